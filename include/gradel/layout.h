@@ -1,0 +1,88 @@
+// Element layouts built from a voxel volume (paper sec. 3.1-3.2, figs. 4-6).
+//
+// Levels and cells
+//   At level L the working volume has cells of edge 2^L voxels. An element is a 2x2x2 group
+//   (2x2 in 2D) of level-L cells: its block is [origin, origin + 2 * cellSize) on each axis,
+//   origin a multiple of 2 * cellSize. Cell c of the block (c = cx + 2*cy + 4*cz, each 0 or 1)
+//   is bit c of `cellMask`.
+//   * full group (all cells filled): the element's own vertices are the 8 (4 in 2D) corners
+//     of the block;
+//   * incomplete group (fig. 6): its own vertices are the corners of its filled cells;
+//   * `voxel` layout: every filled voxel is an element with cellSize 1 and a single mask bit
+//     (its block is the 2x2x2 voxel group holding it), so its own vertices are its 8 corners.
+//   The element's region is the union of its filled cells (the whole block when full).
+//
+// Crack-free joins (fig. 5): an element also carries every vertex of the model that lies on the
+//   closed boundary of its region ("hanging" vertices, from finer neighbours or from incomplete
+//   neighbours at the same level). So every model vertex inside an element's closed region
+//   belongs to that element.
+//
+// Placement (sec. 3.2), `gradational`: at each level, a group gets an element if it holds a
+//   surface cell (a filled cell with an empty face neighbour at that level; see volume.h) or an
+//   empty cell (partly filled group); those cells are then emptied, the volume is halved, the
+//   element size doubles; repeat until the volume is empty. `uniform`: every group with a filled
+//   voxel at level 0 is an element. `voxel`: one element per filled voxel.
+//
+// Numbering: vertices are sorted by lattice coordinate (z, then y, then x); elements by level,
+//   then block origin (z, y, x), then (voxel layout only, where up to 8 elements share a block)
+//   by cell index. Each element's vertex list is sorted by vertex id.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "gradel/volume.h"
+
+namespace gradel {
+
+enum class LayoutKind { Gradational, Uniform, Voxel };
+
+LayoutKind parseLayoutKind(const std::string& name);  ///< "gradational" | "uniform" | "voxel"; InputError otherwise.
+const char* layoutKindName(LayoutKind k);
+
+struct Layout {
+  int dim = 3;                     ///< 2 or 3.
+  std::array<int, 3> dims{0, 0, 0};  ///< Volume size [voxels].
+  Real voxelSize = 1;              ///< [m]
+  LayoutKind kind = LayoutKind::Gradational;
+
+  // ---- vertices ----
+  std::vector<Int3> vertices;  ///< Lattice coordinates of each unique vertex [voxels].
+
+  // ---- elements (one entry each) ----
+  std::vector<uint8_t> level;     ///< Level L (0 = finest).
+  std::vector<int32_t> cellSize;  ///< Cell edge [voxels]: 2^L (1 for the voxel layout).
+  std::vector<Int3> origin;       ///< Lower corner of the 2x2x2 block [voxels].
+  std::vector<uint8_t> cellMask;  ///< Filled cells of the block (bit cx + 2cy + 4cz).
+
+  // ---- element -> vertex lists, compressed rows ----
+  std::vector<uint32_t> elemStart;  ///< Size elements + 1; pairs of element e are [elemStart[e], elemStart[e+1]).
+  std::vector<uint32_t> elemVerts;  ///< Vertex id of each element-vertex pair.
+  std::vector<uint8_t> pairIsOwn;   ///< 1 if own (block corner if full, filled-cell corner if not), 0 if hanging.
+
+  size_t numElements() const { return level.size(); }
+  size_t numVertices() const { return vertices.size(); }
+  size_t numPairs() const { return elemVerts.size(); }
+  int numLevels() const;                      ///< 1 + highest level.
+  bool isFull(size_t e) const { return cellMask[e] == (dim == 3 ? 0xFF : 0x0F); }
+  /// Lattice volume of element e's region [voxels^dim].
+  int64_t regionVoxels(size_t e) const;
+};
+
+struct LayoutStats {
+  size_t voxels = 0;                    ///< Filled voxels.
+  size_t elements = 0;
+  std::vector<size_t> elementsPerLevel;  ///< Index = level.
+  size_t uniqueVertices = 0;
+  size_t pairs = 0;                     ///< Element-vertex pairs ("8 n^3" counting of the paper).
+  size_t hangingVertices = 0;           ///< Unique vertices that are hanging in at least one element.
+  size_t hangingPairs = 0;              ///< Pairs with pairIsOwn == 0.
+};
+
+/// Builds the layout. Throws InputError on an empty volume.
+Layout buildLayout(const VoxelVolume& volume, LayoutKind kind);
+LayoutStats layoutStats(const Layout& layout, const VoxelVolume& volume);
+
+}  // namespace gradel

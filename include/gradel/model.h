@@ -1,0 +1,52 @@
+// The rest model: everything about a body that is computed once from its layout and material
+// and only read afterwards (Jolt's "shared settings"). Hot per-pair data is contiguous, in the
+// layout's compressed-row order.
+#pragma once
+
+#include <vector>
+
+#include "gradel/layout.h"
+#include "gradel/material.h"
+
+namespace gradel {
+
+struct RestModel {
+  int dim = 3;
+  Real voxelSize = 1;       ///< [m]
+  MaterialSettings material;
+
+  // ---- per vertex ----
+  std::vector<Vec3> restPositions;  ///< [m] origin + lattice * voxelSize (buildRestModel).
+  std::vector<Real> mass;           ///< [kg] lumped (consistent) or one voxel's mass (paper).
+  std::vector<Real> invMass;        ///< [1/kg]
+  std::vector<uint8_t> onSurface;   ///< 1 if the vertex is a corner of a voxel face on the body's boundary.
+
+  // ---- per element ----
+  std::vector<Real> stiffness;  ///< k_e [N/m], see material.h.
+  std::vector<Real> size;       ///< [m] block edge 2 * cellSize * h (voxel layout: h); normalises stress.
+  std::vector<uint8_t> level;   ///< Layout level (0 = finest).
+
+  // ---- element -> vertex (compressed rows) ----
+  std::vector<uint32_t> elemStart;  ///< Size elements + 1.
+  std::vector<uint32_t> elemVerts;  ///< Vertex id per pair.
+  std::vector<Vec3> restOffsets;    ///< R0 per pair [m]: rest position minus the element's rest centroid.
+
+  // ---- vertex -> pair (compressed rows), for deterministic force gathering ----
+  std::vector<uint32_t> vertPairStart;  ///< Size vertices + 1.
+  std::vector<uint32_t> vertPairs;      ///< Pair ids touching each vertex, ascending.
+
+  Real totalMass = 0;  ///< [kg]
+  Real smallestPeriod = 0;        ///< [s] the paper's "smallest element period": min over elements of 2 pi sqrt(m_min / k_e) (sec. 3.4).
+  Real smallestVertexPeriod = 0;  ///< [s] min over vertices of 2 pi sqrt(m_i / sum_{e at i} k_e): a vertex shared by n elements vibrates ~sqrt(n) times faster than one element.
+
+  size_t numVertices() const { return restPositions.size(); }
+  size_t numElements() const { return stiffness.size(); }
+  size_t numPairs() const { return elemVerts.size(); }
+};
+
+/// Builds the rest model. `origin` is the world position [m] of lattice point (0,0,0).
+/// Throws InputError for non-positive or non-finite material parameters.
+RestModel buildRestModel(const Layout& layout, const VoxelVolume& volume, const MaterialSettings& material,
+                         const Vec3& origin);
+
+}  // namespace gradel

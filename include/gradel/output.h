@@ -1,0 +1,120 @@
+// Result files of a run (docs/scenes.md, "Output"): one VTK XML UnstructuredGrid per frame
+// for ParaView, a .pvd collection that gives the frames their times, and metrics.csv; all
+// written into an OutputDirectory, which makes the result appear at once or not at all.
+#pragma once
+
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "gradel/model.h"
+#include "gradel/world.h"
+
+namespace gradel {
+
+// ---- VTK frames -------------------------------------------------------------
+
+/// How DataArrays are stored: base64 of the raw little-endian bytes (compact, exact; the
+/// default) or ASCII text (for reading by eye and in tests).
+enum class VtkEncoding { Base64, Ascii };
+
+/// VTK cell types used by writeVtu.
+inline constexpr uint8_t kVtkPolygon = 7;          ///< 2D elements.
+inline constexpr uint8_t kVtkConvexPointSet = 41;  ///< 3D elements.
+
+/// Writes one frame as a VTK XML UnstructuredGrid (.vtu).
+///   points       state.positions [m] (z = 0 in 2D)
+///   cells        one per element. 3D: VTK_CONVEX_POINT_SET over the element's vertex list
+///                (ParaView draws its convex hull; incomplete elements look convex). 2D:
+///                VTK_POLYGON with the vertices in angular order about the element's rest
+///                centroid, which traces the region's outline (every vertex of a 2D element
+///                lies on its outline, layout.h).
+///   point data   "velocity" [m/s] (3 components), "stress" [-] (vertexStress, may be empty)
+///   cell data    "level", "element_id", and "stress" [-] when elementStress is given
+/// Throws std::invalid_argument on size mismatches, std::runtime_error on I/O errors.
+void writeVtu(const std::filesystem::path& file, const RestModel& model, const State& state,
+              const std::vector<Real>& vertexStress, const std::vector<Real>& elementStress = {},
+              VtkEncoding encoding = VtkEncoding::Base64);
+
+/// "frame_00012.vtu": zero-padded so that file listings sort in time order.
+std::string frameFileName(size_t index);
+
+struct PvdFrame {
+  Real time = 0;     ///< [s] simulated time of the frame.
+  std::string file;  ///< Path relative to the .pvd file.
+};
+
+/// Writes a ParaView collection (.pvd) that lists the frames with their times.
+void writePvd(const std::filesystem::path& file, const std::vector<PvdFrame>& frames);
+
+// ---- metrics ----------------------------------------------------------------
+
+/// metrics.csv: one row per frame from World::metrics(), every number written so that it
+/// reads back to the same double (shortest round-trip form).
+class MetricsCsv {
+ public:
+  /// The header line (no newline):
+  /// time,kinetic_energy,elastic_energy,gravity_energy,px,py,pz,Lx,Ly,Lz,max_stress,
+  /// max_penetration,max_contact_depth,min_element_det
+  static const char* header();
+  /// One data line (no newline).
+  static std::string row(const Metrics& m);
+
+  /// Creates the file and writes the header. Throws std::runtime_error on I/O errors.
+  explicit MetricsCsv(const std::filesystem::path& file);
+  ~MetricsCsv();
+  MetricsCsv(const MetricsCsv&) = delete;
+  MetricsCsv& operator=(const MetricsCsv&) = delete;
+
+  void append(const Metrics& m);
+  /// Flushes and closes; throws std::runtime_error if any write failed (disk full, ...).
+  void close();
+
+ private:
+  std::filesystem::path path_;
+  std::FILE* file_ = nullptr;
+};
+
+// ---- the output directory -----------------------------------------------------
+
+/// Writes a result directory so that a failed or interrupted run never leaves a half-written
+/// result and never destroys the previous one:
+///   * everything is written into a sibling `<target>.tmp-XXXXXX` (path());
+///   * commit() moves an existing `<target>` aside, renames the temporary directory to
+///     `<target>`, then deletes the old one (rolled back if the rename fails);
+///   * destruction without commit() deletes the temporary directory and any parent
+///     directories the constructor had to create; `<target>` is untouched.
+class OutputDirectory {
+ public:
+  /// Creates the temporary directory. If `<target>` exists it must be a directory, and if it
+  /// is not empty it must contain a file named `marker` (a previous result, e.g. "run.pvd"), so
+  /// that a mistyped --out can never replace an unrelated directory. Violations are InputError;
+  /// failing to create the directory is InputError too (it comes from the user's choice of
+  /// path). `marker` must not be empty.
+  OutputDirectory(std::filesystem::path target, const std::string& marker);
+  ~OutputDirectory();
+  OutputDirectory(const OutputDirectory&) = delete;
+  OutputDirectory& operator=(const OutputDirectory&) = delete;
+
+  /// The temporary directory to write into (until commit()).
+  const std::filesystem::path& path() const { return temp_; }
+  const std::filesystem::path& target() const { return target_; }
+  std::filesystem::path file(const std::string& name) const { return temp_ / name; }
+
+  /// Publishes the result as `<target>`. Throws std::runtime_error on failure, in which case the
+  /// previous `<target>` is restored.
+  void commit();
+  /// Deletes the temporary directory now (also done by the destructor). Never throws.
+  void abort() noexcept;
+  bool committed() const { return committed_; }
+
+ private:
+  std::filesystem::path target_;
+  std::filesystem::path temp_;
+  std::vector<std::filesystem::path> createdParents_;  ///< Deepest first.
+  bool committed_ = false;
+  bool finished_ = false;
+};
+
+}  // namespace gradel

@@ -1,0 +1,58 @@
+// A scene: everything needed to build a World, as read from a JSON file (docs/scenes.md).
+// Scene builders live here and serve the CLI, tests, benchmarks and (later) the viewer.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "gradel/contacts.h"
+#include "gradel/integrator.h"
+#include "gradel/layout.h"
+#include "gradel/material.h"
+#include "gradel/shapes.h"
+#include "gradel/world.h"
+
+namespace gradel {
+
+struct BodySettings {
+  ShapeSpec shape;                                ///< Volume source (procedural for now).
+  LayoutKind layout = LayoutKind::Gradational;
+  MaterialSettings material;
+  Vec3 position{0, 0, 0};  ///< [m] world position of the volume's lattice origin (voxel (0,0,0)'s lower corner).
+  Vec3 velocity{0, 0, 0};  ///< [m/s] initial velocity of every vertex.
+};
+
+struct OutputSettings {
+  Real duration = 1.0;              ///< [s] simulated time of `gradel run`.
+  Real frameInterval = 1.0 / 30.0;  ///< [s] between written frames.
+};
+
+struct Scene {
+  std::string name;  ///< From the file name or "name".
+  int dim = 3;
+  BodySettings body;
+  SimulationSettings simulation;
+  DomainSettings domain;
+  std::vector<ManipulatorSettings> manipulators;
+  OutputSettings output;
+};
+
+/// Reads and validates a scene file (strict: unknown keys, wrong types, NaN, out-of-range values
+/// are InputError naming the file and the key path, e.g. "scenes/x.json: body.radius: ...").
+Scene loadScene(const std::string& path);
+/// Same, from JSON text; `sourceName` is used in messages.
+Scene parseScene(const std::string& jsonText, const std::string& sourceName);
+
+/// The built body: volume, layout and world together.
+struct BuiltScene {
+  VoxelVolume volume;
+  Layout layout;
+  std::shared_ptr<const RestModel> model;
+  std::unique_ptr<World> world;
+};
+
+/// Rasterises the shape, builds the layout, rest model and world. Throws InputError.
+BuiltScene buildScene(const Scene& scene);
+
+}  // namespace gradel

@@ -1,0 +1,69 @@
+// The binary voxel volume: the input of every layout (paper sec. 1.3, 3.2).
+//
+// Conventions
+//   * Voxel (i, j, k) is the cube [i, i+1] x [j, j+1] x [k, k+1] in lattice units; its
+//     world-space size is `voxelSize` metres on every axis.
+//   * Storage index is i + nx * (j + ny * k) (x fastest).
+//   * A 2D volume has nz == 1 and dim == 2; its lattice points all have z == 0.
+//   * Everything outside the grid counts as empty.
+//   * Surface voxel (paper sec. 3.2 step 1): a filled voxel with at least one empty *face*
+//     neighbour (6 in 3D, 4 in 2D); voxels on the grid border count as having an empty neighbour
+//     outside.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "gradel/types.h"
+
+namespace gradel {
+
+class VoxelVolume {
+ public:
+  VoxelVolume() = default;
+  /// An empty (all-zero) volume. dim is 2 or 3; for dim 2, nz must be 1. voxelSize in metres (> 0).
+  VoxelVolume(int dim, int nx, int ny, int nz, Real voxelSize);
+
+  int dim() const { return dim_; }
+  int nx() const { return n_[0]; }
+  int ny() const { return n_[1]; }
+  int nz() const { return n_[2]; }
+  const std::array<int, 3>& dims() const { return n_; }
+  Real voxelSize() const { return voxelSize_; }
+  size_t size() const { return data_.size(); }
+
+  bool inside(int i, int j, int k) const {
+    return i >= 0 && j >= 0 && k >= 0 && i < n_[0] && j < n_[1] && k < n_[2];
+  }
+  size_t index(int i, int j, int k) const {
+    return size_t(i) + size_t(n_[0]) * (size_t(j) + size_t(n_[1]) * size_t(k));
+  }
+  /// Filled? Out-of-grid coordinates read as empty.
+  bool at(int i, int j, int k) const { return inside(i, j, k) && data_[index(i, j, k)] != 0; }
+  void set(int i, int j, int k, bool v) { data_[index(i, j, k)] = v ? 1 : 0; }
+
+  /// Surface voxel per the face-neighbour definition above.
+  bool isSurface(int i, int j, int k) const;
+  size_t countFilled() const;
+
+  const std::vector<uint8_t>& data() const { return data_; }
+  std::vector<uint8_t>& data() { return data_; }
+
+ private:
+  int dim_ = 3;
+  std::array<int, 3> n_{0, 0, 0};
+  Real voxelSize_ = 1.0;
+  std::vector<uint8_t> data_;
+};
+
+/// Where a volume comes from. Procedural shapes now; file readers (binvox, NRRD, ...) later
+/// implement the same interface. `describe()` names the source in error messages.
+class VolumeSource {
+ public:
+  virtual ~VolumeSource() = default;
+  virtual VoxelVolume load() const = 0;
+  virtual std::string describe() const = 0;
+};
+
+}  // namespace gradel

@@ -1,0 +1,97 @@
+// A simulated body: rest model (shared, immutable) + runtime state + manipulators + walls,
+// advanced by named stages (Box2D style): elastic forces -> integrate (gather, velocities,
+// positions) -> contacts. Every stage runs over an index range; threads only split ranges and
+// never change the order in which any sum is formed, so results are identical at any thread
+// count.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "gradel/contacts.h"
+#include "gradel/integrator.h"
+#include "gradel/model.h"
+
+namespace gradel {
+
+/// Runtime state: what changes every step.
+struct State {
+  Real time = 0;                 ///< [s]
+  std::vector<Vec3> positions;   ///< [m] per vertex.
+  std::vector<Vec3> velocities;  ///< [m/s] per vertex.
+  std::vector<Quat> rotations;   ///< Best-fit rotation per element (warm start of eq. 1).
+};
+
+/// Per-step scratch (never read across steps except for output).
+struct StepScratch {
+  std::vector<Vec3> pairForces;     ///< [N] per element-vertex pair, written by the element stage.
+  std::vector<Real> elementEnergy;  ///< [J] per element, written by the element stage.
+  std::vector<Vec3> previousPositions;  ///< [m] positions at the start of the step (swept contacts).
+  std::vector<Real> contactDepth;   ///< [m] per vertex: depth before correction in the last step.
+};
+
+/// Figures written per frame to metrics.csv.
+struct Metrics {
+  Real time = 0;              ///< [s]
+  Real kineticEnergy = 0;     ///< [J]
+  Real elasticEnergy = 0;     ///< [J]
+  Real gravityEnergy = 0;     ///< [J] -sum m g.x (relative to the origin)
+  Vec3 linearMomentum{0, 0, 0};   ///< [kg m/s]
+  Vec3 angularMomentum{0, 0, 0};  ///< [kg m^2/s] about the world origin.
+  Real maxStress = 0;         ///< [-] max per-element stress (strain-like, see stress()).
+  Real maxPenetration = 0;    ///< [m] deepest vertex inside a manipulator or outside the walls now (should be 0).
+  Real maxContactDepth = 0;   ///< [m] deepest vertex found (and corrected) in the last step.
+  Real minElementDet = 0;     ///< [-] min det of the elements' deformation estimate (< 0: inverted).
+};
+
+class World {
+ public:
+  World(std::shared_ptr<const RestModel> model, const SimulationSettings& sim, const DomainSettings& domain,
+        std::vector<ManipulatorSettings> manipulators);
+
+  /// Advances one time step dt().
+  void step();
+  /// Advances by whole steps until time() >= t (within half a step).
+  void advanceTo(Real t);
+
+  Real time() const { return state_.time; }
+  Real dt() const { return dt_; }
+  const RestModel& model() const { return *model_; }
+  std::shared_ptr<const RestModel> modelPtr() const { return model_; }
+  const State& state() const { return state_; }
+  State& state() { return state_; }  ///< For tests and tools: set positions / velocities directly.
+  const SimulationSettings& settings() const { return sim_; }
+  const DomainSettings& domain() const { return domain_; }
+
+  std::vector<Manipulator>& manipulators() { return manipulators_; }
+  const std::vector<Manipulator>& manipulators() const { return manipulators_; }
+  /// Sets a manipulator's pose from outside (viewer, script); used for manipulators without a path.
+  void setManipulatorPose(size_t i, const Vec3& position, const Vec3& velocity);
+
+  void setThreads(int n) { sim_.threads = n < 1 ? 1 : n; }
+
+  /// Per-element stress (sec. 3, fig. 1): RMS over its vertices of |M R0_i - r_i|, divided by the
+  /// element size [-]. Per-vertex stress: mean over the vertex's elements.
+  std::vector<Real> elementStress() const;
+  std::vector<Real> vertexStress() const;
+
+  Metrics metrics() const;
+  /// FNV-1a hash of the positions and velocities (bitwise): equal states give equal hashes.
+  uint64_t stateHash() const;
+
+ private:
+  void stageElementForces(size_t begin, size_t end);
+  void stageIntegrate(size_t begin, size_t end);
+  void stageContacts(size_t begin, size_t end);
+  void moveManipulators(Real tNext);
+
+  std::shared_ptr<const RestModel> model_;
+  SimulationSettings sim_;
+  DomainSettings domain_;
+  std::vector<Manipulator> manipulators_;
+  State state_;
+  StepScratch scratch_;
+  Real dt_ = 0;
+};
+
+}  // namespace gradel

@@ -1,0 +1,233 @@
+#include "gradel/contacts.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace gradel {
+
+ManipulatorShape parseManipulatorShape(const std::string& name) {
+  if (name == "sphere") return ManipulatorShape::Sphere;
+  if (name == "cylinder") return ManipulatorShape::Cylinder;
+  if (name == "circle") return ManipulatorShape::Circle;
+  throw InputError("unknown manipulator type '" + name + "' (expected sphere, cylinder or circle)");
+}
+
+const char* manipulatorShapeName(ManipulatorShape s) {
+  switch (s) {
+    case ManipulatorShape::Sphere: return "sphere";
+    case ManipulatorShape::Cylinder: return "cylinder";
+    case ManipulatorShape::Circle: return "circle";
+  }
+  return "?";
+}
+
+// ---- paths ------------------------------------------------------------------
+
+namespace {
+// Index of the segment [keys[i], keys[i+1]] holding t, or -1 before the first key, or
+// keys.size()-1 after the last.
+long segmentOf(const std::vector<Keyframe>& keys, Real t) {
+  if (t < keys.front().time) return -1;
+  auto it = std::upper_bound(keys.begin(), keys.end(), t, [](Real tt, const Keyframe& k) { return tt < k.time; });
+  return long(it - keys.begin()) - 1;
+}
+}  // namespace
+
+Vec3 Path::position(Real t) const {
+  if (keys.empty()) return Vec3::Zero();
+  const long s = segmentOf(keys, t);
+  if (s < 0) return keys.front().position;
+  if (size_t(s) + 1 >= keys.size()) {
+    const Keyframe& last = keys.back();
+    return last.velocity ? Vec3(last.position + (t - last.time) * *last.velocity) : last.position;
+  }
+  const Keyframe& a = keys[size_t(s)];
+  const Keyframe& b = keys[size_t(s) + 1];
+  const Real h = b.time - a.time;
+  const Real u = (t - a.time) / h;
+  if (a.velocity && b.velocity) {
+    // Cubic Hermite: matches positions and velocities at both keys.
+    const Real u2 = u * u, u3 = u2 * u;
+    return (2 * u3 - 3 * u2 + 1) * a.position + (u3 - 2 * u2 + u) * h * *a.velocity +
+           (-2 * u3 + 3 * u2) * b.position + (u3 - u2) * h * *b.velocity;
+  }
+  return (1 - u) * a.position + u * b.position;
+}
+
+Vec3 Path::velocity(Real t) const {
+  if (keys.empty()) return Vec3::Zero();
+  const long s = segmentOf(keys, t);
+  if (s < 0) return Vec3::Zero();
+  if (size_t(s) + 1 >= keys.size()) {
+    const Keyframe& last = keys.back();
+    return last.velocity ? *last.velocity : Vec3::Zero();
+  }
+  const Keyframe& a = keys[size_t(s)];
+  const Keyframe& b = keys[size_t(s) + 1];
+  const Real h = b.time - a.time;
+  const Real u = (t - a.time) / h;
+  if (a.velocity && b.velocity) {
+    const Real u2 = u * u;
+    return ((6 * u2 - 6 * u) * a.position + (3 * u2 - 4 * u + 1) * h * *a.velocity +
+            (-6 * u2 + 6 * u) * b.position + (3 * u2 - 2 * u) * h * *b.velocity) /
+           h;
+  }
+  return (b.position - a.position) / h;
+}
+
+// ---- manipulator geometry -----------------------------------------------------
+
+namespace {
+
+// Signed distance of the shape centred at the origin, evaluated at d (frame coordinates).
+Real shapeDistance(const ManipulatorSettings& settings, const Vec3& d, Vec3* normal) {
+  if (settings.shape != ManipulatorShape::Cylinder) {
+    const Real r = d.norm();
+    if (normal) *normal = r > 0 ? Vec3(d / r) : Vec3::UnitY();
+    return r - settings.radius;
+  }
+  // Capped cylinder: the intersection of an infinite cylinder (radial distance) and a slab
+  // (axial distance); exact signed distance of that convex set.
+  const Vec3 a = settings.axis.normalized();
+  const Real h = a.dot(d);
+  const Vec3 radial = d - h * a;
+  const Real rr = radial.norm();
+  const Vec3 radialDir = rr > 0 ? Vec3(radial / rr) : a.unitOrthogonal();
+  const Real dr = rr - settings.radius;  // > 0 outside the side
+  const Real dh = std::abs(h) - settings.halfLength;  // > 0 beyond a cap
+  const Vec3 capDir = h >= 0 ? a : Vec3(-a);
+  if (dr <= 0 && dh <= 0) {  // inside: nearest of side and cap
+    if (normal) *normal = dr > dh ? radialDir : capDir;
+    return std::max(dr, dh);
+  }
+  if (dr > 0 && dh > 0) {  // outside, nearest the rim
+    const Vec3 g = dr * radialDir + dh * capDir;
+    const Real len = g.norm();
+    if (normal) *normal = g / len;
+    return len;
+  }
+  if (dr > 0) {
+    if (normal) *normal = radialDir;
+    return dr;
+  }
+  if (normal) *normal = capDir;
+  return dh;
+}
+
+}  // namespace
+
+Real Manipulator::signedDistance(const Vec3& p, Vec3* normal) const {
+  return shapeDistance(settings, p - position, normal);
+}
+
+namespace {
+
+// Relative signed distance at a point given in the manipulator's frame (centre at origin).
+Real frameDistance(const Manipulator& m, const Vec3& pFrame, Vec3* n) {
+  return shapeDistance(m.settings, pFrame, n);
+}
+
+// The signed distance of a convex set is a convex function, so along a segment it has one
+// minimum (golden-section search) and the first entry point lies between the start and that
+// minimum (bisection).
+bool firstEntry(const Manipulator& m, const Vec3& p0, const Vec3& p1, Real d0, Real d1, Real* tEntry) {
+  // The distance is 1-Lipschitz: along a segment of length L it stays >= (d0 + d1 - L) / 2.
+  if (d0 + d1 - (p1 - p0).norm() > 0) return false;
+  auto f = [&](Real t) { return frameDistance(m, p0 + t * (p1 - p0), nullptr); };
+  Real a = 0, b = 1;
+  const Real g = 0.5 * (std::sqrt(5.0) - 1);
+  Real c = b - g * (b - a), d = a + g * (b - a);
+  Real fc = f(c), fd = f(d);
+  for (int i = 0; i < 60 && fc >= 0 && fd >= 0; ++i) {
+    if (fc < fd) {
+      b = d, d = c, fd = fc, c = b - g * (b - a), fc = f(c);
+    } else {
+      a = c, c = d, fc = fd, d = a + g * (b - a), fd = f(d);
+    }
+  }
+  Real tMin;
+  if (fc < 0) tMin = c;
+  else if (fd < 0) tMin = d;
+  else if (f(1) < 0) tMin = 1;
+  else return false;
+  Real lo = 0, hi = tMin;  // f(lo) >= 0, f(hi) < 0
+  for (int i = 0; i < 60; ++i) {
+    const Real mid = 0.5 * (lo + hi);
+    if (f(mid) >= 0) lo = mid;
+    else hi = mid;
+  }
+  *tEntry = lo;
+  return true;
+}
+
+void reflectVelocity(Vec3& v, const Vec3& surfaceVelocity, const Vec3& n, Real restitution, Real friction) {
+  Vec3 rel = v - surfaceVelocity;
+  const Real vn = rel.dot(n);
+  if (vn < 0) {
+    Vec3 vt = rel - vn * n;
+    const Real vtLen = vt.norm();
+    // Coulomb: the tangential impulse is at most friction times the normal impulse (1 + e)|vn|.
+    const Real drop = friction * (1 + restitution) * (-vn);
+    vt = vtLen > drop ? Vec3(vt * (1 - drop / vtLen)) : Vec3::Zero();
+    rel = vt - restitution * vn * n;
+  }
+  v = surfaceVelocity + rel;
+}
+
+}  // namespace
+
+ContactResult resolveManipulator(const Manipulator& m, const Vec3& xPrev, Vec3& x, Vec3& v, int dim) {
+  ContactResult res;
+  const Vec3 p0 = xPrev - m.previousPosition;  // start of the step, in the moving frame
+  Vec3 p1 = x - m.position;                    // end of the step, in the moving frame
+  if (dim == 2) p1.z() = 0;
+  Vec3 n1;
+  const Real d1 = frameDistance(m, p1, &n1);
+  Real tEntry = 0;
+  Vec3 target;  // frame position to put the vertex at
+  Vec3 n;
+  const Real skin = 1e-9 * m.settings.radius;  // stay just outside so that sd >= 0 holds exactly
+  const Real d0 = frameDistance(m, p0, nullptr);
+  if (d0 >= 0 && firstEntry(m, p0, p1, d0, d1, &tEntry)) {
+    const Vec3 pe = p0 + tEntry * (p1 - p0);
+    Vec3 ne;
+    frameDistance(m, pe, &ne);
+    if (d1 < 0 && n1.dot(ne) > 0) {  // ordinary contact: nearest surface point
+      target = p1 - (d1 - skin) * n1;
+      n = n1;
+      res.depth = -d1;
+    } else {  // passed through (or crossed the middle): back to where it entered
+      target = pe + skin * ne;
+      n = ne;
+      res.depth = (p1 - pe).norm();
+    }
+  } else if (d1 < 0) {  // started inside (initial overlap): nearest surface point
+    target = p1 - (d1 - skin) * n1;
+    n = n1;
+    res.depth = -d1;
+  } else {
+    return res;
+  }
+  if (dim == 2) target.z() = 0, n.z() = 0;
+  x = m.position + target;
+  reflectVelocity(v, m.velocity, n, m.settings.restitution, m.settings.friction);
+  return res;
+}
+
+ContactResult resolveDomain(const DomainSettings& d, Vec3& x, Vec3& v, int dim) {
+  ContactResult res;
+  if (!d.enabled) return res;
+  for (int a = 0; a < dim; ++a) {
+    Real side = 0;
+    if (x[a] < d.min[a]) side = 1, res.depth = std::max(res.depth, d.min[a] - x[a]), x[a] = d.min[a];
+    else if (x[a] > d.max[a]) side = -1, res.depth = std::max(res.depth, x[a] - d.max[a]), x[a] = d.max[a];
+    if (side != 0) {
+      Vec3 n = Vec3::Zero();
+      n[a] = side;
+      reflectVelocity(v, Vec3::Zero(), n, d.restitution, d.friction);
+    }
+  }
+  return res;
+}
+
+}  // namespace gradel

@@ -1,0 +1,341 @@
+// The layout builder (paper sec. 3.1-3.2, figs. 4-6): voxel volume -> elements -> vertices.
+//
+// Three stages, each a function over the previous one's output:
+//   1. placement: scan the working volume level by level and emit one `Placed` record per
+//      element (level, cell size, block origin, cell mask), already in numbering order;
+//   2. vertices: the union of every element's own vertices (block corners of a full element,
+//      corners of the filled cells of an incomplete one), kept as a bitmap over the lattice so
+//      that a vertex's id is its rank in (z, y, x) order;
+//   3. closure (fig. 5): every element additionally takes each model vertex on the boundary of
+//      its region, found by walking the lattice points of the region's boundary faces and
+//      testing them in the bitmap. The cost is O(sum over elements of their boundary lattice
+//      points) time and 1.5 bits per lattice point of memory; no int32 index grid.
+#include "gradel/layout.h"
+
+#include <algorithm>
+#include <bit>
+#include <cassert>
+#include <cstdint>
+
+namespace gradel {
+
+namespace {
+
+/// One element as placed, before its vertex list is known.
+struct Placed {
+  uint8_t level;     ///< Level L.
+  int32_t cellSize;  ///< Cell edge [voxels].
+  Int3 origin;       ///< Lower block corner [voxels].
+  uint8_t mask;      ///< Filled cells, bit cx + 2cy + 4cz.
+};
+
+/// Read-only view of one level's working volume: n[0] x n[1] x n[2] cells, x fastest,
+/// 0 = empty, anything else = filled. Out-of-grid cells (including the padding of odd sizes)
+/// read as empty.
+struct GridView {
+  std::array<int, 3> n;
+  const uint8_t* cells;
+
+  bool at(int i, int j, int k) const {
+    if (i < 0 || j < 0 || k < 0 || i >= n[0] || j >= n[1] || k >= n[2]) return false;
+    return cells[size_t(i) + size_t(n[0]) * (size_t(j) + size_t(n[1]) * size_t(k))] != 0;
+  }
+};
+
+int cellCount(int dim) { return dim == 3 ? 8 : 4; }
+uint8_t fullMask(int dim) { return dim == 3 ? 0xFF : 0x0F; }
+/// Cell c of a block sits at (cx, cy, cz) = bits 0, 1, 2 of c.
+int cellCoord(int c, int axis) { return (c >> axis) & 1; }
+
+/// Scans one level in 2x2x2 groups (2x2 in 2D; odd sizes are padded with empty cells), appends
+/// the elements it places to `out` in (z, y, x) block order, and returns the next level's working
+/// volume (each group -> one cell). `kind` selects the rule (sec. 3.2 step 1):
+///   Gradational: a group with a filled cell gets an element if it is partly filled or one of its
+///     cells is a surface cell (an empty face neighbour at this level, possibly in another group);
+///   Uniform: every group with a filled cell gets one;
+///   Voxel: every filled cell becomes its own single-cell element.
+/// Decisions read the level's volume as it was at the start of the scan, so they do not depend
+/// on scan order; the groups that got elements are "emptied" (step 2) by writing 0 into the next
+/// level (step 3), where a cell is 1 iff its group was full and got no element.
+std::vector<uint8_t> scanLevel(const GridView& g, int dim, int level, LayoutKind kind,
+                               std::vector<Placed>& out, std::array<int, 3>& nextDims) {
+  const int groupsZ = dim == 3 ? (g.n[2] + 1) / 2 : 1;
+  nextDims = {(g.n[0] + 1) / 2, (g.n[1] + 1) / 2, groupsZ};
+  std::vector<uint8_t> next(size_t(nextDims[0]) * size_t(nextDims[1]) * size_t(nextDims[2]), 0);
+  const int cs = 1 << level;  // cell edge [voxels]
+  const int cells = cellCount(dim);
+  const uint8_t full = fullMask(dim);
+  size_t nextIndex = 0;
+  for (int gz = 0; gz < nextDims[2]; ++gz)
+    for (int gy = 0; gy < nextDims[1]; ++gy)
+      for (int gx = 0; gx < nextDims[0]; ++gx, ++nextIndex) {
+        const int bx = 2 * gx, by = 2 * gy, bz = dim == 3 ? 2 * gz : 0;  // first cell of the group
+        uint8_t mask = 0;
+        for (int c = 0; c < cells; ++c)
+          if (g.at(bx + cellCoord(c, 0), by + cellCoord(c, 1), bz + cellCoord(c, 2))) mask |= uint8_t(1u << c);
+        if (mask == 0) continue;
+        const Int3 origin(bx * cs, by * cs, bz * cs);
+        if (kind == LayoutKind::Voxel) {
+          for (int c = 0; c < cells; ++c)
+            if (mask & (1u << c)) out.push_back({uint8_t(level), cs, origin, uint8_t(1u << c)});
+          continue;
+        }
+        bool place = kind == LayoutKind::Uniform || mask != full;
+        // A full group: inner face neighbours are filled, so only the outward neighbour of each
+        // cell on each axis can make it a surface cell.
+        for (int c = 0; c < cells && !place; ++c) {
+          const int i = bx + cellCoord(c, 0), j = by + cellCoord(c, 1), k = bz + cellCoord(c, 2);
+          const int di = cellCoord(c, 0) ? 1 : -1, dj = cellCoord(c, 1) ? 1 : -1, dk = cellCoord(c, 2) ? 1 : -1;
+          place = !g.at(i + di, j, k) || !g.at(i, j + dj, k) || (dim == 3 && !g.at(i, j, k + dk));
+        }
+        if (place) {
+          out.push_back({uint8_t(level), cs, origin, mask});
+        } else {
+          // Step 3 of sec. 3.2: an unplaced group can only be full (a partial one always gets an
+          // element), so halving never meets a mixed group.
+          assert(mask == full);
+          next[nextIndex] = 1;
+        }
+      }
+  return next;
+}
+
+/// Placement for every kind, in numbering order (level, then block origin (z, y, x), then cell).
+std::vector<Placed> place(const VoxelVolume& volume, LayoutKind kind) {
+  std::vector<Placed> out;
+  const int dim = volume.dim();
+  std::array<int, 3> dims = volume.dims();
+  std::array<int, 3> nextDims{};
+  std::vector<uint8_t> next = scanLevel({dims, volume.data().data()}, dim, 0, kind, out, nextDims);
+  if (kind != LayoutKind::Gradational) return out;
+  // Gradational: halve and repeat until the working volume is empty (steps 3-5). Every level
+  // places at least its outermost filled cells, so this terminates after ~log2(size) levels.
+  for (int level = 1; std::any_of(next.begin(), next.end(), [](uint8_t v) { return v != 0; }); ++level) {
+    const std::vector<uint8_t> cur = std::move(next);
+    dims = nextDims;
+    next = scanLevel({dims, cur.data()}, dim, level, kind, out, nextDims);
+  }
+  return out;
+}
+
+/// The model's vertex set as a bitmap over the lattice [0, nx] x [0, ny] x [0, nz] (x fastest,
+/// z slowest, so bit order is the numbering order), plus the number of set bits before each
+/// 64-bit word: a vertex's id is its rank, found in O(1) with one popcount. Cost is 1.5 bits per
+/// lattice point (0.19 bytes; the input volume takes 1 byte per voxel) instead of 4 bytes for a
+/// dense int32 index grid, and a lookup of an absent point (most closure queries) is one bit test.
+class VertexSet {
+ public:
+  VertexSet(const std::array<int, 3>& dims, int dim)
+      : sx_(uint64_t(dims[0]) + 1), sy_(uint64_t(dims[1]) + 1),
+        bits_((sx_ * sy_ * (dim == 3 ? uint64_t(dims[2]) + 1 : 1) + 63) / 64, 0) {}
+
+  uint64_t key(int x, int y, int z) const { return (uint64_t(z) * sy_ + uint64_t(y)) * sx_ + uint64_t(x); }
+  Int3 point(uint64_t key) const {
+    const uint64_t row = key / sx_;
+    return Int3(int32_t(key % sx_), int32_t(row % sy_), int32_t(row / sy_));
+  }
+  void insert(uint64_t key) { bits_[key >> 6] |= uint64_t(1) << (key & 63); }
+
+  /// Freezes the set: computes the rank table and returns the vertices in id order.
+  std::vector<Int3> finish() {
+    std::vector<Int3> points;
+    before_.resize(bits_.size());
+    uint32_t count = 0;
+    for (size_t w = 0; w < bits_.size(); ++w) {
+      before_[w] = count;
+      if (uint64_t(count) + uint64_t(std::popcount(bits_[w])) > UINT32_MAX)
+        throw InputError("layout: more than 2^32 vertices");
+      count += uint32_t(std::popcount(bits_[w]));
+      for (uint64_t m = bits_[w]; m; m &= m - 1) points.push_back(point(uint64_t(w) * 64 + uint64_t(std::countr_zero(m))));
+    }
+    return points;
+  }
+  /// Vertex id at `key`, or -1 when no element owns a vertex there. Only after finish().
+  int64_t find(uint64_t key) const {
+    const uint64_t word = bits_[key >> 6], bit = uint64_t(1) << (key & 63);
+    if (!(word & bit)) return -1;
+    return int64_t(before_[key >> 6]) + std::popcount(word & (bit - 1));
+  }
+
+ private:
+  uint64_t sx_, sy_;              // lattice points per row (nx + 1) and per column (ny + 1)
+  std::vector<uint64_t> bits_;    // bit `key` set iff a vertex sits there
+  std::vector<uint32_t> before_;  // set bits in the words before this one
+};
+
+/// Calls f(low, edge, c) for every cube [low, low + edge] making up element e's region: a full
+/// element is one cube, its block (edge 2 * cellSize); an incomplete one is its filled cells c.
+/// The own vertices (sec. 3.1, fig. 6) are exactly the corners of these cubes.
+template <class F>
+void forEachCube(const Placed& e, int dim, F&& f) {
+  const bool full = e.mask == fullMask(dim);
+  for (int c = 0; c < cellCount(dim); ++c) {
+    if (!(e.mask & (1u << c)) || (full && c != 0)) continue;
+    Int3 low = e.origin;
+    for (int b = 0; b < dim; ++b) low[b] += cellCoord(c, b) * e.cellSize;
+    f(low, full ? 2 * e.cellSize : e.cellSize, c);
+  }
+}
+
+/// Calls f(low, edge, ax, side) for every boundary face of element e's region: the closed face
+/// on axis `ax`, side `side` (0 = low, 1 = high), of a cube of forEachCube. Faces shared by two
+/// filled cells of an incomplete block are interior and skipped.
+template <class F>
+void forEachBoundaryFace(const Placed& e, int dim, F&& f) {
+  const bool full = e.mask == fullMask(dim);
+  forEachCube(e, dim, [&](const Int3& low, int edge, int c) {
+    for (int ax = 0; ax < dim; ++ax)
+      for (int side = 0; side < 2; ++side) {
+        const bool neighbourInBlock = !full && cellCoord(c, ax) != side;
+        if (neighbourInBlock && (e.mask & (1u << (c ^ (1 << ax))))) continue;
+        f(low, edge, ax, side);
+      }
+  });
+}
+
+/// Own vertex test (sec. 3.1, fig. 6): is p a corner of the block (full element) or of one of
+/// the filled cells (incomplete element)?
+bool isOwnCorner(const Int3& p, const Placed& e, int dim) {
+  const int shift = std::countr_zero(unsigned(e.cellSize));  // cellSize is a power of two
+  Int3 a(0, 0, 0);  // corner index within the block, 0..2 per axis
+  for (int b = 0; b < dim; ++b) {
+    const int rel = p[b] - e.origin[b];
+    if (rel & (e.cellSize - 1)) return false;
+    a[b] = rel >> shift;
+    if (a[b] < 0 || a[b] > 2) return false;
+    if (e.mask == fullMask(dim) && a[b] == 1) return false;  // a full element owns only block corners
+  }
+  for (int c = 0; c < cellCount(dim); ++c) {
+    if (!(e.mask & (1u << c))) continue;
+    bool corner = true;
+    for (int b = 0; b < dim; ++b) corner = corner && (a[b] == cellCoord(c, b) || a[b] == cellCoord(c, b) + 1);
+    if (corner) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+LayoutKind parseLayoutKind(const std::string& name) {
+  if (name == "gradational") return LayoutKind::Gradational;
+  if (name == "uniform") return LayoutKind::Uniform;
+  if (name == "voxel") return LayoutKind::Voxel;
+  throw InputError("layout: unknown layout '" + name + "' (expected gradational, uniform or voxel)");
+}
+
+const char* layoutKindName(LayoutKind k) {
+  switch (k) {
+    case LayoutKind::Gradational: return "gradational";
+    case LayoutKind::Uniform: return "uniform";
+    case LayoutKind::Voxel: return "voxel";
+  }
+  return "unknown";
+}
+
+int Layout::numLevels() const {
+  int top = -1;
+  for (uint8_t l : level) top = std::max(top, int(l));
+  return top + 1;
+}
+
+int64_t Layout::regionVoxels(size_t e) const {
+  int64_t cellVolume = 1;
+  for (int b = 0; b < dim; ++b) cellVolume *= cellSize[e];
+  return int64_t(std::popcount(unsigned(cellMask[e]))) * cellVolume;
+}
+
+Layout buildLayout(const VoxelVolume& volume, LayoutKind kind) {
+  if (volume.size() == 0 || volume.countFilled() == 0) throw InputError("layout: the volume is empty");
+  const int dim = volume.dim();
+  const int cells = cellCount(dim);
+  const std::vector<Placed> placed = place(volume, kind);
+
+  Layout L;
+  L.dim = dim;
+  L.dims = volume.dims();
+  L.voxelSize = volume.voxelSize();
+  L.kind = kind;
+
+  // ---- vertices: union of own vertices, numbered in (z, y, x) order. Own vertices are the block
+  // corners of a full element and the corners of the filled cells of an incomplete one (fig. 6),
+  // i.e. the corners of the cubes of forEachCube. They all lie in [0, dims] because a
+  // filled cell holds only filled voxels.
+  VertexSet set(L.dims, dim);
+  for (const Placed& e : placed)
+    forEachCube(e, dim, [&](const Int3& low, int edge, int) {
+      for (int corner = 0; corner < cells; ++corner) {
+        Int3 p = low;
+        for (int b = 0; b < dim; ++b) p[b] += cellCoord(corner, b) * edge;
+        set.insert(set.key(p.x(), p.y(), p.z()));
+      }
+    });
+  L.vertices = set.finish();
+
+  // ---- closure (fig. 5): every model vertex on the region's boundary joins the element.
+  // Only boundary faces are walked: a model vertex cannot lie in the interior of a region
+  // because it is the corner of some other filled cell, whose interior would then overlap
+  // this region, and regions are disjoint. Every own corner is on a boundary face too
+  // (a block corner is on the block surface; the block centre, when not full, is on a face
+  // between a filled and an empty cell), so the walk finds the own vertices as well.
+  L.level.reserve(placed.size());
+  L.cellSize.reserve(placed.size());
+  L.origin.reserve(placed.size());
+  L.cellMask.reserve(placed.size());
+  L.elemStart.reserve(placed.size() + 1);
+  L.elemStart.push_back(0);
+  L.elemVerts.reserve(placed.size() * size_t(cells));
+  L.pairIsOwn.reserve(placed.size() * size_t(cells));
+  std::vector<uint32_t> found;
+  for (const Placed& e : placed) {
+    found.clear();
+    forEachBoundaryFace(e, dim, [&](const Int3& low, int edge, int ax, int side) {
+      int lo[3], hi[3];  // closed lattice box of the face
+      for (int b = 0; b < 3; ++b) {
+        lo[b] = low[b];
+        hi[b] = b < dim ? low[b] + edge : low[b];
+      }
+      lo[ax] = hi[ax] = low[ax] + side * edge;
+      for (int z = lo[2]; z <= hi[2]; ++z)
+        for (int y = lo[1]; y <= hi[1]; ++y)
+          for (int x = lo[0]; x <= hi[0]; ++x) {
+            const int64_t id = set.find(set.key(x, y, z));
+            if (id >= 0) found.push_back(uint32_t(id));
+          }
+    });
+    // Ids and pair offsets are 32-bit (layout.h); only a voxel layout of ~1000^3 gets there.
+    if (L.elemVerts.size() + found.size() > UINT32_MAX)
+      throw InputError("layout: more than 2^32 element-vertex pairs; use a coarser layout or volume");
+    std::sort(found.begin(), found.end());
+    found.erase(std::unique(found.begin(), found.end()), found.end());
+    for (uint32_t v : found) {
+      L.elemVerts.push_back(v);
+      L.pairIsOwn.push_back(isOwnCorner(L.vertices[v], e, dim) ? 1 : 0);
+    }
+    L.elemStart.push_back(uint32_t(L.elemVerts.size()));
+    L.level.push_back(e.level);
+    L.cellSize.push_back(e.cellSize);
+    L.origin.push_back(e.origin);
+    L.cellMask.push_back(e.mask);
+  }
+  return L;
+}
+
+LayoutStats layoutStats(const Layout& layout, const VoxelVolume& volume) {
+  LayoutStats s;
+  s.voxels = volume.countFilled();
+  s.elements = layout.numElements();
+  s.elementsPerLevel.assign(size_t(layout.numLevels()), 0);
+  for (uint8_t l : layout.level) ++s.elementsPerLevel[l];
+  s.uniqueVertices = layout.numVertices();
+  s.pairs = layout.numPairs();
+  std::vector<uint8_t> hanging(layout.numVertices(), 0);
+  for (size_t p = 0; p < layout.numPairs(); ++p)
+    if (!layout.pairIsOwn[p]) {
+      ++s.hangingPairs;
+      hanging[layout.elemVerts[p]] = 1;
+    }
+  s.hangingVertices = size_t(std::count(hanging.begin(), hanging.end(), uint8_t(1)));
+  return s;
+}
+
+}  // namespace gradel

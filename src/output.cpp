@@ -1,0 +1,343 @@
+#include "gradel/output.h"
+
+#include <stdlib.h>  // mkdtemp (POSIX)
+#include <unistd.h>  // rmdir
+
+#include <algorithm>
+#include <bit>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <numeric>
+#include <stdexcept>
+#include <system_error>
+#include <type_traits>
+
+namespace gradel {
+namespace fs = std::filesystem;
+
+namespace {
+
+// ---- number and byte formatting ----------------------------------------------
+
+// Shortest text that reads back to the same value (no precision is lost in the CSV or in
+// ASCII VTK files, and no noise digits are added).
+template <class T>
+void appendNumber(std::string& out, T x) {
+  char buf[32];
+  std::to_chars_result r;
+  if constexpr (std::is_floating_point_v<T>)
+    r = std::to_chars(buf, buf + sizeof buf, x);
+  else
+    r = std::to_chars(buf, buf + sizeof buf, std::conditional_t<(sizeof(T) < sizeof(int)), int, T>(x));
+  out.append(buf, r.ptr);
+}
+
+void appendBase64(std::string& out, const unsigned char* data, size_t n) {
+  static const char kTable[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  size_t i = 0;
+  for (; i + 3 <= n; i += 3) {
+    const uint32_t v = uint32_t(data[i]) << 16 | uint32_t(data[i + 1]) << 8 | data[i + 2];
+    out += kTable[v >> 18], out += kTable[(v >> 12) & 63], out += kTable[(v >> 6) & 63], out += kTable[v & 63];
+  }
+  if (n - i == 1) {
+    const uint32_t v = uint32_t(data[i]) << 16;
+    out += kTable[v >> 18], out += kTable[(v >> 12) & 63], out += "==";
+  } else if (n - i == 2) {
+    const uint32_t v = uint32_t(data[i]) << 16 | uint32_t(data[i + 1]) << 8;
+    out += kTable[v >> 18], out += kTable[(v >> 12) & 63], out += kTable[(v >> 6) & 63], out += '=';
+  }
+}
+
+template <class T>
+const char* vtkTypeName() {
+  if constexpr (std::is_same_v<T, double>) return "Float64";
+  if constexpr (std::is_same_v<T, int64_t>) return "Int64";
+  if constexpr (std::is_same_v<T, uint8_t>) return "UInt8";
+}
+
+// One <DataArray>. Binary form (VTK XML "binary", uncompressed): base64 of one stream holding
+// a UInt32 byte count followed by the raw values in native byte order, which is how
+// vtkXMLDataParser::ReadUncompressedData reads it back.
+template <class T>
+void appendDataArray(std::string& out, const char* name, int components, const std::vector<T>& values,
+                     VtkEncoding encoding) {
+  out += "        <DataArray type=\"";
+  out += vtkTypeName<T>();
+  out += "\"";
+  if (name) out += std::string(" Name=\"") + name + "\"";
+  if (components > 1) out += " NumberOfComponents=\"" + std::to_string(components) + "\"";
+  out += encoding == VtkEncoding::Ascii ? " format=\"ascii\">\n" : " format=\"binary\">\n";
+  if (encoding == VtkEncoding::Ascii) {
+    for (size_t i = 0; i < values.size(); ++i) {
+      appendNumber(out, values[i]);
+      out += (i + 1) % size_t(std::max(components, 1)) == 0 || i + 1 == values.size() ? '\n' : ' ';
+    }
+  } else {
+    const size_t bytes = values.size() * sizeof(T);
+    if (bytes > UINT32_MAX) throw std::runtime_error("writeVtu: array larger than 4 GiB");
+    std::vector<unsigned char> raw(sizeof(uint32_t) + bytes);
+    const uint32_t header = uint32_t(bytes);
+    std::memcpy(raw.data(), &header, sizeof header);
+    if (bytes) std::memcpy(raw.data() + sizeof header, values.data(), bytes);
+    appendBase64(out, raw.data(), raw.size());
+    out += '\n';
+  }
+  out += "        </DataArray>\n";
+}
+
+void writeWholeFile(const fs::path& file, const std::string& text) {
+  std::FILE* f = std::fopen(file.c_str(), "wb");
+  if (!f) throw std::runtime_error("cannot write " + file.string() + ": " + std::strerror(errno));
+  const bool wrote = std::fwrite(text.data(), 1, text.size(), f) == text.size();
+  const int err = errno;
+  if (std::fclose(f) != 0 || !wrote)
+    throw std::runtime_error("cannot write " + file.string() + ": " + std::strerror(wrote ? errno : err));
+}
+
+std::string xmlEscape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+constexpr const char* kByteOrder = std::endian::native == std::endian::little ? "LittleEndian" : "BigEndian";
+
+}  // namespace
+
+// ---- VTK ------------------------------------------------------------------------
+
+std::string frameFileName(size_t index) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "frame_%05zu.vtu", index);
+  return buf;
+}
+
+void writeVtu(const fs::path& file, const RestModel& model, const State& state, const std::vector<Real>& vertexStress,
+              const std::vector<Real>& elementStress, VtkEncoding encoding) {
+  const size_t nv = model.numVertices(), ne = model.numElements();
+  if (state.positions.size() != nv || state.velocities.size() != nv)
+    throw std::invalid_argument("writeVtu: state does not match the model's vertex count");
+  if (!vertexStress.empty() && vertexStress.size() != nv)
+    throw std::invalid_argument("writeVtu: vertexStress must be empty or have one value per vertex");
+  if (!elementStress.empty() && elementStress.size() != ne)
+    throw std::invalid_argument("writeVtu: elementStress must be empty or have one value per element");
+  if (model.elemStart.size() != ne + 1 || model.level.size() != ne)
+    throw std::invalid_argument("writeVtu: inconsistent rest model");
+
+  std::vector<double> points(3 * nv), velocity(3 * nv);
+  for (size_t v = 0; v < nv; ++v)
+    for (int c = 0; c < 3; ++c) {
+      points[3 * v + c] = state.positions[v][c];
+      velocity[3 * v + c] = state.velocities[v][c];
+    }
+
+  std::vector<int64_t> connectivity;
+  connectivity.reserve(model.numPairs());
+  std::vector<int64_t> offsets(ne);
+  std::vector<uint8_t> types(ne, model.dim == 2 ? kVtkPolygon : kVtkConvexPointSet);
+  std::vector<int64_t> elementId(ne);
+  std::vector<std::pair<double, uint32_t>> ring;  // (angle, pair) of one 2D element
+  for (size_t e = 0; e < ne; ++e) {
+    const uint32_t b = model.elemStart[e], end = model.elemStart[e + 1];
+    if (model.dim == 2) {
+      // restOffsets are relative to the rest centroid, so their angles order the outline.
+      ring.clear();
+      for (uint32_t p = b; p < end; ++p) ring.emplace_back(std::atan2(model.restOffsets[p].y(), model.restOffsets[p].x()), p);
+      std::stable_sort(ring.begin(), ring.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+      for (const auto& r : ring) connectivity.push_back(model.elemVerts[r.second]);
+    } else {
+      for (uint32_t p = b; p < end; ++p) connectivity.push_back(model.elemVerts[p]);
+    }
+    offsets[e] = int64_t(connectivity.size());
+    elementId[e] = int64_t(e);
+  }
+
+  std::string out;
+  out.reserve(64 * nv + 16 * connectivity.size() + 1024);
+  out += "<?xml version=\"1.0\"?>\n";
+  out += std::string("<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"") + kByteOrder + "\">\n";
+  out += "  <UnstructuredGrid>\n";
+  out += "    <Piece NumberOfPoints=\"" + std::to_string(nv) + "\" NumberOfCells=\"" + std::to_string(ne) + "\">\n";
+  out += vertexStress.empty() ? "      <PointData Vectors=\"velocity\">\n"
+                              : "      <PointData Scalars=\"stress\" Vectors=\"velocity\">\n";
+  appendDataArray(out, "velocity", 3, velocity, encoding);
+  if (!vertexStress.empty()) appendDataArray(out, "stress", 1, std::vector<double>(vertexStress.begin(), vertexStress.end()), encoding);
+  out += "      </PointData>\n";
+  out += "      <CellData Scalars=\"level\">\n";
+  appendDataArray(out, "level", 1, model.level, encoding);
+  appendDataArray(out, "element_id", 1, elementId, encoding);
+  if (!elementStress.empty())
+    appendDataArray(out, "element_stress", 1, std::vector<double>(elementStress.begin(), elementStress.end()), encoding);
+  out += "      </CellData>\n";
+  out += "      <Points>\n";
+  appendDataArray(out, "position", 3, points, encoding);
+  out += "      </Points>\n";
+  out += "      <Cells>\n";
+  appendDataArray(out, "connectivity", 1, connectivity, encoding);
+  appendDataArray(out, "offsets", 1, offsets, encoding);
+  appendDataArray(out, "types", 1, types, encoding);
+  out += "      </Cells>\n";
+  out += "    </Piece>\n";
+  out += "  </UnstructuredGrid>\n";
+  out += "</VTKFile>\n";
+  writeWholeFile(file, out);
+}
+
+void writePvd(const fs::path& file, const std::vector<PvdFrame>& frames) {
+  std::string out = "<?xml version=\"1.0\"?>\n";
+  out += std::string("<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"") + kByteOrder + "\">\n";
+  out += "  <Collection>\n";
+  for (const PvdFrame& f : frames) {
+    out += "    <DataSet timestep=\"";
+    appendNumber(out, f.time);
+    out += "\" group=\"\" part=\"0\" file=\"" + xmlEscape(f.file) + "\"/>\n";
+  }
+  out += "  </Collection>\n";
+  out += "</VTKFile>\n";
+  writeWholeFile(file, out);
+}
+
+// ---- metrics ----------------------------------------------------------------------
+
+const char* MetricsCsv::header() {
+  return "time,kinetic_energy,elastic_energy,gravity_energy,px,py,pz,Lx,Ly,Lz,max_stress,max_penetration,"
+         "max_contact_depth,min_element_det";
+}
+
+std::string MetricsCsv::row(const Metrics& m) {
+  const double v[] = {m.time,
+                      m.kineticEnergy,
+                      m.elasticEnergy,
+                      m.gravityEnergy,
+                      m.linearMomentum.x(),
+                      m.linearMomentum.y(),
+                      m.linearMomentum.z(),
+                      m.angularMomentum.x(),
+                      m.angularMomentum.y(),
+                      m.angularMomentum.z(),
+                      m.maxStress,
+                      m.maxPenetration,
+                      m.maxContactDepth,
+                      m.minElementDet};
+  std::string out;
+  for (size_t i = 0; i < std::size(v); ++i) {
+    if (i) out += ',';
+    appendNumber(out, v[i]);
+  }
+  return out;
+}
+
+MetricsCsv::MetricsCsv(const fs::path& file) : path_(file) {
+  file_ = std::fopen(file.c_str(), "wb");
+  if (!file_) throw std::runtime_error("cannot write " + file.string() + ": " + std::strerror(errno));
+  std::fputs(header(), file_);
+  std::fputc('\n', file_);
+}
+
+MetricsCsv::~MetricsCsv() {
+  if (file_) std::fclose(file_);
+}
+
+void MetricsCsv::append(const Metrics& m) {
+  if (!file_) throw std::logic_error("MetricsCsv::append after close");
+  const std::string line = row(m) + '\n';
+  std::fwrite(line.data(), 1, line.size(), file_);
+}
+
+void MetricsCsv::close() {
+  if (!file_) return;
+  // ferror covers every earlier fwrite; fclose reports the final flush.
+  const bool failed = std::ferror(file_) != 0;
+  const bool closeFailed = std::fclose(file_) != 0;
+  file_ = nullptr;
+  if (failed || closeFailed) throw std::runtime_error("cannot write " + path_.string() + ": " + std::strerror(errno));
+}
+
+// ---- output directory ---------------------------------------------------------------
+
+namespace {
+// A fresh, unused sibling name "<base>XXXXXX"; mkdtemp makes it unique and atomic.
+fs::path makeUniqueDir(const std::string& base) {
+  std::string tmpl = base + "XXXXXX";
+  if (!::mkdtemp(tmpl.data())) return {};
+  return tmpl;
+}
+}  // namespace
+
+OutputDirectory::OutputDirectory(fs::path target, const std::string& marker) {
+  if (marker.empty()) throw std::invalid_argument("OutputDirectory: marker must name a file of a previous result");
+  target = target.lexically_normal();
+  if (!target.has_filename()) target = target.parent_path();  // "out/x/" -> "out/x"
+  const std::string leaf = target.filename().string();
+  if (leaf.empty() || leaf == "." || leaf == "..")
+    throw InputError(target.string() + ": cannot be used as an output directory (name the result directory itself)");
+  target_ = target;
+
+  std::error_code ec;
+  const fs::file_status st = fs::status(target_, ec);
+  if (fs::exists(st)) {
+    if (!fs::is_directory(st)) throw InputError(target_.string() + ": exists and is not a directory");
+    if (!fs::is_empty(target_, ec) && !fs::exists(target_ / marker, ec))
+      throw InputError(target_.string() + ": exists and is not a previous result (no " + marker +
+                       "); refusing to replace it");
+  }
+
+  const fs::path parent = target_.has_parent_path() ? target_.parent_path() : fs::path(".");
+  for (fs::path p = parent; !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
+    createdParents_.push_back(p);
+    if (p == p.parent_path()) break;
+  }
+  fs::create_directories(parent, ec);
+  if (ec) {
+    abort();
+    throw InputError(parent.string() + ": cannot create: " + ec.message());
+  }
+  temp_ = makeUniqueDir((parent / (leaf + ".tmp-")).string());
+  if (temp_.empty()) {
+    const int err = errno;
+    abort();
+    throw InputError(target_.string() + ": cannot create a directory beside it: " + std::strerror(err));
+  }
+}
+
+OutputDirectory::~OutputDirectory() {
+  if (!finished_) abort();
+}
+
+void OutputDirectory::abort() noexcept {
+  std::error_code ec;
+  if (!temp_.empty()) fs::remove_all(temp_, ec);
+  for (const fs::path& p : createdParents_) fs::remove(p, ec);  // only removes empty directories
+  finished_ = true;
+}
+
+void OutputDirectory::commit() {
+  if (finished_) throw std::logic_error("OutputDirectory::commit: already committed or aborted");
+  std::error_code ec;
+  fs::path old;
+  if (fs::exists(fs::symlink_status(target_, ec))) {
+    // Reserve a unique name, then free it for rename() (which also moves a symlink).
+    old = makeUniqueDir(target_.string() + ".old-");
+    if (old.empty() || ::rmdir(old.c_str()) != 0 || std::rename(target_.c_str(), old.c_str()) != 0)
+      throw std::runtime_error("cannot move the previous " + target_.string() + " aside: " + std::strerror(errno));
+  }
+  if (std::rename(temp_.c_str(), target_.c_str()) != 0) {
+    const int err = errno;
+    if (!old.empty()) std::rename(old.c_str(), target_.c_str());  // put the previous result back
+    throw std::runtime_error("cannot rename " + temp_.string() + " to " + target_.string() + ": " + std::strerror(err));
+  }
+  committed_ = finished_ = true;
+  if (!old.empty()) fs::remove_all(old, ec);
+}
+
+}  // namespace gradel

@@ -1,0 +1,307 @@
+// Tests for the result writers (src/output.cpp): VTK frames decode back to the model and state,
+// the .pvd and metrics.csv have the documented form, and OutputDirectory publishes a result
+// atomically or leaves everything as it was.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "gradel/output.h"
+
+namespace gradel {
+namespace {
+namespace fs = std::filesystem;
+
+// A fresh, empty scratch directory per test, removed afterwards.
+class OutputTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    root_ = fs::temp_directory_path() /
+            ("gradel-output-test-" + std::to_string(::getpid()) + "-" +
+             ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(root_);
+    fs::create_directories(root_);
+  }
+  void TearDown() override { fs::remove_all(root_); }
+  fs::path root_;
+};
+
+std::string readFile(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+void writeFile(const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
+
+// Entries of a directory, sorted, as names.
+std::vector<std::string> listing(const fs::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// ---- VTK ------------------------------------------------------------------------
+
+// Two 2D elements by hand: a unit square [0,1]^2 (4 corners) and, beside it, [1,2]x[0,1]
+// carrying the hanging vertex (1, 0.5) of a finer neighbour on its left edge.
+RestModel twoElements2d() {
+  RestModel m;
+  m.dim = 2;
+  m.restPositions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(2, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 0), Vec3(2, 1, 0), Vec3(1, 0.5, 0)};
+  m.level = {0, 1};
+  m.stiffness = {1, 1};
+  m.size = {1, 1};
+  m.elemStart = {0, 4, 9};
+  m.elemVerts = {0, 1, 3, 4, /**/ 1, 2, 4, 5, 6};
+  for (size_t e = 0; e < 2; ++e) {
+    Vec3 c = Vec3::Zero();
+    for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) c += m.restPositions[m.elemVerts[p]];
+    c /= Real(m.elemStart[e + 1] - m.elemStart[e]);
+    for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) m.restOffsets.push_back(m.restPositions[m.elemVerts[p]] - c);
+  }
+  return m;
+}
+
+State stateOf(const RestModel& m) {
+  State s;
+  s.positions = m.restPositions;
+  for (size_t i = 0; i < s.positions.size(); ++i) s.velocities.push_back(Vec3(0.5 * Real(i), -1.0 / 3.0, 0));
+  return s;
+}
+
+// The text between <DataArray ... Name="name" ...> and </DataArray>.
+std::string dataArrayText(const std::string& xml, const std::string& name) {
+  const size_t at = xml.find("Name=\"" + name + "\"");
+  if (at == std::string::npos) return "";
+  const size_t open = xml.find('>', at) + 1;
+  return xml.substr(open, xml.find("</DataArray>", open) - open);
+}
+
+std::vector<unsigned char> base64Decode(const std::string& text) {
+  auto value = [](char c) -> int {
+    if (c >= 'A' && c <= 'Z') return c - 'A';
+    if (c >= 'a' && c <= 'z') return c - 'a' + 26;
+    if (c >= '0' && c <= '9') return c - '0' + 52;
+    if (c == '+') return 62;
+    if (c == '/') return 63;
+    return -1;
+  };
+  std::vector<unsigned char> out;
+  uint32_t acc = 0;
+  int bits = 0;
+  for (char c : text) {
+    const int v = value(c);
+    if (v < 0) continue;  // whitespace and '=' padding
+    acc = (acc << 6) | uint32_t(v);
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      out.push_back(static_cast<unsigned char>((acc >> bits) & 0xFF));
+    }
+  }
+  return out;
+}
+
+// A binary DataArray decoded: checks the UInt32 byte-count header, returns the values.
+template <class T>
+std::vector<T> decodeBinary(const std::string& xml, const std::string& name) {
+  const std::vector<unsigned char> raw = base64Decode(dataArrayText(xml, name));
+  EXPECT_GE(raw.size(), 4u);
+  if (raw.size() < 4) return {};
+  uint32_t bytes = 0;
+  std::memcpy(&bytes, raw.data(), 4);
+  EXPECT_EQ(bytes, raw.size() - 4) << name;
+  std::vector<T> v((raw.size() - 4) / sizeof(T));
+  std::memcpy(v.data(), raw.data() + 4, v.size() * sizeof(T));
+  return v;
+}
+
+template <class T>
+std::vector<T> decodeAscii(const std::string& xml, const std::string& name) {
+  std::istringstream in(dataArrayText(xml, name));
+  std::vector<T> v;
+  double x;
+  while (in >> x) v.push_back(T(x));
+  return v;
+}
+
+TEST_F(OutputTest, writeVtu_binary_decodesToModelAndState) {
+  const RestModel m = twoElements2d();
+  const State s = stateOf(m);
+  const std::vector<Real> vstress = {0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6}, estress = {1.5, 2.5};
+  writeVtu(root_ / "f.vtu", m, s, vstress, estress);
+  const std::string xml = readFile(root_ / "f.vtu");
+  EXPECT_NE(xml.find("type=\"UnstructuredGrid\""), std::string::npos);
+  EXPECT_NE(xml.find("NumberOfPoints=\"7\" NumberOfCells=\"2\""), std::string::npos);
+
+  const auto points = decodeBinary<double>(xml, "position");
+  ASSERT_EQ(points.size(), 21u);
+  for (size_t i = 0; i < 7; ++i)
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(points[3 * i + c], s.positions[i][c]);
+  const auto vel = decodeBinary<double>(xml, "velocity");
+  ASSERT_EQ(vel.size(), 21u);
+  EXPECT_EQ(vel[3 * 5 + 0], 2.5);
+  EXPECT_EQ(vel[3 * 5 + 1], -1.0 / 3.0);  // exact: binary keeps every bit
+  EXPECT_EQ(decodeBinary<double>(xml, "stress"), vstress);
+  EXPECT_EQ(decodeBinary<double>(xml, "element_stress"), estress);
+  EXPECT_EQ(decodeBinary<uint8_t>(xml, "level"), (std::vector<uint8_t>{0, 1}));
+  EXPECT_EQ(decodeBinary<int64_t>(xml, "element_id"), (std::vector<int64_t>{0, 1}));
+  EXPECT_EQ(decodeBinary<int64_t>(xml, "offsets"), (std::vector<int64_t>{4, 9}));
+  EXPECT_EQ(decodeBinary<uint8_t>(xml, "types"), (std::vector<uint8_t>{kVtkPolygon, kVtkPolygon}));
+  // 2D cells are polygons in angular order about the element's centroid: the outline.
+  EXPECT_EQ(decodeBinary<int64_t>(xml, "connectivity"), (std::vector<int64_t>{0, 1, 4, 3, /**/ 1, 2, 5, 4, 6}));
+}
+
+TEST_F(OutputTest, writeVtu_ascii_matchesBinary) {
+  RestModel m = twoElements2d();
+  m.dim = 3;  // the same vertices as a 3D model: convex point sets in stored order
+  const State s = stateOf(m);
+  writeVtu(root_ / "a.vtu", m, s, {}, {}, VtkEncoding::Ascii);
+  const std::string xml = readFile(root_ / "a.vtu");
+  EXPECT_NE(xml.find("format=\"ascii\""), std::string::npos);
+  EXPECT_EQ(xml.find("format=\"binary\""), std::string::npos);
+  EXPECT_EQ(xml.find("Name=\"stress\""), std::string::npos);  // no stress given, none written
+  EXPECT_EQ(decodeAscii<double>(xml, "velocity")[3 * 2 + 1], -1.0 / 3.0);  // shortest round-trip text
+  EXPECT_EQ(decodeAscii<int64_t>(xml, "connectivity"), (std::vector<int64_t>{0, 1, 3, 4, 1, 2, 4, 5, 6}));
+  EXPECT_EQ(decodeAscii<int>(xml, "types"), (std::vector<int>{kVtkConvexPointSet, kVtkConvexPointSet}));
+}
+
+TEST_F(OutputTest, writeVtu_sizeMismatch_throws) {
+  const RestModel m = twoElements2d();
+  State s = stateOf(m);
+  EXPECT_THROW(writeVtu(root_ / "x.vtu", m, s, {1.0, 2.0}), std::invalid_argument);
+  s.velocities.pop_back();
+  EXPECT_THROW(writeVtu(root_ / "x.vtu", m, s, {}), std::invalid_argument);
+}
+
+TEST_F(OutputTest, writeVtu_unwritablePath_throwsRuntimeError) {
+  const RestModel m = twoElements2d();
+  EXPECT_THROW(writeVtu(root_ / "no-such-dir" / "x.vtu", m, stateOf(m), {}), std::runtime_error);
+}
+
+TEST_F(OutputTest, writePvd_listsFramesWithTimes) {
+  writePvd(root_ / "run.pvd", {{0.0, frameFileName(0)}, {0.125, frameFileName(1)}});
+  const std::string xml = readFile(root_ / "run.pvd");
+  EXPECT_NE(xml.find("type=\"Collection\""), std::string::npos);
+  EXPECT_NE(xml.find("timestep=\"0\" group=\"\" part=\"0\" file=\"frame_00000.vtu\""), std::string::npos) << xml;
+  EXPECT_NE(xml.find("timestep=\"0.125\" group=\"\" part=\"0\" file=\"frame_00001.vtu\""), std::string::npos) << xml;
+}
+
+// ---- metrics ----------------------------------------------------------------------
+
+TEST_F(OutputTest, metricsCsv_headerAndRows_roundTrip) {
+  Metrics a;
+  a.time = 0.1;
+  a.kineticEnergy = 1.0 / 3.0;
+  a.linearMomentum = Vec3(1, 2, 3);
+  a.angularMomentum = Vec3(-4, 5e-300, 6);
+  a.minElementDet = -0.5;
+  {
+    MetricsCsv csv(root_ / "metrics.csv");
+    csv.append(a);
+    csv.append(Metrics{});
+    csv.close();
+  }
+  std::istringstream in(readFile(root_ / "metrics.csv"));
+  std::string header, row1, row2, extra;
+  std::getline(in, header);
+  std::getline(in, row1);
+  std::getline(in, row2);
+  EXPECT_FALSE(std::getline(in, extra));
+  EXPECT_EQ(header,
+            "time,kinetic_energy,elastic_energy,gravity_energy,px,py,pz,Lx,Ly,Lz,max_stress,max_penetration,"
+            "max_contact_depth,min_element_det");
+  std::vector<double> values;
+  std::istringstream cells(row1);
+  for (std::string cell; std::getline(cells, cell, ',');) values.push_back(std::stod(cell));
+  ASSERT_EQ(values.size(), 14u);
+  EXPECT_EQ(values[0], 0.1);
+  EXPECT_EQ(values[1], 1.0 / 3.0);  // full precision
+  EXPECT_EQ(values[6], 3.0);
+  EXPECT_EQ(values[8], 5e-300);
+  EXPECT_EQ(values[13], -0.5);
+  EXPECT_EQ(row2, "0,0,0,0,0,0,0,0,0,0,0,0,0,0");
+}
+
+// ---- OutputDirectory ----------------------------------------------------------------
+
+TEST_F(OutputTest, outputDirectory_commit_publishesTarget) {
+  const fs::path target = root_ / "deep" / "er" / "run";
+  {
+    OutputDirectory out(target, "run.pvd");
+    EXPECT_FALSE(fs::exists(target));
+    EXPECT_EQ(out.path().parent_path(), target.parent_path());  // a sibling, so rename() is atomic
+    writeFile(out.file("a.txt"), "new");
+    out.commit();
+    EXPECT_TRUE(out.committed());
+  }
+  EXPECT_EQ(readFile(target / "a.txt"), "new");
+  EXPECT_EQ(listing(target.parent_path()), std::vector<std::string>{"run"});  // no temporary left
+}
+
+TEST_F(OutputTest, outputDirectory_abort_leavesNothing) {
+  const fs::path target = root_ / "deep" / "er" / "run";
+  {
+    OutputDirectory out(target, "run.pvd");
+    writeFile(out.file("a.txt"), "partial");
+  }  // destroyed without commit: as after an error or a divergence
+  EXPECT_FALSE(fs::exists(root_ / "deep"));  // the parents it created are gone too
+  EXPECT_TRUE(listing(root_).empty());
+}
+
+TEST_F(OutputTest, outputDirectory_existingTarget_keptOnAbortReplacedOnCommit) {
+  const fs::path target = root_ / "run";
+  fs::create_directories(target);
+  writeFile(target / "run.pvd", "old");
+  writeFile(target / "stale.txt", "old");
+  {
+    OutputDirectory out(target, "run.pvd");
+    writeFile(out.file("run.pvd"), "new");
+    EXPECT_EQ(readFile(target / "run.pvd"), "old");  // untouched until commit
+  }
+  EXPECT_EQ(listing(target), (std::vector<std::string>{"run.pvd", "stale.txt"}));
+  EXPECT_EQ(readFile(target / "run.pvd"), "old");
+  {
+    OutputDirectory out(target, "run.pvd");
+    writeFile(out.file("run.pvd"), "new");
+    out.commit();
+  }
+  EXPECT_EQ(listing(target), std::vector<std::string>{"run.pvd"});  // replaced as a whole
+  EXPECT_EQ(readFile(target / "run.pvd"), "new");
+  EXPECT_EQ(listing(root_), std::vector<std::string>{"run"});  // the old copy was deleted
+}
+
+TEST_F(OutputTest, outputDirectory_refusesToReplaceForeignDirectoryOrFile) {
+  fs::create_directories(root_ / "home");
+  writeFile(root_ / "home" / "precious.txt", "keep");
+  EXPECT_THROW(OutputDirectory(root_ / "home", "run.pvd"), InputError);
+  EXPECT_EQ(readFile(root_ / "home" / "precious.txt"), "keep");
+  writeFile(root_ / "file", "x");
+  EXPECT_THROW(OutputDirectory(root_ / "file", "run.pvd"), InputError);
+  EXPECT_THROW(OutputDirectory(root_ / "..", "run.pvd"), InputError);  // the non-empty temp directory
+  EXPECT_THROW(OutputDirectory(root_ / "a" / "..", "run.pvd"), InputError);  // normalises to root_ itself
+  EXPECT_EQ(listing(root_), (std::vector<std::string>{"file", "home"}));  // no temporaries left
+  // An empty existing directory is fine to replace.
+  fs::create_directories(root_ / "empty");
+  OutputDirectory ok(root_ / "empty", "run.pvd");
+  ok.commit();
+}
+
+TEST_F(OutputTest, outputDirectory_trailingSlash_namesTheDirectory) {
+  {
+    OutputDirectory out(root_.string() + "/res/", "run.pvd");
+    EXPECT_EQ(out.target().filename(), "res");
+    out.commit();
+  }
+  EXPECT_TRUE(fs::is_directory(root_ / "res"));
+}
+
+}  // namespace
+}  // namespace gradel

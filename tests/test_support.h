@@ -1,0 +1,66 @@
+// Small builders shared by the tests (the CLI and benchmarks use scene.h's buildScene).
+#pragma once
+
+#include <memory>
+#include <random>
+
+#include "gradel/layout.h"
+#include "gradel/model.h"
+#include "gradel/shapes.h"
+#include "gradel/world.h"
+
+namespace gradel::test {
+
+struct Body {
+  VoxelVolume volume;
+  Layout layout;
+  std::shared_ptr<const RestModel> model;
+};
+
+inline Body makeBody(const std::string& shape, int size, int dim, LayoutKind kind,
+                     MaterialSettings material = {}, Real voxelSize = 0.01, Vec3 origin = Vec3::Zero()) {
+  Body b;
+  b.volume = rasterize(presetShape(shape, size, dim, voxelSize));
+  b.layout = buildLayout(b.volume, kind);
+  b.model = std::make_shared<RestModel>(buildRestModel(b.layout, b.volume, material, origin));
+  return b;
+}
+
+/// Settings with no gravity and no damping: an isolated body.
+inline SimulationSettings isolated() {
+  SimulationSettings s;
+  s.gravity = Vec3::Zero();
+  s.damping = 0;
+  return s;
+}
+
+/// Perturbs positions and velocities with a seeded RNG (a deformed, moving, spinning body).
+inline void perturb(World& w, Real posAmp, Real velAmp, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<Real> u(-1, 1);
+  const int dim = w.model().dim;
+  for (size_t i = 0; i < w.state().positions.size(); ++i)
+    for (int a = 0; a < dim; ++a) {
+      w.state().positions[i][a] += posAmp * u(rng);
+      w.state().velocities[i][a] += velAmp * u(rng);
+    }
+}
+
+/// Applies a smooth deformation x <- c + (I + eps)(x - c) about the body's centre: a stretch
+/// and a shear of `strain`, exciting mostly the body's low modes (as a real load would).
+inline void deformSmoothly(World& w, Real strain) {
+  Vec3 c = Vec3::Zero();
+  for (const Vec3& x : w.state().positions) c += x;
+  c /= Real(w.state().positions.size());
+  Mat3 eps = Mat3::Zero();
+  eps(0, 0) = strain, eps(1, 1) = -0.5 * strain, eps(0, 1) = 0.5 * strain;
+  if (w.model().dim == 3) eps(2, 2) = 0.5 * strain, eps(1, 2) = 0.5 * strain;
+  for (Vec3& x : w.state().positions) x = c + (Mat3::Identity() + eps) * (x - c);
+}
+
+inline Real totalEnergy(const World& w) {
+  const Metrics m = w.metrics();
+  return m.kineticEnergy + m.elasticEnergy + m.gravityEnergy;
+}
+
+}  // namespace gradel::test
