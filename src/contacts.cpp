@@ -130,34 +130,62 @@ Real frameDistance(const Manipulator& m, const Vec3& pFrame, Vec3* n) {
 // The signed distance of a convex set is a convex function, so along a segment it has one
 // minimum (golden-section search) and the first entry point lies between the start and that
 // minimum (bisection).
-bool firstEntry(const Manipulator& m, const Vec3& p0, const Vec3& p1, Real d0, Real d1, Real* tEntry) {
+// Finds where the segment p0 -> p1 (frame coordinates, d0 = sd(p0) >= 0, d1 = sd(p1)) first
+// enters the shape (tEntry) and, if it ends outside, where it leaves it again (tExit = 1 when it
+// ends inside). Returns false if it never enters.
+bool segmentCrossing(const Manipulator& m, const Vec3& p0, const Vec3& p1, Real d0, Real d1, Real* tEntry,
+                     Real* tExit) {
   // The distance is 1-Lipschitz: along a segment of length L it stays >= (d0 + d1 - L) / 2.
   if (d0 + d1 - (p1 - p0).norm() > 0) return false;
   auto f = [&](Real t) { return frameDistance(m, p0 + t * (p1 - p0), nullptr); };
-  Real a = 0, b = 1;
-  const Real g = 0.5 * (std::sqrt(5.0) - 1);
-  Real c = b - g * (b - a), d = a + g * (b - a);
-  Real fc = f(c), fd = f(d);
-  for (int i = 0; i < 60 && fc >= 0 && fd >= 0; ++i) {
-    if (fc < fd) {
-      b = d, d = c, fd = fc, c = b - g * (b - a), fc = f(c);
-    } else {
-      a = c, c = d, fc = fd, d = a + g * (b - a), fd = f(d);
-    }
-  }
   Real tMin;
-  if (fc < 0) tMin = c;
-  else if (fd < 0) tMin = d;
-  else if (f(1) < 0) tMin = 1;
-  else return false;
-  Real lo = 0, hi = tMin;  // f(lo) >= 0, f(hi) < 0
+  if (d1 < 0) {
+    tMin = 1;
+  } else {
+    Real a = 0, b = 1;
+    const Real g = 0.5 * (std::sqrt(5.0) - 1);
+    Real c = b - g * (b - a), d = a + g * (b - a);
+    Real fc = f(c), fd = f(d);
+    for (int i = 0; i < 60 && fc >= 0 && fd >= 0; ++i) {
+      if (fc < fd) {
+        b = d, d = c, fd = fc, c = b - g * (b - a), fc = f(c);
+      } else {
+        a = c, c = d, fc = fd, d = a + g * (b - a), fd = f(d);
+      }
+    }
+    if (fc < 0) tMin = c;
+    else if (fd < 0) tMin = d;
+    else return false;
+  }
+  Real lo = 0, hi = tMin;  // f(lo) >= 0 > f(hi)
   for (int i = 0; i < 60; ++i) {
     const Real mid = 0.5 * (lo + hi);
-    if (f(mid) >= 0) lo = mid;
-    else hi = mid;
+    (f(mid) >= 0 ? lo : hi) = mid;
   }
   *tEntry = lo;
+  *tExit = 1;
+  if (d1 >= 0) {
+    Real in = tMin, out = 1;  // f(in) < 0 <= f(out)
+    for (int i = 0; i < 60; ++i) {
+      const Real mid = 0.5 * (in + out);
+      (f(mid) >= 0 ? out : in) = mid;
+    }
+    *tExit = out;
+  }
   return true;
+}
+
+// Position-level Coulomb friction. Projecting a vertex back along the normal leaves the
+// tangential part of its step relative to the surface, so a vertex whose velocity friction has
+// stopped would still creep by dt^2 a_t every step (fast enough to let a grasped body slide out).
+// The tangential displacement is undone up to friction * penetration depth (static friction
+// cancels it; kinetic friction shortens it). Returns the correction to subtract.
+Vec3 frictionSlipCorrection(const Vec3& relativeStep, const Vec3& n, Real depth, Real friction) {
+  if (friction <= 0) return Vec3::Zero();
+  const Vec3 tangential = relativeStep - relativeStep.dot(n) * n;
+  const Real len = tangential.norm();
+  const Real allowed = friction * depth;
+  return len <= allowed ? tangential : Vec3(tangential * (allowed / len));
 }
 
 void reflectVelocity(Vec3& v, const Vec3& surfaceVelocity, const Vec3& n, Real restitution, Real friction) {
@@ -176,19 +204,19 @@ void reflectVelocity(Vec3& v, const Vec3& surfaceVelocity, const Vec3& n, Real r
 
 }  // namespace
 
-ContactResult resolveManipulator(const Manipulator& m, const Vec3& xPrev, Vec3& x, Vec3& v, int dim) {
+ContactResult resolveManipulator(const Manipulator& m, const Vec3& xPrev, Vec3& x, Vec3& v, int dim, bool bounce) {
   ContactResult res;
   const Vec3 p0 = xPrev - m.previousPosition;  // start of the step, in the moving frame
   Vec3 p1 = x - m.position;                    // end of the step, in the moving frame
   if (dim == 2) p1.z() = 0;
   Vec3 n1;
   const Real d1 = frameDistance(m, p1, &n1);
-  Real tEntry = 0;
+  Real tEntry = 0, tExit = 1;
   Vec3 target;  // frame position to put the vertex at
   Vec3 n;
   const Real skin = 1e-9 * m.settings.radius;  // stay just outside so that sd >= 0 holds exactly
   const Real d0 = frameDistance(m, p0, nullptr);
-  if (d0 >= 0 && firstEntry(m, p0, p1, d0, d1, &tEntry)) {
+  if (d0 >= 0 && segmentCrossing(m, p0, p1, d0, d1, &tEntry, &tExit)) {
     const Vec3 pe = p0 + tEntry * (p1 - p0);
     Vec3 ne;
     frameDistance(m, pe, &ne);
@@ -196,7 +224,17 @@ ContactResult resolveManipulator(const Manipulator& m, const Vec3& xPrev, Vec3& 
       target = p1 - (d1 - skin) * n1;
       n = n1;
       res.depth = -d1;
-    } else {  // passed through (or crossed the middle): back to where it entered
+      target -= frictionSlipCorrection(p1 - p0, n, res.depth, m.settings.friction);
+    } else {
+      if (d1 >= 0) {
+        // Ends outside. It went right through the manipulator only if it left on the far side
+        // (entry and exit normals opposed); a short chord near the surface (a vertex sliding
+        // along a curved side) or a clipped corner is no contact.
+        Vec3 nx;
+        frameDistance(m, p0 + tExit * (p1 - p0), &nx);
+        if (ne.dot(nx) >= 0) return res;
+      }
+      // Passed through, or crossed the middle: back to where it entered.
       target = pe + skin * ne;
       n = ne;
       res.depth = (p1 - pe).norm();
@@ -205,26 +243,31 @@ ContactResult resolveManipulator(const Manipulator& m, const Vec3& xPrev, Vec3& 
     target = p1 - (d1 - skin) * n1;
     n = n1;
     res.depth = -d1;
+    target -= frictionSlipCorrection(p1 - p0, n, res.depth, m.settings.friction);
   } else {
     return res;
   }
   if (dim == 2) target.z() = 0, n.z() = 0;
   x = m.position + target;
-  reflectVelocity(v, m.velocity, n, m.settings.restitution, m.settings.friction);
+  reflectVelocity(v, m.velocity, n, bounce ? m.settings.restitution : 0.0, m.settings.friction);
   return res;
 }
 
-ContactResult resolveDomain(const DomainSettings& d, Vec3& x, Vec3& v, int dim) {
+ContactResult resolveDomain(const DomainSettings& d, const Vec3& xPrev, Vec3& x, Vec3& v, int dim, bool bounce) {
   ContactResult res;
   if (!d.enabled) return res;
   for (int a = 0; a < dim; ++a) {
-    Real side = 0;
-    if (x[a] < d.min[a]) side = 1, res.depth = std::max(res.depth, d.min[a] - x[a]), x[a] = d.min[a];
-    else if (x[a] > d.max[a]) side = -1, res.depth = std::max(res.depth, x[a] - d.max[a]), x[a] = d.max[a];
+    Real side = 0, depth = 0;
+    if (x[a] < d.min[a]) side = 1, depth = d.min[a] - x[a], x[a] = d.min[a];
+    else if (x[a] > d.max[a]) side = -1, depth = x[a] - d.max[a], x[a] = d.max[a];
     if (side != 0) {
       Vec3 n = Vec3::Zero();
       n[a] = side;
-      reflectVelocity(v, Vec3::Zero(), n, d.restitution, d.friction);
+      res.depth = std::max(res.depth, depth);
+      const Vec3 slip = frictionSlipCorrection(x - xPrev, n, depth, d.friction);
+      for (int b = 0; b < dim; ++b)
+        if (b != a) x[b] -= slip[b];
+      reflectVelocity(v, Vec3::Zero(), n, bounce ? d.restitution : 0.0, d.friction);
     }
   }
   return res;

@@ -515,7 +515,7 @@ void readSimulation(Fields f, Scene& scene) {
     if (dt->is_string()) {
       if (dt->get<std::string>() != "auto")
         f.fail("dt", "unknown value " + dt->dump() + " (expected \"auto\" or a number > 0 [s])");
-      s.dt = 0;  // auto: dt_fraction of the smallest element's period (integrator.h)
+      s.dt = 0;  // auto: dt_fraction of the smallest period, see dt_period (integrator.h)
     } else if (!dt->is_number()) {
       f.failWrongType("dt", *dt, "\"auto\" or a number > 0 [s]");
     } else {
@@ -525,6 +525,7 @@ void readSimulation(Fields f, Scene& scene) {
     }
   }
   s.dtFraction = f.number("dt_fraction", s.dtFraction, kFraction, "");
+  s.dtPeriod = f.enumeration("dt_period", s.dtPeriod, &parsePeriodRule);
   s.damping = f.number("damping", s.damping, kNonNegative, "1/s");
   s.gravity = f.vec("gravity", s.gravity, "m/s^2");
   if (scene.dim == 2) s.gravity.z() = 0;

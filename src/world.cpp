@@ -102,24 +102,25 @@ void World::stageIntegrate(size_t begin, size_t end) {
   }
 }
 
-// Stage 3: contacts, per vertex (independent). A vertex pinched between a manipulator and a wall
-// is resolved alternately a few times; the walls go last so no vertex ever leaves the box.
+// Stage 3: contacts, per vertex (independent). The first pass bounces (sec. 3.5). A vertex
+// pinched between surfaces (a manipulator and a wall, or two manipulators) is resolved again, up
+// to three more passes, inelastically: repeated elastic reflections between two surfaces would
+// pump energy into it. The walls go last in every pass, so no vertex ever leaves the box.
 void World::stageContacts(size_t begin, size_t end) {
   const int dim = model_->dim;
+  const size_t surfaces = manipulators_.size() + (domain_.enabled ? 1 : 0);
   for (size_t i = begin; i < end; ++i) {
     Vec3& x = state_.positions[i];
     Vec3& v = state_.velocities[i];
     Real depth = 0;
     for (int pass = 0; pass < 4; ++pass) {
+      const bool bounce = pass == 0;
       Real passDepth = 0;
-      for (const Manipulator& mp : manipulators_) {
-        const ContactResult r = resolveManipulator(mp, scratch_.previousPositions[i], x, v, dim);
-        passDepth = std::max(passDepth, r.depth);
-      }
-      const ContactResult w = resolveDomain(domain_, x, v, dim);
-      passDepth = std::max(passDepth, w.depth);
+      for (const Manipulator& mp : manipulators_)
+        passDepth = std::max(passDepth, resolveManipulator(mp, scratch_.previousPositions[i], x, v, dim, bounce).depth);
+      passDepth = std::max(passDepth, resolveDomain(domain_, scratch_.previousPositions[i], x, v, dim, bounce).depth);
       depth = std::max(depth, passDepth);
-      if (passDepth == 0 || manipulators_.empty() || !domain_.enabled) break;
+      if (passDepth == 0 || surfaces < 2) break;
     }
     scratch_.contactDepth[i] = depth;
   }
@@ -152,7 +153,7 @@ void parallelRanges(size_t n, int threads, Fn&& fn) {
 void World::step() {
   const size_t V = model_->numVertices(), E = model_->numElements();
   const bool contacts = !manipulators_.empty() || domain_.enabled;
-  if (!manipulators_.empty()) scratch_.previousPositions = state_.positions;
+  if (contacts) scratch_.previousPositions = state_.positions;
   parallelRanges(E, sim_.threads, [&](size_t b, size_t e) { stageElementForces(b, e); });
   parallelRanges(V, sim_.threads, [&](size_t b, size_t e) { stageIntegrate(b, e); });
   moveManipulators(state_.time + dt_);

@@ -35,22 +35,6 @@ TEST_P(Isolated, MomentumConservedOver10kSteps) {
   EXPECT_LT((m1.angularMomentum - m0.angularMomentum).norm() / lScale, 1e-9);
 }
 
-TEST_P(Isolated, SymplecticUndampedEnergyWithinOnePercent) {
-  // A smooth 3% deformation released at dt = T/10 (auto): the energy stays within 1%.
-  const Case c = GetParam();
-  Body b = makeBody(c.shape, c.size, c.dim, c.kind);
-  World w(b.model, isolated(), {}, {});
-  deformSmoothly(w, 0.03);
-  const Real e0 = totalEnergy(w);
-  ASSERT_GT(e0, 0);
-  Real worst = 0;
-  for (int s = 0; s < 10000; ++s) {
-    w.step();
-    if (s % 10 == 0) worst = std::max(worst, std::abs(totalEnergy(w) - e0) / e0);
-  }
-  EXPECT_LT(worst, 0.01);
-}
-
 TEST_P(Isolated, SymplecticEnergyDoesNotDriftUnderRoughExcitation) {
   // Random per-vertex kicks excite the highest modes, where symplectic Euler's measured energy
   // oscillates by O(omega dt) around a conserved "shadow" energy: bounded, with no trend. The
@@ -70,27 +54,6 @@ TEST_P(Isolated, SymplecticEnergyDoesNotDriftUnderRoughExcitation) {
   }
   EXPECT_NEAR(last / first, 1.0, 0.01);
   EXPECT_LT(peak, 1.5 * e0);
-}
-
-TEST_P(Isolated, DampedEnergyNeverRises) {
-  const Case c = GetParam();
-  Body b = makeBody(c.shape, c.size, c.dim, c.kind);
-  SimulationSettings s = isolated();
-  s.damping = 5.0;
-  World w(b.model, s, {}, {});
-  perturb(w, 0.15 * b.model->voxelSize, 0.02, 3);
-  // Damping is only guaranteed to remove energy when measured at a fixed point of the cycle;
-  // the symplectic "shadow" energy oscillates by O(dt). So compare against the running
-  // minimum plus that O(dt) band, and require a real decrease over the run.
-  const Real e0 = totalEnergy(w);
-  Real prev = e0;
-  for (int k = 0; k < 2000; ++k) {
-    w.step();
-    const Real e = totalEnergy(w);
-    EXPECT_LE(e, prev * (1 + 2e-2)) << "step " << k;
-    prev = std::min(prev, e);
-  }
-  EXPECT_LT(totalEnergy(w), 0.5 * e0);
 }
 
 TEST_P(Isolated, RestStaysAtRest) {
@@ -113,6 +76,54 @@ INSTANTIATE_TEST_SUITE_P(Bodies, Isolated,
                                          Case{"sphere", 7, 3, LayoutKind::Uniform},
                                          Case{"sphere", 12, 2, LayoutKind::Gradational},
                                          Case{"box", 5, 2, LayoutKind::Voxel}),
+                         caseName);
+
+class Resolved : public testing::TestWithParam<Case> {};
+
+TEST_P(Resolved, SymplecticUndampedEnergyWithinOnePercent) {
+  // A smooth 3% deformation released at dt = T/10 (auto): the energy stays within 1%. The error
+  // of symplectic Euler's energy is O((omega dt)^2) in the excited modes, so this holds for
+  // bodies several elements across, whose deformation lives in modes slower than the
+  // element period (a 6-voxel box, 3 elements across, swings by ~3%).
+  const Case c = GetParam();
+  Body b = makeBody(c.shape, c.size, c.dim, c.kind);
+  World w(b.model, isolated(), {}, {});
+  deformSmoothly(w, 0.03);
+  const Real e0 = totalEnergy(w);
+  ASSERT_GT(e0, 0);
+  Real worst = 0;
+  for (int s = 0; s < 10000; ++s) {
+    w.step();
+    if (s % 10 == 0) worst = std::max(worst, std::abs(totalEnergy(w) - e0) / e0);
+  }
+  EXPECT_LT(worst, 0.01);
+}
+
+TEST_P(Resolved, DampedEnergyNeverRises) {
+  const Case c = GetParam();
+  Body b = makeBody(c.shape, c.size, c.dim, c.kind);
+  SimulationSettings s = isolated();
+  s.damping = 20.0;
+  World w(b.model, s, {}, {});
+  deformSmoothly(w, 0.03);
+  // Damping removes energy every step; the measured (synchronised) energy carries an O(dt^2)
+  // error of its own, so allow 0.1% above the running minimum, and require a real decrease.
+  const Real e0 = totalEnergy(w);
+  Real low = e0;
+  for (int k = 0; k < 3000; ++k) {
+    w.step();
+    const Real e = totalEnergy(w);
+    ASSERT_LE(e, low + 1e-3 * e0) << "step " << k;
+    low = std::min(low, e);
+  }
+  EXPECT_LT(totalEnergy(w), 0.5 * e0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Bodies, Resolved,
+                         testing::Values(Case{"sphere", 16, 3, LayoutKind::Gradational},
+                                         Case{"sphere", 12, 3, LayoutKind::Uniform},
+                                         Case{"sphere", 32, 2, LayoutKind::Gradational},
+                                         Case{"box", 16, 2, LayoutKind::Voxel}),
                          caseName);
 
 TEST(Dynamics, ForwardEulerGainsEnergyWhereSymplecticDoesNot) {

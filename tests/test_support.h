@@ -64,3 +64,19 @@ inline Real totalEnergy(const World& w) {
 }
 
 }  // namespace gradel::test
+
+namespace gradel::test {
+
+inline Vec3 centreOfMass(const World& w) {
+  Vec3 c = Vec3::Zero();
+  for (size_t i = 0; i < w.model().numVertices(); ++i) c += w.model().mass[i] * w.state().positions[i];
+  return c / w.model().totalMass;
+}
+
+inline Vec3 centreOfMassVelocity(const World& w) {
+  Vec3 c = Vec3::Zero();
+  for (size_t i = 0; i < w.model().numVertices(); ++i) c += w.model().mass[i] * w.state().velocities[i];
+  return c / w.model().totalMass;
+}
+
+}  // namespace gradel::test

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "gradel/types.h"
@@ -66,10 +67,15 @@ struct ContactResult {
 };
 
 /// Resolves one vertex against one manipulator, in place. xPrev is the vertex position at the
-/// start of the step (for the swept test). Pure function of its arguments.
-ContactResult resolveManipulator(const Manipulator& m, const Vec3& xPrev, Vec3& x, Vec3& v, int dim);
+/// start of the step (for the swept test). With bounce == false the contact is inelastic
+/// (restitution 0): used when a vertex pinched between two surfaces is resolved again, so that
+/// repeated reflections cannot pump energy into it. Pure function of its arguments.
+ContactResult resolveManipulator(const Manipulator& m, const Vec3& xPrev, Vec3& x, Vec3& v, int dim,
+                                 bool bounce = true);
 
-/// Resolves one vertex against the domain walls, in place.
-ContactResult resolveDomain(const DomainSettings& d, Vec3& x, Vec3& v, int dim);
+/// Resolves one vertex against the domain walls, in place (bounce as above). xPrev as above:
+/// friction also acts on the position (see contacts.cpp, frictionSlipCorrection).
+ContactResult resolveDomain(const DomainSettings& d, const Vec3& xPrev, Vec3& x, Vec3& v, int dim,
+                            bool bounce = true);
 
 }  // namespace gradel
