@@ -186,3 +186,38 @@ TEST(Contacts, GraspAgainstWallKeepsEverythingOutside) {
   EXPECT_LT(w.state().positions[tip].x(), 0.075);  // it may slide a little along the (frictionless) cylinder
   EXPECT_GT(w.state().positions[tip].x(), 0.02);
 }
+
+TEST(Contacts, SlidingAlongACurvedSideIsNotMistakenForTunnelling) {
+  // A vertex resting on a static cylinder's side slides along the axis and around it: the short
+  // chord of its step dips inside the curved surface, which must not freeze it in place.
+  Manipulator m;
+  m.settings.shape = ManipulatorShape::Cylinder;
+  m.settings.radius = 0.02;
+  m.settings.halfLength = 0.08;
+  m.settings.axis = Vec3(0, 1, 0);
+  m.position = m.previousPosition = Vec3::Zero();
+  const Vec3 start(0.02 * std::cos(0.3), 0.0, 0.02 * std::sin(0.3));
+  Vec3 x = start + Vec3(0, -6e-4, 4e-4), v(0, -2.9, 2.0);  // a step of 0.7 mm along the side
+  resolveManipulator(m, start, x, v, 3);
+  EXPECT_GT((x - start).norm(), 5e-4);  // it moved
+  EXPECT_GE(m.signedDistance(x, nullptr), 0.0);
+  EXPECT_NEAR(v.y(), -2.9, 1e-12);  // frictionless: tangential velocity untouched
+}
+
+TEST(Contacts, StaticFrictionHoldsPositionNotJustVelocity) {
+  // A vertex pressed into a static sphere while being pulled sideways: with enough friction its
+  // tangential step is undone (no creep); without friction it slides the full step.
+  for (Real mu : {0.0, 2.0}) {
+    const Manipulator m = sphereAt(Vec3::Zero(), 1.0, 0.0, mu);
+    const Vec3 xPrev(0, 1.0 + 1e-9, 0);
+    Vec3 x(0.001, 0.999, 0), v(0.1, -0.1, 0);  // 1 mm sideways, 1 mm in
+    resolveManipulator(m, xPrev, x, v, 3);
+    EXPECT_GE(m.signedDistance(x, nullptr), 0.0);
+    if (mu == 0) {
+      EXPECT_NEAR(x.x(), 0.001, 1e-5);
+    } else {
+      EXPECT_NEAR(x.x(), 0.0, 1e-5);
+      EXPECT_NEAR(v.norm(), 0.0, 1e-12);
+    }
+  }
+}
