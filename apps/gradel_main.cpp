@@ -1,9 +1,10 @@
 // gradel: command-line front end.
 //   gradel layout --shape sphere --size 12 [--dim 2|3] [--layout ...] [--json]
 //   gradel run SCENE.json [--out DIR] [--duration S] [--threads N]
+//   gradel render SCENE.json [--out DIR] [--frames N] [--size WxH] ...   (render_command.h)
 //   gradel --version
 // Exit codes: 0 ok, 1 internal error, 2 bad input (one line on stderr, nothing written),
-// 3 simulation diverged (nothing written), 130 interrupted (nothing written).
+// 3 simulation diverged (nothing written), 4 no OpenGL for `render`, 130 interrupted (nothing written).
 #include <unistd.h>
 
 #include <algorithm>
@@ -26,6 +27,9 @@
 #include "gradel/output.h"
 #include "gradel/scene.h"
 #include "gradel/shapes.h"
+#ifdef GRADEL_WITH_RENDER
+#include "gradel/render/render_command.h"
+#endif
 
 #ifndef GRADEL_VERSION
 #define GRADEL_VERSION "0.1.0"
@@ -222,7 +226,8 @@ int runScene(const RunOptions& o) {
     maxStress = std::max(maxStress, m.maxStress);
     last = m;
     const std::string name = gradel::frameFileName(index);
-    gradel::writeVtu(dir.file(name), model, world.state(), world.vertexStress(), world.elementStress());
+    const std::vector<gradel::Real> elementStress = world.elementStress();
+    gradel::writeVtu(dir.file(name), model, world.state(), world.vertexStress(elementStress), elementStress);
     pvd.push_back({world.time(), name});
   };
 
@@ -303,9 +308,17 @@ int main(int argc, char** argv) {
   run->add_option("--duration", ro.duration, "Simulated time [s] (overrides simulation.duration)");
   run->add_option("--threads", ro.threads, "Worker threads (overrides simulation.threads)");
 
+#ifdef GRADEL_WITH_RENDER
+  gradel::render::RenderCommandOptions rendo;
+  CLI::App* render = gradel::render::addRenderCommand(app, rendo);
+#endif
+
   try {
     app.parse(argc, argv);
     if (layout->parsed()) return runLayout(lo);
+#ifdef GRADEL_WITH_RENDER
+    if (render->parsed()) return gradel::render::runRenderCommand(rendo);
+#endif
     return runScene(ro);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version

@@ -1,6 +1,5 @@
 #include "gradel/rotation_fit.h"
 
-#include <Eigen/Cholesky>
 #include <Eigen/SVD>
 #include <cmath>
 
@@ -12,26 +11,79 @@ int fitRotation3(const Mat3& A, Quat& q, int maxIterations, Real tolerance) {
   // Near the optimum H is positive definite and the Newton step w = H^-1 g converges
   // quadratically. Elsewhere (far from it, inverted or flat elements) we take the step of
   // Mueller et al. 2016, w = g / |tr B|, which never leaves the rotation group and climbs f.
+  // Written out in scalars: this runs once per element per step (the hot loop).
+  Real qw = q.w(), qx = q.x(), qy = q.y(), qz = q.z();
+  const Real scaleA = std::abs(A(0, 0)) + std::abs(A(1, 1)) + std::abs(A(2, 2)) + std::abs(A(0, 1)) +
+                      std::abs(A(1, 0)) + std::abs(A(0, 2)) + std::abs(A(2, 0)) + std::abs(A(1, 2)) + std::abs(A(2, 1));
   int it = 0;
   for (; it < maxIterations; ++it) {
-    const Mat3 B = q.toRotationMatrix().transpose() * A;
-    const Vec3 g(B(2, 1) - B(1, 2), B(0, 2) - B(2, 0), B(1, 0) - B(0, 1));
-    const Real tr = B.trace();
-    const Mat3 H = tr * Mat3::Identity() - 0.5 * (B + B.transpose());
-    Vec3 w;
-    Eigen::LLT<Mat3> llt(H);
-    const Real scale = std::abs(tr) + 1e-300;
-    if (llt.info() == Eigen::Success && H.diagonal().minCoeff() > 1e-6 * scale) {
-      w = llt.solve(g);
-    } else {
-      w = g / (scale + 1e-9 * A.norm());
+    // R from the unit quaternion.
+    const Real xx = qx * qx, yy = qy * qy, zz = qz * qz, xy = qx * qy, xz = qx * qz, yz = qy * qz;
+    const Real wx = qw * qx, wy = qw * qy, wz = qw * qz;
+    const Real R00 = 1 - 2 * (yy + zz), R01 = 2 * (xy - wz), R02 = 2 * (xz + wy);
+    const Real R10 = 2 * (xy + wz), R11 = 1 - 2 * (xx + zz), R12 = 2 * (yz - wx);
+    const Real R20 = 2 * (xz - wy), R21 = 2 * (yz + wx), R22 = 1 - 2 * (xx + yy);
+    // B = R^T A.
+    Real B[3][3];
+    for (int c = 0; c < 3; ++c) {
+      B[0][c] = R00 * A(0, c) + R10 * A(1, c) + R20 * A(2, c);
+      B[1][c] = R01 * A(0, c) + R11 * A(1, c) + R21 * A(2, c);
+      B[2][c] = R02 * A(0, c) + R12 * A(1, c) + R22 * A(2, c);
     }
-    Real angle = w.norm();
-    if (!(angle >= tolerance)) break;  // also stops on NaN
-    if (angle > 1.0) w *= 1.0 / angle, angle = 1.0;  // a trust region: at most one radian a step
-    q = q * Quat(Eigen::AngleAxisd(angle, w / angle));
-    q.normalize();
+    const Real g0 = B[2][1] - B[1][2], g1 = B[0][2] - B[2][0], g2 = B[1][0] - B[0][1];
+    const Real tr = B[0][0] + B[1][1] + B[2][2];
+    // H = tr I - sym(B), symmetric.
+    const Real h00 = tr - B[0][0], h11 = tr - B[1][1], h22 = tr - B[2][2];
+    const Real h01 = -0.5 * (B[0][1] + B[1][0]), h02 = -0.5 * (B[0][2] + B[2][0]), h12 = -0.5 * (B[1][2] + B[2][1]);
+    // Positive definite by Sylvester's criterion -> Newton via the adjugate; else Mueller's step.
+    const Real c00 = h11 * h22 - h12 * h12, c01 = h02 * h12 - h01 * h22, c02 = h01 * h12 - h02 * h11;
+    const Real det = h00 * c00 + h01 * c01 + h02 * c02;
+    const Real m2 = h00 * h11 - h01 * h01;
+    const Real scale = std::abs(tr) + 1e-300;
+    Real w0, w1, w2;
+    const bool newton = h00 > 1e-6 * scale && m2 > 1e-12 * scale * scale && det > 1e-18 * scale * scale * scale;
+    if (newton) {
+      const Real c11 = h00 * h22 - h02 * h02, c12 = h01 * h02 - h00 * h12, c22 = m2;
+      const Real inv = 1 / det;
+      w0 = (c00 * g0 + c01 * g1 + c02 * g2) * inv;
+      w1 = (c01 * g0 + c11 * g1 + c12 * g2) * inv;
+      w2 = (c02 * g0 + c12 * g1 + c22 * g2) * inv;
+    } else {
+      const Real inv = 1 / (scale + 1e-9 * scaleA);
+      w0 = g0 * inv, w1 = g1 * inv, w2 = g2 * inv;
+    }
+    Real angle2 = w0 * w0 + w1 * w1 + w2 * w2;
+    if (!(angle2 >= tolerance * tolerance)) break;  // converged (also stops on NaN)
+    if (angle2 > 1.0) {  // a trust region: at most one radian a step
+      const Real s = 1 / std::sqrt(angle2);
+      w0 *= s, w1 *= s, w2 *= s, angle2 = 1;
+    }
+    // q <- q * exp(w / 2): exact half-angle rotation, with sin and cos from their series for
+    // small angles (the usual case with a warm start) to stay cheap.
+    const Real angle = std::sqrt(angle2);
+    Real cw, sw;  // cos(angle / 2), sin(angle / 2) / angle
+    if (angle < 1e-3) {
+      cw = 1 - angle2 / 8;
+      sw = 0.5 - angle2 / 48;
+    } else {
+      cw = std::cos(0.5 * angle);
+      sw = std::sin(0.5 * angle) / angle;
+    }
+    const Real dx = sw * w0, dy = sw * w1, dz = sw * w2;
+    const Real nw = qw * cw - qx * dx - qy * dy - qz * dz;
+    const Real nx = qw * dx + qx * cw + qy * dz - qz * dy;
+    const Real ny = qw * dy - qx * dz + qy * cw + qz * dx;
+    const Real nz = qw * dz + qx * dy - qy * dx + qz * cw;
+    const Real norm = 1 / std::sqrt(nw * nw + nx * nx + ny * ny + nz * nz);
+    qw = nw * norm, qx = nx * norm, qy = ny * norm, qz = nz * norm;
+    // Newton converges quadratically: after a step this small the next one would be below
+    // the tolerance, so skip the iteration that would only confirm it.
+    if (newton && angle2 < tolerance) {
+      ++it;
+      break;
+    }
   }
+  q = Quat(qw, qx, qy, qz);
   return it;
 }
 

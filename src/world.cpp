@@ -2,6 +2,9 @@
 
 #include <cmath>
 #include <cstring>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include "gradel/element.h"
 
@@ -38,12 +41,11 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   dt_ = sim_.dt > 0 ? sim_.dt : sim_.dtFraction * period;
   if (!(dt_ > 0) || !std::isfinite(dt_)) throw InputError("simulation.dt: could not derive a positive time step");
 
-  const size_t V = model_->numVertices(), E = model_->numElements(), P = model_->numPairs();
+  const size_t V = model_->numVertices(), E = model_->numElements();
   state_.positions = model_->restPositions;
   state_.velocities.assign(V, Vec3::Zero());
   state_.rotations.assign(E, Quat::Identity());
-  scratch_.pairForces.assign(P, Vec3::Zero());
-  scratch_.elementEnergy.assign(E, 0.0);
+  scratch_.forces.assign(V, Vec3::Zero());
   scratch_.contactDepth.assign(V, 0.0);
 
   for (ManipulatorSettings& s : manipulators) {
@@ -66,19 +68,21 @@ void World::setManipulatorPose(size_t i, const Vec3& position, const Vec3& veloc
   m.velocity = velocity;
 }
 
-// Stage 1: elastic forces per element into per-pair slots (no two elements write the same slot).
-void World::stageElementForces(size_t begin, size_t end) {
+// Stage 1: elastic forces of the elements [begin, end) of one colour (eq. 1), added into the
+// per-vertex force array; elements of one colour share no vertex.
+void World::stageElementForces(size_t colour, size_t begin, size_t end) {
   const RestModel& m = *model_;
   const Vec3* x = state_.positions.data();
-  for (size_t e = begin; e < end; ++e) {
+  const uint32_t* ids = &m.colourElements[m.colourStart[colour]];
+  for (size_t j = begin; j < end; ++j) {
+    const uint32_t e = ids[j];
     const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
-    const ElementResult r = elementForces(m.dim, x, &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[e],
-                                          state_.rotations[e], &scratch_.pairForces[b], sim_.rotationIterations);
-    scratch_.elementEnergy[e] = r.energy;
+    elementForcesAccumulate(m.dim, x, &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[e], state_.rotations[e],
+                            scratch_.forces.data(), sim_.rotationIterations);
   }
 }
 
-// Stage 2: gather each vertex's pair forces in a fixed order, then integrate (eqs. 2-3).
+// Stage 2: integrate (eqs. 2-3), and clear the force slots for the next step.
 void World::stageIntegrate(size_t begin, size_t end) {
   const RestModel& m = *model_;
   const Real dt = dt_;
@@ -87,9 +91,8 @@ void World::stageIntegrate(size_t begin, size_t end) {
   Vec3 g = sim_.gravity;
   if (m.dim == 2) g.z() = 0;
   for (size_t i = begin; i < end; ++i) {
-    Vec3 f = Vec3::Zero();
-    for (uint32_t q = m.vertPairStart[i]; q < m.vertPairStart[i + 1]; ++q) f += scratch_.pairForces[m.vertPairs[q]];
-    const Vec3 a = f * m.invMass[i] + g;
+    const Vec3 a = scratch_.forces[i] * m.invMass[i] + g;
+    scratch_.forces[i].setZero();
     Vec3& x = state_.positions[i];
     Vec3& v = state_.velocities[i];
     if (forward) {
@@ -135,29 +138,46 @@ void World::moveManipulators(Real tNext) {
 }
 
 namespace {
-// Runs fn(begin, end) over [0, n) split into `threads` contiguous ranges. Each index is handled
-// by exactly one call and no result depends on the split, so any thread count gives the same
-// answer bit for bit.
-template <class Fn>
-void parallelRanges(size_t n, int threads, Fn&& fn) {
-  if (threads <= 1 || n < 1024) {
-    fn(size_t(0), n);
-    return;
-  }
-  const size_t chunks = size_t(threads) * 8;
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-  for (size_t c = 0; c < chunks; ++c) fn(n * c / chunks, n * (c + 1) / chunks);
+// The contiguous share [begin, end) of n items for worker `t` of `threads`. Every item is handled
+// by exactly one worker and no result depends on the split.
+inline std::pair<size_t, size_t> share(size_t n, int t, int threads) {
+  return {n * size_t(t) / size_t(threads), n * size_t(t + 1) / size_t(threads)};
 }
 }  // namespace
 
 void World::step() {
-  const size_t V = model_->numVertices(), E = model_->numElements();
+  const size_t V = model_->numVertices();
+  const size_t colours = model_->numColours();
   const bool contacts = !manipulators_.empty() || domain_.enabled;
+  // Small bodies are not worth waking threads for.
+  const int threads = V < 2048 ? 1 : sim_.threads;
   if (contacts) scratch_.previousPositions = state_.positions;
-  parallelRanges(E, sim_.threads, [&](size_t b, size_t e) { stageElementForces(b, e); });
-  parallelRanges(V, sim_.threads, [&](size_t b, size_t e) { stageIntegrate(b, e); });
-  moveManipulators(state_.time + dt_);
-  if (contacts) parallelRanges(V, sim_.threads, [&](size_t b, size_t e) { stageContacts(b, e); });
+  // One parallel region per step; each `omp for` ends with a barrier, so the colours run one
+  // after the other and the stages in order.
+#pragma omp parallel num_threads(threads) if (threads > 1)
+  {
+#ifdef _OPENMP
+    const int t = omp_get_thread_num(), T = omp_get_num_threads();
+#else
+    const int t = 0, T = 1;
+#endif
+    for (size_t c = 0; c < colours; ++c) {
+      const auto [b, e] = share(model_->colourStart[c + 1] - model_->colourStart[c], t, T);
+      stageElementForces(c, b, e);
+#pragma omp barrier
+    }
+    {
+      const auto [b, e] = share(V, t, T);
+      stageIntegrate(b, e);
+    }
+#pragma omp barrier
+#pragma omp single
+    moveManipulators(state_.time + dt_);
+    if (contacts) {
+      const auto [b, e] = share(V, t, T);
+      stageContacts(b, e);
+    }
+  }
   for (Manipulator& m : manipulators_) m.previousPosition = m.position;
   state_.time += dt_;
 }
@@ -181,21 +201,17 @@ std::vector<Real> World::elementStress() const {
   return s;
 }
 
-std::vector<Real> World::vertexStress() const {
+std::vector<Real> World::vertexStress() const { return vertexStress(elementStress()); }
+
+std::vector<Real> World::vertexStress(const std::vector<Real>& elementStress) const {
   const RestModel& m = *model_;
-  const std::vector<Real> es = elementStress();
-  // Element of each pair, for the gather.
-  std::vector<uint32_t> pairElem(m.numPairs());
+  // Mean over each vertex's elements, summed in element order (deterministic).
+  std::vector<Real> sum(m.numVertices(), 0.0);
+  std::vector<uint32_t> count(m.numVertices(), 0);
   for (size_t e = 0; e < m.numElements(); ++e)
-    for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) pairElem[p] = uint32_t(e);
-  std::vector<Real> vs(m.numVertices(), 0.0);
-  for (size_t i = 0; i < m.numVertices(); ++i) {
-    const uint32_t b = m.vertPairStart[i], n = m.vertPairStart[i + 1] - b;
-    Real sum = 0;
-    for (uint32_t q = b; q < b + n; ++q) sum += es[pairElem[m.vertPairs[q]]];
-    vs[i] = n ? sum / n : 0;
-  }
-  return vs;
+    for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) sum[m.elemVerts[p]] += elementStress[e], ++count[m.elemVerts[p]];
+  for (size_t i = 0; i < sum.size(); ++i) sum[i] = count[i] ? sum[i] / count[i] : 0;
+  return sum;
 }
 
 Metrics World::metrics() const {
@@ -206,13 +222,16 @@ Metrics World::metrics() const {
   if (m.dim == 2) g.z() = 0;
 
   // Elastic forces and energy at the current positions.
-  std::vector<Vec3> pairForces(m.numPairs());
+  std::vector<Vec3> forces(m.numVertices(), Vec3::Zero());
+  std::vector<Vec3> f;
   r.minElementDet = std::numeric_limits<Real>::infinity();
   for (size_t e = 0; e < m.numElements(); ++e) {
     const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
+    f.resize(n);
     Quat q = state_.rotations[e];
     const ElementResult er = elementForces(m.dim, state_.positions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n),
-                                           m.stiffness[e], q, &pairForces[b], 20);
+                                           m.stiffness[e], q, f.data(), 20);
+    for (uint32_t i = 0; i < n; ++i) forces[m.elemVerts[b + i]] += f[i];
     r.elasticEnergy += er.energy;
     r.maxStress = std::max(r.maxStress, std::sqrt(er.sumSqDisp / n) / m.size[e]);
     r.minElementDet = std::min(r.minElementDet,
@@ -227,11 +246,7 @@ Metrics World::metrics() const {
   for (size_t i = 0; i < m.numVertices(); ++i) {
     const Vec3& x = state_.positions[i];
     Vec3 v = state_.velocities[i];
-    if (staggered) {
-      Vec3 f = Vec3::Zero();
-      for (uint32_t q = m.vertPairStart[i]; q < m.vertPairStart[i + 1]; ++q) f += pairForces[m.vertPairs[q]];
-      v += 0.5 * dt_ * (f * m.invMass[i] + g);
-    }
+    if (staggered) v += 0.5 * dt_ * (forces[i] * m.invMass[i] + g);
     r.kineticEnergy += 0.5 * m.mass[i] * v.squaredNorm();
     r.gravityEnergy -= m.mass[i] * g.dot(x);
     r.linearMomentum += m.mass[i] * v;
@@ -255,6 +270,15 @@ uint64_t World::stateHash() const {
   mix(state_.positions.data(), state_.positions.size() * sizeof(Vec3));
   mix(state_.velocities.data(), state_.velocities.size() * sizeof(Vec3));
   return h;
+}
+
+size_t World::memoryBytes() const {
+  auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
+  size_t b = sizeof(*this) + model_->memoryBytes();
+  b += bytes(state_.positions) + bytes(state_.velocities) + bytes(state_.rotations);
+  b += bytes(scratch_.forces) + bytes(scratch_.previousPositions) + bytes(scratch_.contactDepth);
+  for (const Manipulator& m : manipulators_) b += sizeof(m) + bytes(m.settings.path.keys);
+  return b;
 }
 
 }  // namespace gradel

@@ -127,19 +127,23 @@ INSTANTIATE_TEST_SUITE_P(Bodies, Resolved,
                          caseName);
 
 TEST(Dynamics, ForwardEulerGainsEnergyWhereSymplecticDoesNot) {
-  // The paper's literal eq. 3 uses V(T): on an undamped oscillator it adds energy every cycle.
+  // The paper's literal eq. 3 uses V(T): every undamped oscillation gains energy by a factor
+  // 1 + (omega dt)^2 per step, so at dt = T/10 the fastest modes (seeded by rounding) explode
+  // within a few hundred steps. Symplectic Euler keeps the energy.
   Body b = makeBody("box", 4, 3, LayoutKind::Gradational);
-  auto run = [&](IntegratorKind k) {
+  auto run = [&](IntegratorKind k, int steps) {
     SimulationSettings s = isolated();
     s.integrator = k;
     World w(b.model, s, {}, {});
     deformSmoothly(w, 0.03);
     const Real e0 = totalEnergy(w);
-    for (int i = 0; i < 3000; ++i) w.step();
+    for (int i = 0; i < steps; ++i) w.step();
     return totalEnergy(w) / e0;
   };
-  EXPECT_GT(run(IntegratorKind::ForwardEuler), 1.5);
-  EXPECT_NEAR(run(IntegratorKind::SymplecticEuler), 1.0, 0.01);
+  const Real forward = run(IntegratorKind::ForwardEuler, 100);
+  EXPECT_TRUE(std::isfinite(forward));
+  EXPECT_GT(forward, 1.5);
+  EXPECT_NEAR(run(IntegratorKind::SymplecticEuler, 3000), 1.0, 0.01);
 }
 
 TEST(Dynamics, GravityAcceleratesTheCentreOfMass) {
@@ -153,7 +157,7 @@ TEST(Dynamics, GravityAcceleratesTheCentreOfMass) {
   Vec3 p = Vec3::Zero();
   for (size_t i = 0; i < b.model->numVertices(); ++i) p += b.model->mass[i] * w.state().velocities[i];
   EXPECT_NEAR(p.y() / (b.model->totalMass * -9.81 * w.time()), 1.0, 1e-9);
-  EXPECT_NEAR(std::abs(p.x()) + std::abs(p.z()), 0.0, 1e-15);
+  EXPECT_LT(std::abs(p.x()) + std::abs(p.z()), 1e-12 * std::abs(p.y()));
 }
 
 TEST(Dynamics, AutoStepIsTenthOfSmallestPeriod) {

@@ -24,6 +24,11 @@ struct ElementResult {
 ElementResult elementForces(int dim, const Vec3* x, const uint32_t* verts, const Vec3* R0, int n,
                             Real k, Quat& q, Vec3* f, int maxIterations = 4);
 
+/// The same forces added into a global per-vertex array (forces[verts[i]] += f_i), without the
+/// energy: the stepping loop's form. The caller makes sure no two concurrent calls share a vertex.
+void elementForcesAccumulate(int dim, const Vec3* x, const uint32_t* verts, const Vec3* R0, int n, Real k, Quat& q,
+                             Vec3* forces, int maxIterations = 4);
+
 /// A = sum_i r_i R0_i^T about the current centroid (also returns the centroid).
 Mat3 elementCovariance(const Vec3* x, const uint32_t* verts, const Vec3* R0, int n, Vec3* centroid = nullptr);
 

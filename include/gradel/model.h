@@ -31,9 +31,13 @@ struct RestModel {
   std::vector<uint32_t> elemVerts;  ///< Vertex id per pair.
   std::vector<Vec3> restOffsets;    ///< R0 per pair [m]: rest position minus the element's rest centroid.
 
-  // ---- vertex -> pair (compressed rows), for deterministic force gathering ----
-  std::vector<uint32_t> vertPairStart;  ///< Size vertices + 1.
-  std::vector<uint32_t> vertPairs;      ///< Pair ids touching each vertex, ascending.
+  // ---- element colouring: no two elements of one colour share a vertex ----
+  std::vector<uint32_t> colourStart;     ///< Size colours + 1.
+  std::vector<uint32_t> colourElements;  ///< Element ids grouped by colour, ascending within a colour.
+  // Elements of one colour can add their forces into the vertices concurrently without
+  // conflicts, and each vertex receives its contributions in colour order whatever the thread
+  // count: deterministic parallel accumulation without atomics.
+
 
   Real totalMass = 0;  ///< [kg]
   Real smallestPeriod = 0;        ///< [s] the paper's "smallest element period": min over elements of 2 pi sqrt(m_min / k_e) (sec. 3.4).
@@ -41,7 +45,10 @@ struct RestModel {
 
   size_t numVertices() const { return restPositions.size(); }
   size_t numElements() const { return stiffness.size(); }
+  /// Bytes held by all arrays of the model (capacity, not size).
+  size_t memoryBytes() const;
   size_t numPairs() const { return elemVerts.size(); }
+  size_t numColours() const { return colourStart.empty() ? 0 : colourStart.size() - 1; }
 };
 
 /// Builds the rest model. `origin` is the world position [m] of lattice point (0,0,0).

@@ -1,8 +1,8 @@
 // A simulated body: rest model (shared, immutable) + runtime state + manipulators + walls,
-// advanced by named stages (Box2D style): elastic forces -> integrate (gather, velocities,
-// positions) -> contacts. Every stage runs over an index range; threads only split ranges and
-// never change the order in which any sum is formed, so results are identical at any thread
-// count.
+// advanced by named stages (Box2D style): elastic forces -> integrate (velocities, positions)
+// -> contacts. Every stage runs over an index range; threads only split ranges and never change
+// the order in which any sum is formed (element forces are added colour by colour, see
+// model.h), so results are identical at any thread count.
 #pragma once
 
 #include <memory>
@@ -24,8 +24,7 @@ struct State {
 
 /// Per-step scratch (never read across steps except for output).
 struct StepScratch {
-  std::vector<Vec3> pairForces;     ///< [N] per element-vertex pair, written by the element stage.
-  std::vector<Real> elementEnergy;  ///< [J] per element, written by the element stage.
+  std::vector<Vec3> forces;         ///< [N] per vertex, accumulated colour by colour by the element stage.
   std::vector<Vec3> previousPositions;  ///< [m] positions at the start of the step (swept contacts).
   std::vector<Real> contactDepth;   ///< [m] per vertex: depth before correction in the last step.
 };
@@ -74,13 +73,17 @@ class World {
   /// element size [-]. Per-vertex stress: mean over the vertex's elements.
   std::vector<Real> elementStress() const;
   std::vector<Real> vertexStress() const;
+  /// The same from an elementStress() result already at hand.
+  std::vector<Real> vertexStress(const std::vector<Real>& elementStress) const;
 
   Metrics metrics() const;
   /// FNV-1a hash of the positions and velocities (bitwise): equal states give equal hashes.
   uint64_t stateHash() const;
+  /// Bytes held by the world: rest model, state, scratch and manipulators (capacities).
+  size_t memoryBytes() const;
 
  private:
-  void stageElementForces(size_t begin, size_t end);
+  void stageElementForces(size_t colour, size_t begin, size_t end);
   void stageIntegrate(size_t begin, size_t end);
   void stageContacts(size_t begin, size_t end);
   void moveManipulators(Real tNext);
