@@ -188,9 +188,11 @@ TEST(Dynamics, ConsistentMassIsDensityTimesVolume) {
 }
 
 TEST(Dynamics, SameStateAtAnyThreadCount) {
-  // Large enough (> 1024 elements) that the stages really split across threads.
-  Body b = makeBody("sphere", 14, 3, LayoutKind::Voxel);
-  ASSERT_GT(b.model->numElements(), 1024u);
+  // Large enough (>= 2048 vertices, see World::step) that the stages really split across
+  // threads, with many colours.
+  Body b = makeBody("sphere", 16, 3, LayoutKind::Voxel);
+  ASSERT_GE(b.model->numVertices(), 2048u);
+  ASSERT_GT(b.model->numColours(), 8u);
   auto run = [&](int threads) {
     SimulationSettings s;
     s.threads = threads;

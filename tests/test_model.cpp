@@ -1,0 +1,65 @@
+// model: the rest model built from a layout (masses, stiffness, colouring).
+#include <gtest/gtest.h>
+
+#include <set>
+
+#include "test_support.h"
+
+using namespace gradel;
+using namespace gradel::test;
+
+TEST(Model, ColouringIsConflictFreeAndComplete) {
+  for (LayoutKind k : {LayoutKind::Gradational, LayoutKind::Uniform, LayoutKind::Voxel})
+    for (int dim : {2, 3}) {
+      Body b = makeBody("sphere", dim == 3 ? 14 : 40, dim, k);
+      const RestModel& m = *b.model;
+      std::vector<int> seen(m.numElements(), 0);
+      for (size_t c = 0; c < m.numColours(); ++c) {
+        std::set<uint32_t> verts;
+        for (uint32_t j = m.colourStart[c]; j < m.colourStart[c + 1]; ++j) {
+          const uint32_t e = m.colourElements[j];
+          ++seen[e];
+          if (j > m.colourStart[c]) {
+            EXPECT_LT(m.colourElements[j - 1], e);  // ascending within a colour
+          }
+          for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p)
+            EXPECT_TRUE(verts.insert(m.elemVerts[p]).second) << "colour " << c << " shares vertex " << m.elemVerts[p];
+        }
+      }
+      for (int s : seen) EXPECT_EQ(s, 1);
+      EXPECT_LE(m.numColours(), dim == 3 ? 64u : 16u);
+    }
+}
+
+TEST(Model, ConsistentCubeStiffnessIsHalfEdgeTimesModulus) {
+  // A full cube element of edge s with 8 corners: sum |R0|^2 = 6 s^2, V = s^3, so
+  // k_e = 3 E s^3 / (6 s^2) = E s / 2 (material.h).
+  MaterialSettings mat;
+  mat.youngsModulus = 2.0e5;
+  Body b = makeBody("box", 2, 3, LayoutKind::Gradational, mat, 0.01);
+  ASSERT_EQ(b.model->numElements(), 1u);
+  EXPECT_NEAR(b.model->stiffness[0], 2.0e5 * 0.02 / 2, 1e-9);
+  // Each corner gets an eighth of the block's mass.
+  for (Real mass : b.model->mass) EXPECT_NEAR(mass, 1000.0 * 8e-6 / 8, 1e-15);
+}
+
+TEST(Model, PaperScalingGivesEveryVertexOneVoxelsMass) {
+  MaterialSettings mat;
+  mat.scaling = Scaling::Paper;
+  mat.density = 1.0;
+  mat.paperK = 10000;
+  Body b = makeBody("sphere", 12, 3, LayoutKind::Gradational, mat, 1.0);
+  for (Real mass : b.model->mass) EXPECT_EQ(mass, 1.0);
+  for (size_t e = 0; e < b.model->numElements(); ++e)
+    EXPECT_DOUBLE_EQ(b.model->stiffness[e], 10000.0 / b.model->size[e]);  // k / s_e (sec. 2.2)
+}
+
+TEST(Model, RestOffsetsAreCentred) {
+  Body b = makeBody("sphere", 10, 3, LayoutKind::Gradational);
+  const RestModel& m = *b.model;
+  for (size_t e = 0; e < m.numElements(); ++e) {
+    Vec3 s = Vec3::Zero();
+    for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) s += m.restOffsets[p];
+    EXPECT_LT(s.norm(), 1e-12 * m.size[e]);  // zero up to rounding
+  }
+}
