@@ -20,6 +20,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "gradel/io/volume_file.h"
 #include "gradel/scene.h"
 
 namespace gradel {
@@ -466,32 +467,106 @@ Primitive readPrimitive(Fields& f) {
   return p;
 }
 
+// "body.source": a volume or mesh file (io/volume_file.h). Relative paths are relative to the
+// scene file's folder; the file must exist when the scene is read, and is read by buildScene.
+std::shared_ptr<const VolumeSource> readSource(Fields f, int dim, Real voxelSize) {
+  io::VolumeFileSpec spec;
+  spec.dim = dim;
+  spec.voxelSize = voxelSize;
+  const json& file = f.require("file", "a file path");
+  if (!file.is_string() || file.get<std::string>().empty()) f.failWrongType("file", file, "a file path");
+  std::filesystem::path path = file.get<std::string>();
+  if (path.is_relative()) path = std::filesystem::path(f.context().file).parent_path() / path;
+  spec.path = path.lexically_normal().string();
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(spec.path, ec))
+    f.fail("file", "\"" + file.get<std::string>() + "\" is not a readable file (looked for " + spec.path + ")");
+  if (f.take("format")) {
+    spec.format = f.enumeration("format", io::VolumeFormat::Binvox, &io::parseVolumeFormat);
+  } else {
+    try {
+      spec.format = io::volumeFormatFromPath(spec.path);
+    } catch (const InputError& e) {
+      f.fail("file", e.what());
+    }
+  }
+  const io::VolumeFormat format = *spec.format;
+  const std::string name = io::volumeFormatName(format);
+  const bool grey = format == io::VolumeFormat::Nrrd || format == io::VolumeFormat::Nifti || format == io::VolumeFormat::Raw;
+  const bool mesh = io::isMeshFormat(format);
+  const std::string greyOnly = "only grey-level formats (nrrd, nifti, raw) take it; " + name + " files are binary already";
+  if (!grey) {
+    f.forbid("threshold", greyOnly);
+    f.forbid("range", greyOnly);
+  }
+  spec.grey.threshold = f.optNumber("threshold", kAny, "");
+  if (const json* r = f.take("range")) {
+    const std::string expected = "2 numbers [lo, hi] with lo <= hi";
+    if (!r->is_array() || r->size() != 2 || !(*r)[0].is_number() || !(*r)[1].is_number()) f.failWrongType("range", *r, expected);
+    const Real lo = (*r)[0].get<Real>(), hi = (*r)[1].get<Real>();
+    if (!std::isfinite(lo) || !std::isfinite(hi) || lo > hi) f.fail("range", r->dump() + " is out of range (expected " + expected + ")");
+    if (spec.grey.threshold) f.fail("range", "not allowed here: give \"threshold\" or \"range\", not both");
+    spec.grey.rangeLo = lo;
+    spec.grey.rangeHi = hi;
+  }
+  if (mesh) {
+    if (dim == 2) f.fail("file", "a mesh is voxelised in 3D only (expected a voxel format in a 2D scene)");
+    spec.resolution = f.optInteger("resolution", 1, 1024).value_or(spec.resolution);
+  } else {
+    f.forbid("resolution", "only meshes (obj, stl, ply) are voxelised at a resolution");
+  }
+  if (format == io::VolumeFormat::Vox)
+    spec.model = f.optInteger("model", 0, 1 << 20).value_or(spec.model);
+  else
+    f.forbid("model", "only .vox files hold several models");
+  if (format == io::VolumeFormat::Raw) {
+    const std::array<int, 3> dims = f.requireIntVec("dims", 1, kMaxGridEdge);
+    spec.raw.dims = {dims[0], dims[1], dims[2]};
+    f.require("type", "a sample type");
+    spec.raw.samples.type = f.enumeration("type", io::ScalarType::UInt8, &io::parseScalarType);
+    spec.raw.samples.bigEndian = f.choice("endian", {"little", "big"}, 0) == 1;
+    spec.raw.headerBytes = uint64_t(f.optInteger("header_bytes", 0, std::numeric_limits<int>::max()).value_or(0));
+  } else {
+    for (const char* key : {"dims", "type", "endian", "header_bytes"})
+      f.forbid(key, "only raw files need their layout described (the " + name + " header has it)");
+  }
+  f.finish();
+  return io::openVolume(spec);
+}
+
 void readBody(Fields f, Scene& scene) {
   const int dim = scene.dim;
   BodySettings& body = scene.body;
-  const int shape = f.choice("shape", {"box", "sphere", "cylinder", "union"});
-  const Real voxelSize = f.number("voxel_size", body.shape.voxelSize, kPositive, "m");
-  if (shape == 3) {
-    f.forbid("size", "\"size\" is for the presets box, sphere and cylinder; a union takes \"grid\"");
-    ShapeSpec spec;
-    spec.dim = dim;
-    spec.voxelSize = voxelSize;
-    spec.dims = f.requireIntVec("grid", 1, kMaxGridEdge);
-    std::vector<Fields> prims = f.objectArray("primitives", true);
-    if (prims.empty()) f.fail("primitives", "empty (expected at least one primitive)");
-    for (Fields& pf : prims) spec.primitives.push_back(readPrimitive(pf));
-    body.shape = spec;
+  if (auto source = f.optObject("source")) {
+    for (const char* key : {"shape", "size", "grid", "primitives"})
+      f.forbid(key, "a body with \"source\" takes its volume from the file");
+    body.shape.voxelSize = f.number("voxel_size", body.shape.voxelSize, kPositive, "m");
+    body.source = readSource(*source, dim, body.shape.voxelSize);
   } else {
-    f.forbid("grid", "\"grid\" is only for shape \"union\"");
-    f.forbid("primitives", "\"primitives\" is only for shape \"union\"");
-    const int size = f.requireInteger("size", 1, kMaxGridEdge);
-    if (shape == 2 && dim == 2)
-      f.fail("shape", "\"cylinder\" is 3D only (expected \"box\", \"sphere\" or \"union\" in a 2D scene)");
-    static const char* kNames[] = {"box", "sphere", "cylinder"};
-    try {
-      body.shape = presetShape(kNames[shape], size, dim, voxelSize);
-    } catch (const InputError& e) {
-      f.fail("shape", e.what());
+    const int shape = f.choice("shape", {"box", "sphere", "cylinder", "union"});
+    const Real voxelSize = f.number("voxel_size", body.shape.voxelSize, kPositive, "m");
+    if (shape == 3) {
+      f.forbid("size", "\"size\" is for the presets box, sphere and cylinder; a union takes \"grid\"");
+      ShapeSpec spec;
+      spec.dim = dim;
+      spec.voxelSize = voxelSize;
+      spec.dims = f.requireIntVec("grid", 1, kMaxGridEdge);
+      std::vector<Fields> prims = f.objectArray("primitives", true);
+      if (prims.empty()) f.fail("primitives", "empty (expected at least one primitive)");
+      for (Fields& pf : prims) spec.primitives.push_back(readPrimitive(pf));
+      body.shape = spec;
+    } else {
+      f.forbid("grid", "\"grid\" is only for shape \"union\"");
+      f.forbid("primitives", "\"primitives\" is only for shape \"union\"");
+      const int size = f.requireInteger("size", 1, kMaxGridEdge);
+      if (shape == 2 && dim == 2)
+        f.fail("shape", "\"cylinder\" is 3D only (expected \"box\", \"sphere\" or \"union\" in a 2D scene)");
+      static const char* kNames[] = {"box", "sphere", "cylinder"};
+      try {
+        body.shape = presetShape(kNames[shape], size, dim, voxelSize);
+      } catch (const InputError& e) {
+        f.fail("shape", e.what());
+      }
     }
   }
   body.layout = f.enumeration("layout", body.layout, &parseLayoutKind);
@@ -532,6 +607,7 @@ void readSimulation(Fields f, Scene& scene) {
   scene.output.duration = f.number("duration", scene.output.duration, kPositive, "s");
   scene.output.frameInterval = f.number("frame_interval", scene.output.frameInterval, kPositive, "s");
   s.threads = f.optInteger("threads", 1, 1024).value_or(s.threads);
+  s.implicitIterations = f.optInteger("implicit_iterations", 1, 1000).value_or(s.implicitIterations);
   f.finish();
 }
 
@@ -560,6 +636,35 @@ Keyframe readKeyframe(Fields& f) {
   return k;
 }
 
+// A path of keyframes with strictly increasing times.
+Path readPath(Fields& f) {
+  Path path;
+  std::vector<Fields> keys = f.objectArray("path", false);
+  for (size_t i = 0; i < keys.size(); ++i) {
+    Keyframe k = readKeyframe(keys[i]);
+    if (i > 0 && !(k.time > path.keys.back().time))
+      keys[i].fail("t", numberText(k.time) + " is not after the previous key's t = " +
+                            numberText(path.keys.back().time) + " (expected strictly increasing times [s])");
+    path.keys.push_back(k);
+  }
+  return path;
+}
+
+// A pinned box; its path's positions are offsets from rest (pins.h).
+PinSettings readPin(Fields& f, int dim) {
+  PinSettings p;
+  p.min = f.requireVec("min", kAny, "m");
+  p.max = f.requireVec("max", kAny, "m");
+  if (dim == 2) {
+    p.min.z() = -1;  // the z = 0 plane is inside, as for the domain
+    p.max.z() = 1;
+  }
+  checkMaxAboveMin(f, p.min, p.max);
+  p.path = readPath(f);
+  f.finish();
+  return p;
+}
+
 ManipulatorSettings readManipulator(Fields& f, int dim) {
   ManipulatorSettings m;
   f.require("type", dim == 3 ? "\"sphere\" or \"cylinder\"" : "\"circle\" or \"sphere\"");
@@ -581,14 +686,7 @@ ManipulatorSettings readManipulator(Fields& f, int dim) {
   }
   m.restitution = f.number("restitution", m.restitution, kUnit, "");
   m.friction = f.number("friction", m.friction, kNonNegative, "");
-  std::vector<Fields> keys = f.objectArray("path", false);
-  for (size_t i = 0; i < keys.size(); ++i) {
-    Keyframe k = readKeyframe(keys[i]);
-    if (i > 0 && !(k.time > m.path.keys.back().time))
-      keys[i].fail("t", numberText(k.time) + " is not after the previous key's t = " +
-                            numberText(m.path.keys.back().time) + " (expected strictly increasing times [s])");
-    m.path.keys.push_back(k);
-  }
+  m.path = readPath(f);
   f.finish();
   return m;
 }
@@ -620,6 +718,7 @@ Scene parseScene(const std::string& jsonText, const std::string& sourceName) {
   if (auto s = top.optObject("simulation")) readSimulation(*s, scene);
   if (auto d = top.optObject("domain")) readDomain(*d, scene);
   for (Fields& mf : top.objectArray("manipulators", false)) scene.manipulators.push_back(readManipulator(mf, scene.dim));
+  for (Fields& pf : top.objectArray("pins", false)) scene.pins.push_back(readPin(pf, scene.dim));
   top.finish();
 
   if (scene.dim == 2) {

@@ -13,10 +13,12 @@ namespace gradel {
 IntegratorKind parseIntegratorKind(const std::string& name) {
   if (name == "symplectic") return IntegratorKind::SymplecticEuler;
   if (name == "forward_euler") return IntegratorKind::ForwardEuler;
-  throw InputError("unknown integrator '" + name + "' (expected symplectic or forward_euler)");
+  if (name == "implicit") return IntegratorKind::Implicit;
+  throw InputError("unknown integrator '" + name + "' (expected symplectic, forward_euler or implicit)");
 }
 
 const char* integratorKindName(IntegratorKind k) {
+  if (k == IntegratorKind::Implicit) return "implicit";
   return k == IntegratorKind::ForwardEuler ? "forward_euler" : "symplectic";
 }
 
@@ -38,7 +40,10 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   if (!(sim_.damping >= 0) || !std::isfinite(sim_.damping)) throw InputError("simulation.damping must be >= 0");
   if (!sim_.gravity.allFinite()) throw InputError("simulation.gravity must be finite");
   const Real period = sim_.dtPeriod == PeriodRule::Element ? model_->smallestPeriod : model_->smallestVertexPeriod;
-  dt_ = sim_.dt > 0 ? sim_.dt : sim_.dtFraction * period;
+  // The implicit integrator is stable at any dt: "auto" is one display frame.
+  const Real autoDt = sim_.integrator == IntegratorKind::Implicit ? 1.0 / 60.0 : sim_.dtFraction * period;
+  dt_ = sim_.dt > 0 ? sim_.dt : autoDt;
+  if (sim_.implicitIterations < 1) throw InputError("simulation.implicit_iterations must be >= 1");
   if (!(dt_ > 0) || !std::isfinite(dt_)) throw InputError("simulation.dt: could not derive a positive time step");
 
   const size_t V = model_->numVertices(), E = model_->numElements();
@@ -146,6 +151,7 @@ inline std::pair<size_t, size_t> share(size_t n, int t, int threads) {
 }  // namespace
 
 void World::step() {
+  if (sim_.integrator == IntegratorKind::Implicit) return stepImplicit();
   const size_t V = model_->numVertices();
   const size_t colours = model_->numColours();
   const bool contacts = !manipulators_.empty() || domain_.enabled;
@@ -180,6 +186,71 @@ void World::step() {
   }
   for (Manipulator& m : manipulators_) m.previousPosition = m.position;
   state_.time += dt_;
+  if (!pinSet_.empty()) applyPins(state_.time);
+}
+
+void World::setPins(std::vector<PinSettings> pins) {
+  pinSet_ = selectPins(pins, model_->restPositions);
+  pins_ = std::move(pins);
+  projective_.reset();  // the implicit system eliminates the pinned vertices: refactor
+  applyPins(state_.time);
+}
+
+std::vector<Vec3> World::pinTargets(Real t) const {
+  std::vector<Vec3> x(pinSet_.vertices.size());
+  for (size_t j = 0; j < x.size(); ++j)
+    x[j] = model_->restPositions[pinSet_.vertices[j]] + pins_[pinSet_.pinOf[j]].path.position(t);
+  return x;
+}
+
+// Pinned vertices take their prescribed position and the path's velocity (explicit integrators:
+// after the step, so pins override forces and contacts).
+void World::applyPins(Real t) {
+  const std::vector<Vec3> x = pinTargets(t);
+  for (size_t j = 0; j < x.size(); ++j) {
+    const uint32_t i = pinSet_.vertices[j];
+    state_.positions[i] = x[j];
+    state_.velocities[i] = pins_[pinSet_.pinOf[j]].path.velocity(t);
+    if (model_->dim == 2) state_.positions[i].z() = 0, state_.velocities[i].z() = 0;
+  }
+}
+
+// Implicit step (projective.h): solve with pinned vertices eliminated, then the same contact
+// stage as the explicit path (positions projected, velocity rules applied to the derived
+// velocities (x_new - x_old) / dt).
+void World::stepImplicit() {
+  if (!projective_) projective_ = std::make_unique<ProjectiveSolver>(*model_, dt_, pinSet_.vertices);
+  Vec3 g = sim_.gravity;
+  if (model_->dim == 2) g.z() = 0;
+  const bool contacts = !manipulators_.empty() || domain_.enabled;
+  if (contacts) scratch_.previousPositions = state_.positions;
+  const Real tNext = state_.time + dt_;
+  const std::vector<Vec3> x0 = state_.positions, v0 = state_.velocities;
+  const std::vector<Quat> q0 = state_.rotations;
+  const std::vector<Vec3> targets = pinTargets(tNext);
+  projective_->step(state_.positions, state_.velocities, state_.rotations, g, sim_.damping, sim_.implicitIterations,
+                    targets, sim_.rotationIterations);
+  moveManipulators(tNext);
+  if (contacts) {
+    // The contact pass finds the vertices that ended inside a surface; the step is solved again
+    // with them held at their projected positions, so that the support reaches the whole body
+    // within the step (projecting only those vertices afterwards lets a body sink and crush at
+    // frame-size steps). A last pass then applies the contact rules to the final state.
+    stageContacts(0, model_->numVertices());
+    std::vector<uint32_t> held;
+    std::vector<Vec3> heldAt;
+    for (uint32_t i = 0; i < model_->numVertices(); ++i)
+      if (scratch_.contactDepth[i] > 0) held.push_back(i), heldAt.push_back(state_.positions[i]);
+    if (!held.empty()) {
+      state_.positions = x0, state_.velocities = v0, state_.rotations = q0;
+      projective_->step(state_.positions, state_.velocities, state_.rotations, g, sim_.damping,
+                        sim_.implicitIterations, targets, sim_.rotationIterations, held, heldAt);
+      stageContacts(0, model_->numVertices());
+    }
+  }
+  for (Manipulator& m : manipulators_) m.previousPosition = m.position;
+  state_.time = tNext;
+  if (!pinSet_.empty()) applyPins(state_.time);
 }
 
 void World::advanceTo(Real t) {

@@ -11,8 +11,10 @@ namespace gradel {
 ///   undamped oscillator; kept to reproduce the paper).
 /// SymplecticEuler (default): V(T+dT) = V(T) + A(T) dT, then P(T+dT) = P(T) + V(T+dT) dT; its
 ///   energy stays bounded for any dt below the stability limit, which is why it is the default.
-enum class IntegratorKind { SymplecticEuler, ForwardEuler };
-IntegratorKind parseIntegratorKind(const std::string& name);  ///< "symplectic" | "forward_euler"
+/// Implicit: projective dynamics (projective.h), backward Euler on the same element energy;
+///   stable at any dt (dt = auto means 1/60 s here), dissipative.
+enum class IntegratorKind { SymplecticEuler, ForwardEuler, Implicit };
+IntegratorKind parseIntegratorKind(const std::string& name);  ///< "symplectic" | "forward_euler" | "implicit"
 const char* integratorKindName(IntegratorKind k);
 
 /// What "the smallest period" means for dt = auto.
@@ -34,6 +36,7 @@ struct SimulationSettings {
   Vec3 gravity{0, -9.81, 0};  ///< [m/s^2]
   int threads = 1;           ///< Worker threads (results are identical at any count).
   int rotationIterations = 4;  ///< Max warm-started rotation refinements per element per step.
+  int implicitIterations = 10;  ///< Implicit only: local/global passes per step (projective.h).
 };
 
 }  // namespace gradel

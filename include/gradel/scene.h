@@ -10,13 +10,15 @@
 #include "gradel/integrator.h"
 #include "gradel/layout.h"
 #include "gradel/material.h"
+#include "gradel/pins.h"
 #include "gradel/shapes.h"
 #include "gradel/world.h"
 
 namespace gradel {
 
 struct BodySettings {
-  ShapeSpec shape;                                ///< Volume source (procedural for now).
+  ShapeSpec shape;                                ///< Procedural volume, used when `source` is null.
+  std::shared_ptr<const VolumeSource> source;     ///< File or array volume (io/volume_file.h); overrides `shape`.
   LayoutKind layout = LayoutKind::Gradational;
   MaterialSettings material;
   Vec3 position{0, 0, 0};  ///< [m] world position of the volume's lattice origin (voxel (0,0,0)'s lower corner).
@@ -35,6 +37,7 @@ struct Scene {
   SimulationSettings simulation;
   DomainSettings domain;
   std::vector<ManipulatorSettings> manipulators;
+  std::vector<PinSettings> pins;  ///< Boundary conditions (pins.h).
   OutputSettings output;
 };
 

@@ -11,6 +11,8 @@
 #include "gradel/contacts.h"
 #include "gradel/integrator.h"
 #include "gradel/model.h"
+#include "gradel/pins.h"
+#include "gradel/projective.h"
 
 namespace gradel {
 
@@ -69,6 +71,12 @@ class World {
 
   void setThreads(int n) { sim_.threads = n < 1 ? 1 : n; }
 
+  /// Boundary conditions (pins.h): replaces the pins and moves the pinned vertices to their
+  /// prescribed positions now. Throws InputError when a pin holds no vertex.
+  void setPins(std::vector<PinSettings> pins);
+  const std::vector<PinSettings>& pins() const { return pins_; }
+  const PinSet& pinned() const { return pinSet_; }
+
   /// Per-element stress (sec. 3, fig. 1): RMS over its vertices of |M R0_i - r_i|, divided by the
   /// element size [-]. Per-vertex stress: mean over the vertex's elements.
   std::vector<Real> elementStress() const;
@@ -87,6 +95,9 @@ class World {
   void stageIntegrate(size_t begin, size_t end);
   void stageContacts(size_t begin, size_t end);
   void moveManipulators(Real tNext);
+  void stepImplicit();
+  void applyPins(Real t);
+  std::vector<Vec3> pinTargets(Real t) const;
 
   std::shared_ptr<const RestModel> model_;
   SimulationSettings sim_;
@@ -95,6 +106,9 @@ class World {
   State state_;
   StepScratch scratch_;
   Real dt_ = 0;
+  std::vector<PinSettings> pins_;
+  PinSet pinSet_;
+  std::unique_ptr<ProjectiveSolver> projective_;  ///< Implicit only: built at the first step (dt, pins fixed).
 };
 
 }  // namespace gradel

@@ -1,0 +1,21 @@
+// A smooth surface of a voxel volume, for embedding (embedding.h) when no render mesh is given:
+// the 0.5 level set of the occupancy smoothed by a 3x3x3 box average, sampled at voxel centres
+// and extracted by marching tetrahedra (the marching-cubes family: each lattice cube split
+// into six tetrahedra around its main diagonal, so no 256-case table is needed and
+// neighbouring cubes always agree on shared faces: the mesh is closed).
+//
+// On a flat face of the volume the level set lies exactly on the voxel faces; edges and
+// corners come out rounded by about one voxel.
+#pragma once
+
+#include "gradel/mesh.h"
+#include "gradel/volume.h"
+
+namespace gradel {
+
+/// The isosurface of a 3D volume in metres (lattice point (0,0,0) at `origin`), triangles
+/// counter-clockwise seen from outside, vertices shared (closed, consistently oriented), with
+/// area-weighted vertex normals. Throws InputError for a 2D or empty volume.
+TriangleMesh isosurface(const VoxelVolume& volume, const Vec3& origin);
+
+}  // namespace gradel

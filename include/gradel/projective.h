@@ -1,0 +1,60 @@
+// The implicit integrator: projective dynamics (Bouaziz, Martin, Liu, Kavan, Pauly 2014) on the
+// shape-matching element energy of element.h, E_e = k_e/2 sum_i |M_e R0_i - (x_i - c_e)|^2.
+//
+// One step minimises  1/(2 dt^2) |x - y|_M^2 + sum_e E_e(x),  y = x_n + dt v_n + dt^2 g
+// (backward Euler with the same element energy), by alternating
+//   local:  M_e = best-fit rotation of element e at the current x (eq. 1, rotation_fit.h,
+//           warm-started from the previous one);
+//   global: (M/dt^2 + sum_e k_e G_e^T G_e) x = M/dt^2 y + sum_e k_e G_e^T (M_e R0),
+// where G_e = I - 11^T/n maps the element's vertices to their offsets from the centroid. The
+// matrix is constant (dt, stiffness and pins fixed): it is factored once (sparse LDL^T) and the
+// three coordinates, which decouple, are three right-hand sides of one V x V system. Pinned
+// vertices are eliminated: their prescribed positions move to the right-hand side.
+// Contacts (held vertices): a vertex a contact pass found inside a surface can be held at its
+// projected position for a second solve of the step; the constraint is exact, through the
+// capacitance matrix S = E^T A^-1 E of the held set (|held| extra back-solves per step, the
+// factor stays as it is). Velocities are (x_{n+1} - x_n) / dt. The scheme is unconditionally stable and dissipative
+// (numerical damping grows with omega dt); it is what lets a stiff body run at dt = 1/60 s.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "gradel/model.h"
+
+namespace gradel {
+
+class ProjectiveSolver {
+ public:
+  /// Factors the global matrix for `model` at time step dt [s] with the vertices `pinned`
+  /// (ascending ids) eliminated. The model must outlive the solver.
+  ProjectiveSolver(const RestModel& model, Real dt, const std::vector<uint32_t>& pinned);
+  ~ProjectiveSolver();
+  ProjectiveSolver(const ProjectiveSolver&) = delete;
+  ProjectiveSolver& operator=(const ProjectiveSolver&) = delete;
+
+  /// One step of dt: x, v (per vertex) and q (per element, warm start) in/out. `pinTargets` are
+  /// the pinned vertices' positions at the end of the step (order of `pinned`); their velocities
+  /// are set to the displacement over dt. Velocities are scaled by 1 / (1 + damping dt) as in
+  /// the explicit integrators. `iterations` local/global passes (>= 1).
+  /// `held` / `heldTargets`: free vertices held at given positions during this step (contacts).
+  void step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vector<Quat>& q, const Vec3& gravity, Real damping,
+            int iterations, const std::vector<Vec3>& pinTargets, int rotationIterations = 4,
+            const std::vector<uint32_t>& held = {}, const std::vector<Vec3>& heldTargets = {});
+
+  /// Static equilibrium under gravity with the pins at `pinTargets`: the same local/global
+  /// iteration with the inertia term dropped (needs at least one pin per body). Runs until the
+  /// largest position change of a pass is below `tolerance` [m] or `maxIterations`; returns the
+  /// number of passes. Requires a solver built with `dt` = 0 (static).
+  int solveStatic(std::vector<Vec3>& x, std::vector<Quat>& q, const Vec3& gravity, const std::vector<Vec3>& pinTargets,
+                  int maxIterations, Real tolerance);
+
+  Real dt() const;
+  size_t numFree() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace gradel

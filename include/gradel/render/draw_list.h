@@ -1,0 +1,84 @@
+// What one picture shows, as plain vertex arrays (no OpenGL): the body's surfaces, the element
+// wireframe coloured by level (fig. 4), stress colour (fig. 1: darker where the stress is
+// high) with its legend, vertices, manipulators and the domain's walls. The viewer and
+// `gradel render` build the same draw list and hand it to Renderer.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "gradel/embedding.h"
+#include "gradel/scene.h"
+#include "gradel/surface.h"
+
+namespace gradel::render {
+
+/// Which surface covers the body.
+enum class SurfaceMode {
+  Smooth,    ///< The paper's display surface (sec. 3.3), smooth vertex normals.
+  Voxel,     ///< The plain voxel staircase, flat shaded (for comparison).
+  Embedded,  ///< The embedded render mesh (embedding.h); the smooth surface if there is none.
+  None,
+};
+SurfaceMode parseSurfaceMode(const std::string& name);  ///< "smooth" | "voxel" | "embedded" | "none"; InputError otherwise.
+
+/// What to draw (the viewer's toggles; `gradel render --show`).
+struct ViewOptions {
+  SurfaceMode surface = SurfaceMode::Smooth;
+  bool wireframe = false;  ///< Element outlines coloured by level.
+  bool section = false;    ///< Wireframe of only the elements cut by the body's middle z plane (fig. 4's section).
+  bool stress = false;    ///< Colour the surface by stress, with a legend.
+  bool vertices = false;  ///< Model vertices as points.
+  bool manipulators = true;
+  bool walls = true;
+  Real stressScale = 0.05;  ///< [-] stress drawn darkest (World::vertexStress units).
+  std::string caption;      ///< Text drawn at the top left (empty = none).
+};
+
+/// Everything about a body that drawing needs and that is built once per model (rest data).
+struct BodyView {
+  DisplaySurface smooth, voxel;
+  std::vector<std::array<uint32_t, 2>> edges;  ///< Element outline edges (model vertex ids).
+  std::vector<uint8_t> edgeLevel;              ///< Level of the element each edge comes from.
+  std::vector<uint8_t> edgeInSection;          ///< 1 if that element is cut by the middle z plane (3D; always 1 in 2D).
+  int levels = 1;
+  std::optional<EmbeddedMesh> embedded;  ///< Drawn in SurfaceMode::Embedded (none in 2D without a mesh).
+};
+
+/// Builds the surfaces and element outlines of a built scene. The embedded mesh is `restMesh`
+/// (rest coordinates [m]) when given, else (3D) the isosurface of the volume (isosurface.h).
+BodyView makeBodyView(const BuiltScene& scene, const TriangleMesh* restMesh = nullptr);
+
+struct DrawVertex {
+  float position[3];
+  float normal[3];
+  float color[4];
+};
+
+struct DrawList {
+  std::vector<DrawVertex> triangles;  ///< Lit, world space.
+  std::vector<DrawVertex> lines;      ///< Unlit, world space.
+  std::vector<DrawVertex> points;     ///< Unlit, world space.
+  std::vector<DrawVertex> overlay;    ///< Unlit triangles in pixels (x right, y down): legend, caption.
+  std::array<float, 3> background{0.93f, 0.94f, 0.96f};
+};
+
+/// Colour of stress s for the legend and the surface: light cream at 0, dark red-brown at
+/// `scale` and above (fig. 1: darker where the stress is high).
+std::array<float, 3> stressColor(Real s, Real scale);
+/// Distinct colour of layout level L (the wireframe of fig. 4).
+std::array<float, 3> levelColor(int level);
+
+/// The draw list of one picture of `world` (whose model `body` was made from).
+DrawList buildDrawList(const BodyView& body, const World& world, const ViewOptions& options, int width, int height);
+
+/// Adds text in pixels at (x, y) (top left), `scale` pixels per font unit (stb_easy_font).
+void addText(DrawList& list, const std::string& text, float x, float y, float scale, std::array<float, 3> color);
+
+/// Axis-aligned bounds of everything in the scene worth framing: the body, the manipulators and,
+/// when walls are shown, the part of the domain near the body.
+void sceneBounds(const World& world, Vec3* lo, Vec3* hi);
+
+}  // namespace gradel::render

@@ -1,0 +1,43 @@
+// `gradel render SCENE.json --out DIR [--frames N] [--size WxH] ...`: simulates a scene and draws
+// the viewer's pictures offscreen (EGL surfaceless) into DIR/frame_NNNNN.png, then DIR/render.mp4
+// when ffmpeg is on the PATH; optionally exports the display surface of every frame as OBJ or
+// PLY (DIR/surface_NNNNN.obj) for Blender. DIR/render.json summarises the run.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+namespace gradel::render {
+
+struct RenderCommandOptions {
+  std::string scene;
+  std::string out;
+  std::optional<int> frames;        ///< Frames at the scene's frame interval; default: the whole duration.
+  std::string size = "640x480";     ///< WxH [pixels].
+  std::string surface = "smooth";   ///< smooth | voxel | embedded | none
+  bool stress = false;
+  bool wireframe = false;
+  bool vertices = false;
+  bool section = false;             ///< Wireframe of the middle z section only.
+  double start = 0;                 ///< [s] simulated time of the first frame.
+  std::optional<double> yaw, pitch;  ///< [rad] camera angles (default: framing's 0.6, 0.35).
+  double zoom = 1;                  ///< > 1 moves the camera closer.
+  double stressScale = 0.05;        ///< [-] stress drawn darkest.
+  std::string exportFormat = "none";  ///< none | obj | ply
+  bool noPictures = false;          ///< Export only (no OpenGL needed).
+  bool noVideo = false;
+};
+
+/// Adds the `render` subcommand to the CLI, filling `o`.
+CLI::App* addRenderCommand(CLI::App& app, RenderCommandOptions& o);
+
+/// Runs it. Returns the exit code: 0 ok, 4 no OpenGL (message on stderr); throws InputError for
+/// bad input (exit code 2 in the CLI).
+int runRenderCommand(const RenderCommandOptions& o);
+
+/// Parses "WxH" (each 16..8192). Throws InputError.
+void parseSize(const std::string& text, int* width, int* height);
+
+}  // namespace gradel::render

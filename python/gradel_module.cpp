@@ -1,0 +1,347 @@
+// The Python module `gradel` (pybind11): build a body from a numpy array, a file or a shape,
+// simulate it, and read the state as numpy arrays. Positions and velocities are views of the
+// World's own memory (no copy; writable); results computed on demand (stress, surfaces, volumes)
+// are moved into the array's owner instead of copied. See python/example.py and docs/io.md.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cstring>
+#include <map>
+#include <optional>
+
+#include "gradel/io/volume_data_source.h"
+#include "gradel/io/volume_file.h"
+#include "gradel/scene.h"
+#include "gradel/surface.h"
+
+namespace py = pybind11;
+using namespace gradel;
+
+namespace {
+
+// ---- arrays without copies -----------------------------------------------------------
+
+py::array vec3Array(std::vector<Vec3>&& v) {
+  static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 is three packed doubles");
+  auto* owner = new std::vector<Vec3>(std::move(v));
+  py::capsule base(owner, [](void* p) { delete static_cast<std::vector<Vec3>*>(p); });
+  return py::array_t<double>({py::ssize_t(owner->size()), py::ssize_t(3)}, {py::ssize_t(sizeof(Vec3)), py::ssize_t(sizeof(double))},
+                             owner->data()->data(), base);
+}
+
+py::array realArray(std::vector<Real>&& v) {
+  auto* owner = new std::vector<Real>(std::move(v));
+  py::capsule base(owner, [](void* p) { delete static_cast<std::vector<Real>*>(p); });
+  return py::array_t<double>({py::ssize_t(owner->size())}, {py::ssize_t(sizeof(Real))}, owner->data(), base);
+}
+
+// The volume as a boolean array indexed [i, j, k] (x fastest in memory: Fortran order).
+py::array volumeArray(std::shared_ptr<const VoxelVolume> v) {
+  auto* owner = new std::shared_ptr<const VoxelVolume>(std::move(v));
+  py::capsule base(owner, [](void* p) { delete static_cast<std::shared_ptr<const VoxelVolume>*>(p); });
+  const VoxelVolume& vol = **owner;
+  const py::ssize_t nx = vol.nx(), ny = vol.ny(), nz = vol.nz();
+  // The bytes are 0 / 1, which numpy's bool reads as False / True. Read-only: the volume is shared.
+  py::array a(py::dtype("bool"), {nx, ny, nz}, {py::ssize_t(1), nx, nx * ny}, vol.data().data(), base);
+  py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  return a;
+}
+
+// ---- bodies -----------------------------------------------------------------------------
+
+/// A voxel volume ready to simulate, from an array, a file or a shape.
+struct Body {
+  std::shared_ptr<const VoxelVolume> volume;
+  std::string name;
+};
+
+Body bodyFromArray(const py::array& input, Real voxelSize) {
+  const py::array_t<bool, py::array::forcecast> a(input);  // any dtype: non-zero is filled
+  if (a.ndim() != 2 && a.ndim() != 3) throw InputError("array: expected 2 or 3 dimensions, got " + std::to_string(a.ndim()));
+  const int dim = int(a.ndim());
+  std::array<py::ssize_t, 3> n{a.shape(0), a.shape(1), dim == 3 ? a.shape(2) : 1};
+  for (py::ssize_t s : n)
+    if (s < 1 || s > 4096) throw InputError("array: every size must be in [1, 4096], got shape " + std::string(py::str(input.attr("shape"))));
+  auto v = std::make_shared<VoxelVolume>(dim, int(n[0]), int(n[1]), int(n[2]), voxelSize);
+  uint8_t* out = v->data().data();
+  const bool* in = a.data();
+  const auto st = a.strides();
+  for (py::ssize_t k = 0; k < n[2]; ++k)
+    for (py::ssize_t j = 0; j < n[1]; ++j)
+      for (py::ssize_t i = 0; i < n[0]; ++i) {
+        const py::ssize_t off = i * st[0] + j * st[1] + (dim == 3 ? k * st[2] : 0);
+        out[v->index(int(i), int(j), int(k))] = *reinterpret_cast<const bool*>(reinterpret_cast<const char*>(in) + off) ? 1 : 0;
+      }
+  if (v->countFilled() == 0) throw InputError("array: the volume is empty (no true voxel)");
+  return {v, "numpy array"};
+}
+
+io::VolumeFileSpec fileSpec(const std::string& path, std::optional<std::string> format, std::optional<double> threshold,
+                            std::optional<std::pair<double, double>> range, int resolution,
+                            std::optional<std::array<int64_t, 3>> dims, std::optional<std::string> type,
+                            const std::string& endian, uint64_t headerBytes, int model, Real voxelSize, int dim) {
+  io::VolumeFileSpec s;
+  s.path = path;
+  if (format) s.format = io::parseVolumeFormat(*format);
+  s.voxelSize = voxelSize;
+  s.dim = dim;
+  if (threshold && range) throw InputError(path + ": give threshold or range, not both");
+  s.grey.threshold = threshold;
+  if (range) {
+    if (!(range->first <= range->second)) throw InputError(path + ": range must be (lo, hi) with lo <= hi");
+    s.grey.rangeLo = range->first;
+    s.grey.rangeHi = range->second;
+  }
+  s.resolution = resolution;
+  if (dims) s.raw.dims = *dims;
+  if (type) s.raw.samples.type = io::parseScalarType(*type);
+  if (endian != "little" && endian != "big") throw InputError(path + ": endian must be 'little' or 'big'");
+  s.raw.samples.bigEndian = endian == "big";
+  s.raw.headerBytes = headerBytes;
+  s.model = model;
+  const io::VolumeFormat f = s.format ? *s.format : io::volumeFormatFromPath(path);
+  if (f == io::VolumeFormat::Raw && (!dims || !type)) throw InputError(path + ": a raw file needs dims and type");
+  return s;
+}
+
+// ---- simulations ------------------------------------------------------------------------
+
+/// A built scene plus lazily built display surfaces.
+struct Simulation {
+  Scene scene;
+  BuiltScene built;
+  std::map<SurfaceKind, DisplaySurface> surfaces;
+
+  World& world() { return *built.world; }
+};
+
+std::unique_ptr<Simulation> makeSimulation(Scene scene) {
+  auto s = std::make_unique<Simulation>();
+  s->built = buildScene(scene);
+  s->scene = std::move(scene);
+  return s;
+}
+
+Vec3 vec(const std::vector<double>& v, const char* what, int dim) {
+  if (int(v.size()) != dim && v.size() != 3)
+    throw InputError(std::string(what) + ": expected " + std::to_string(dim) + " numbers, got " + std::to_string(v.size()));
+  Vec3 out(0, 0, 0);
+  for (size_t i = 0; i < v.size(); ++i) out[int(i)] = v[i];
+  if (!out.allFinite()) throw InputError(std::string(what) + ": not finite");
+  return out;
+}
+
+// A view of one of the world's per-vertex vector arrays (positions, velocities), kept alive by
+// the Simulation object that owns the world.
+py::array stateView(py::object self, std::vector<Vec3>& v) {
+  return py::array_t<double>({py::ssize_t(v.size()), py::ssize_t(3)}, {py::ssize_t(sizeof(Vec3)), py::ssize_t(sizeof(double))},
+                             v.data()->data(), self);
+}
+
+}  // namespace
+
+PYBIND11_MODULE(gradel, m) {
+  m.doc() = "gradel: real-time elastic bodies from voxel volumes (Miyazaki et al. 2002 gradational layout)";
+  py::register_exception<InputError>(m, "InputError", PyExc_ValueError);
+
+  m.def(
+      "load_volume",
+      [](const std::string& path, std::optional<std::string> format, std::optional<double> threshold,
+         std::optional<std::pair<double, double>> range, int resolution, std::optional<std::array<int64_t, 3>> dims,
+         std::optional<std::string> type, const std::string& endian, uint64_t headerBytes, int model) {
+        const io::VolumeFileSpec s = fileSpec(path, format, threshold, range, resolution, dims, type, endian, headerBytes, model, 0.01, 3);
+        std::shared_ptr<const VoxelVolume> v;
+        {
+          py::gil_scoped_release release;
+          v = std::make_shared<VoxelVolume>(io::readVolumeFile(s));
+        }
+        return volumeArray(std::move(v));
+      },
+      py::arg("path"), py::kw_only(), py::arg("format") = py::none(), py::arg("threshold") = py::none(),
+      py::arg("range") = py::none(), py::arg("resolution") = 64, py::arg("dims") = py::none(), py::arg("type") = py::none(),
+      py::arg("endian") = "little", py::arg("header_bytes") = 0, py::arg("model") = 0,
+      "Reads a volume or mesh file (binvox, vox, nrrd, nifti, raw, obj, stl, ply) into a read-only boolean array "
+      "[i, j, k] without copying it.");
+
+  py::class_<Body>(m, "Body", "A binary voxel volume to simulate.")
+      .def_static("from_array", &bodyFromArray, py::arg("voxels"), py::kw_only(), py::arg("voxel_size") = 0.01,
+                  "From a 3D (or 2D) array indexed [i, j, k]; non-zero entries are filled. voxel_size in metres.")
+      .def_static(
+          "from_file",
+          [](const std::string& path, std::optional<std::string> format, std::optional<double> threshold,
+             std::optional<std::pair<double, double>> range, int resolution, std::optional<std::array<int64_t, 3>> dims,
+             std::optional<std::string> type, const std::string& endian, uint64_t headerBytes, int model, Real voxelSize, int dim) {
+            const io::VolumeFileSpec s =
+                fileSpec(path, format, threshold, range, resolution, dims, type, endian, headerBytes, model, voxelSize, dim);
+            return Body{std::make_shared<VoxelVolume>(io::readVolumeFile(s)), path};
+          },
+          py::arg("path"), py::kw_only(), py::arg("format") = py::none(), py::arg("threshold") = py::none(),
+          py::arg("range") = py::none(), py::arg("resolution") = 64, py::arg("dims") = py::none(), py::arg("type") = py::none(),
+          py::arg("endian") = "little", py::arg("header_bytes") = 0, py::arg("model") = 0, py::arg("voxel_size") = 0.01,
+          py::arg("dim") = 3, "From a file; the options are those of a scene's body.source (docs/scenes.md).")
+      .def_static(
+          "from_shape",
+          [](const std::string& shape, int size, int dim, Real voxelSize) {
+            return Body{std::make_shared<VoxelVolume>(rasterize(presetShape(shape, size, dim, voxelSize))), shape};
+          },
+          py::arg("shape"), py::arg("size"), py::kw_only(), py::arg("dim") = 3, py::arg("voxel_size") = 0.01,
+          "A preset shape ('box', 'sphere', 'cylinder') inscribed in a size^dim grid.")
+      .def_property_readonly("voxels", [](const Body& b) { return volumeArray(b.volume); }, "Read-only boolean view [i, j, k].")
+      .def_property_readonly("dim", [](const Body& b) { return b.volume->dim(); })
+      .def_property_readonly("voxel_size", [](const Body& b) { return b.volume->voxelSize(); })
+      .def_property_readonly("filled", [](const Body& b) { return b.volume->countFilled(); })
+      .def("__repr__", [](const Body& b) {
+        const auto& d = b.volume->dims();
+        return "<gradel.Body " + b.name + " " + std::to_string(d[0]) + "x" + std::to_string(d[1]) + "x" + std::to_string(d[2]) +
+               ", " + std::to_string(b.volume->countFilled()) + " voxels>";
+      });
+
+  py::class_<Simulation>(m, "Simulation", "A body built into a gradational layout and simulated (World).")
+      .def(py::init([](const Body& body, const std::string& layout, const std::string& scaling, Real youngsModulus,
+                       Real density, Real k, const std::string& integrator, std::optional<Real> dt, Real dtFraction,
+                       Real damping, std::vector<double> gravity, int threads, std::vector<double> position,
+                       std::vector<double> velocity, std::optional<std::vector<double>> domainMin,
+                       std::optional<std::vector<double>> domainMax, Real restitution, Real friction) {
+             Scene s;
+             s.name = "python";
+             s.dim = body.volume->dim();
+             s.body.source = std::make_shared<io::VolumeDataSource>(body.volume, body.name);
+             s.body.layout = parseLayoutKind(layout);
+             s.body.material.scaling = parseScaling(scaling);
+             s.body.material.youngsModulus = youngsModulus;
+             s.body.material.density = density;
+             s.body.material.paperK = k;
+             s.body.position = vec(position, "position", s.dim);
+             s.body.velocity = vec(velocity, "velocity", s.dim);
+             s.simulation.integrator = parseIntegratorKind(integrator);
+             if (dt && !(*dt > 0)) throw InputError("dt: must be > 0 (or None for auto)");
+             s.simulation.dt = dt.value_or(0);
+             s.simulation.dtFraction = dtFraction;
+             s.simulation.damping = damping;
+             s.simulation.gravity = vec(gravity, "gravity", s.dim);
+             s.simulation.threads = threads;
+             if (domainMin || domainMax) {
+               if (!domainMin || !domainMax) throw InputError("domain: give both domain_min and domain_max");
+               s.domain.enabled = true;
+               s.domain.min = vec(*domainMin, "domain_min", s.dim);
+               s.domain.max = vec(*domainMax, "domain_max", s.dim);
+               if (s.dim == 2) s.domain.min.z() = -1, s.domain.max.z() = 1;
+               s.domain.restitution = restitution;
+               s.domain.friction = friction;
+             }
+             return makeSimulation(std::move(s));
+           }),
+           py::arg("body"), py::kw_only(), py::arg("layout") = "gradational", py::arg("scaling") = "consistent",
+           py::arg("youngs_modulus") = MaterialSettings{}.youngsModulus, py::arg("density") = MaterialSettings{}.density,
+           py::arg("k") = MaterialSettings{}.paperK, py::arg("integrator") = "symplectic", py::arg("dt") = py::none(),
+           py::arg("dt_fraction") = SimulationSettings{}.dtFraction, py::arg("damping") = SimulationSettings{}.damping,
+           py::arg("gravity") = std::vector<double>{0, -9.81, 0}, py::arg("threads") = 1,
+           py::arg("position") = std::vector<double>{0, 0, 0}, py::arg("velocity") = std::vector<double>{0, 0, 0},
+           py::arg("domain_min") = py::none(), py::arg("domain_max") = py::none(),
+           py::arg("restitution") = DomainSettings{}.restitution, py::arg("friction") = DomainSettings{}.friction,
+           "Builds layout, rest model and world. Units: SI (m, s, kg, Pa). Material, layout and integrator are fixed "
+           "for the simulation's life (the rest model is immutable): make a new Simulation to change them.")
+      .def_static("from_scene", [](const std::string& path) { return makeSimulation(loadScene(path)); }, py::arg("path"),
+                  "Builds the simulation of a JSON scene file (docs/scenes.md), manipulators and all.")
+      .def(
+          "add_manipulator",
+          [](Simulation& s, const std::string& type, Real radius, std::vector<double> position, Real halfLength,
+             std::vector<double> axis, Real restitution, Real friction) {
+            Manipulator mp;
+            mp.settings.shape = parseManipulatorShape(type);
+            if ((mp.settings.shape == ManipulatorShape::Circle) != (s.scene.dim == 2))
+              throw InputError("type: '" + type + "' does not fit a " + std::to_string(s.scene.dim) + "D body");
+            if (!(radius > 0)) throw InputError("radius: must be > 0 [m]");
+            mp.settings.radius = radius;
+            mp.settings.halfLength = halfLength;
+            mp.settings.axis = vec(axis, "axis", s.scene.dim);
+            if (!(mp.settings.axis.norm() > 0)) throw InputError("axis: must be non-zero");
+            mp.settings.axis.normalize();
+            mp.settings.restitution = restitution;
+            mp.settings.friction = friction;
+            mp.position = mp.previousPosition = vec(position, "position", s.scene.dim);
+            s.world().manipulators().push_back(mp);
+            return s.world().manipulators().size() - 1;
+          },
+          py::arg("type") = "sphere", py::kw_only(), py::arg("radius") = 0.02, py::arg("position") = std::vector<double>{0, 0, 0},
+          py::arg("half_length") = 0.05, py::arg("axis") = std::vector<double>{0, 0, 1}, py::arg("restitution") = 1.0,
+          py::arg("friction") = 0.0, "Adds a kinematic manipulator ('sphere', 'cylinder'; 'circle' in 2D); returns its index.")
+      .def(
+          "move_manipulator",
+          [](Simulation& s, size_t i, std::vector<double> position, std::vector<double> velocity) {
+            if (i >= s.world().manipulators().size()) throw py::index_error("no manipulator " + std::to_string(i));
+            s.world().setManipulatorPose(i, vec(position, "position", s.scene.dim), vec(velocity, "velocity", s.scene.dim));
+          },
+          py::arg("index"), py::arg("position"), py::arg("velocity") = std::vector<double>{0, 0, 0},
+          "Sets a manipulator's centre [m] and velocity [m/s]; the next step sweeps it from its last pose.")
+      .def_property_readonly("manipulator_positions",
+                             [](Simulation& s) {
+                               std::vector<Vec3> p;
+                               for (const Manipulator& mp : s.world().manipulators()) p.push_back(mp.position);
+                               return vec3Array(std::move(p));
+                             })
+      .def(
+          "step",
+          [](Simulation& s, int n) {
+            py::gil_scoped_release release;
+            for (int i = 0; i < n; ++i) s.world().step();
+          },
+          py::arg("n") = 1, "Advances n time steps of dt.")
+      .def(
+          "advance_to",
+          [](Simulation& s, Real t) {
+            py::gil_scoped_release release;
+            s.world().advanceTo(t);
+          },
+          py::arg("t"), "Advances whole steps until time >= t [s].")
+      .def_property_readonly("time", [](Simulation& s) { return s.world().time(); })
+      .def_property_readonly("dt", [](Simulation& s) { return s.world().dt(); })
+      .def_property_readonly("num_vertices", [](Simulation& s) { return s.world().model().numVertices(); })
+      .def_property_readonly("num_elements", [](Simulation& s) { return s.world().model().numElements(); })
+      .def_property_readonly("positions", [](py::object self) { return stateView(self, self.cast<Simulation&>().world().state().positions); },
+                             "(N, 3) float64 view of the vertex positions [m] (no copy, writable).")
+      .def_property_readonly("velocities", [](py::object self) { return stateView(self, self.cast<Simulation&>().world().state().velocities); },
+                             "(N, 3) float64 view of the vertex velocities [m/s] (no copy, writable).")
+      .def_property_readonly("rest_positions", [](Simulation& s) { return vec3Array(std::vector<Vec3>(s.world().model().restPositions)); })
+      .def_property_readonly("masses", [](Simulation& s) { return realArray(std::vector<Real>(s.world().model().mass)); })
+      .def_property_readonly("stress", [](Simulation& s) { return realArray(s.world().vertexStress()); },
+                             "Per-vertex stress [-] (mean of its elements' stress).")
+      .def_property_readonly("element_stress", [](Simulation& s) { return realArray(s.world().elementStress()); })
+      .def_property_readonly("state_hash", [](Simulation& s) { return s.world().stateHash(); })
+      .def_property_readonly("voxels", [](Simulation& s) {
+        return volumeArray(std::make_shared<const VoxelVolume>(s.built.volume));
+      })
+      .def("metrics",
+           [](Simulation& s) {
+             const Metrics x = s.world().metrics();
+             py::dict d;
+             d["time"] = x.time;
+             d["kinetic_energy"] = x.kineticEnergy;
+             d["elastic_energy"] = x.elasticEnergy;
+             d["gravity_energy"] = x.gravityEnergy;
+             d["linear_momentum"] = std::vector<double>{x.linearMomentum.x(), x.linearMomentum.y(), x.linearMomentum.z()};
+             d["angular_momentum"] = std::vector<double>{x.angularMomentum.x(), x.angularMomentum.y(), x.angularMomentum.z()};
+             d["max_stress"] = x.maxStress;
+             d["max_penetration"] = x.maxPenetration;
+             d["min_element_det"] = x.minElementDet;
+             return d;
+           })
+      .def(
+          "surface",
+          [](Simulation& s, const std::string& kind) {
+            const SurfaceKind k = parseSurfaceKind(kind);
+            auto it = s.surfaces.find(k);
+            if (it == s.surfaces.end()) it = s.surfaces.emplace(k, buildDisplaySurface(s.built.layout, s.built.volume, k)).first;
+            TriangleMesh mesh = surfaceMesh(it->second, s.world().state().positions);
+            auto tris = std::move(mesh.triangles);
+            auto* owner = new std::vector<std::array<uint32_t, 3>>(std::move(tris));
+            py::capsule base(owner, [](void* p) { delete static_cast<std::vector<std::array<uint32_t, 3>>*>(p); });
+            py::array triangles = py::array_t<uint32_t>({py::ssize_t(owner->size()), py::ssize_t(3)},
+                                                        {py::ssize_t(sizeof(std::array<uint32_t, 3>)), py::ssize_t(sizeof(uint32_t))},
+                                                        owner->data()->data(), base);
+            return py::make_tuple(vec3Array(std::move(mesh.vertices)), triangles, vec3Array(std::move(mesh.normals)));
+          },
+          py::arg("kind") = "smooth",
+          "The display surface now: (vertices (V, 3) [m], triangles (T, 3) uint32, normals (V, 3)); kind 'smooth' or 'voxel'.");
+}

@@ -1,0 +1,109 @@
+"""pytest suite of the Python module (run by ctest as python_pytest; see cmake/python.cmake)."""
+import os
+
+import numpy as np
+import pytest
+
+import gradel
+
+ROOT = os.environ.get("GRADEL_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
+
+
+def sample(name):
+    return os.path.join(ROOT, "samples", name)
+
+
+def test_load_volume_is_a_read_only_view_in_x_fastest_order():
+    v = gradel.load_volume(sample("ct.nrrd"), threshold=300)
+    assert v.dtype == np.bool_ and v.shape == (40, 40, 40)
+    assert v.flags["F_CONTIGUOUS"] and not v.flags["OWNDATA"] and not v.flags["WRITEABLE"]
+    limb = gradel.load_volume(sample("ct.nrrd"), threshold=-300)
+    assert limb.sum() > 3 * v.sum() > 0
+    nii = gradel.load_volume(sample("ct.nii.gz"), threshold=300)
+    raw = gradel.load_volume(sample("ct.raw"), dims=(40, 40, 40), type="uint8")
+    assert (nii == v).all() and (raw == v).all()
+
+
+@pytest.mark.parametrize("name,options", [
+    ("torus.binvox", {}), ("mushroom.vox", {}), ("torus.obj", {"resolution": 24}),
+    ("torus.stl", {"resolution": 24}), ("pawn.ply", {"resolution": 20}),
+])
+def test_every_sample_format_loads(name, options):
+    v = gradel.load_volume(sample(name), **options)
+    assert v.ndim == 3 and v.sum() > 100
+
+
+def test_bad_input_raises_input_error_naming_the_file():
+    with pytest.raises(gradel.InputError, match="nope.nrrd: cannot read"):
+        gradel.load_volume(sample("nope.nrrd"))
+    with pytest.raises(ValueError, match="a raw file needs dims and type"):
+        gradel.load_volume(sample("ct.raw"))
+    with pytest.raises(ValueError, match="empty"):
+        gradel.Body.from_array(np.zeros((4, 4, 4), bool))
+    with pytest.raises(ValueError, match="the volume is empty: no voxel passes the threshold 5000"):
+        gradel.Body.from_file(sample("ct.nrrd"), threshold=5000)
+
+
+def test_body_from_array_keeps_index_order():
+    a = np.zeros((6, 5, 4), bool)
+    a[1:3, 2:5, 0:2] = True
+    b = gradel.Body.from_array(a, voxel_size=0.02)
+    assert b.filled == a.sum() and b.voxel_size == 0.02
+    assert (b.voxels == a).all()
+    c = gradel.Body.from_array(np.asfortranarray(a.astype(np.float32)))  # any dtype, any order
+    assert (c.voxels == a).all()
+
+
+def test_simulation_views_share_memory_and_step():
+    body = gradel.Body.from_shape("sphere", 8)
+    sim = gradel.Simulation(body, gravity=[0, 0, 0], dt=1e-4)
+    p = sim.positions
+    assert p.shape == (sim.num_vertices, 3) and p.dtype == np.float64 and not p.flags["OWNDATA"]
+    rest = sim.rest_positions.copy()
+    sim.velocities[:] = [0.1, 0.0, 0.0]  # writable view: sets the world's velocities
+    sim.step(100)
+    assert sim.time == pytest.approx(0.01)
+    assert np.allclose(p - rest, [0.001, 0, 0], atol=1e-9)  # the same view saw the motion
+    assert sim.masses.sum() == pytest.approx(1000 * body.filled * 0.01 ** 3)
+    assert sim.stress.shape == (sim.num_vertices,) and np.allclose(sim.stress, 0, atol=1e-9)
+
+
+def test_manipulator_pushes_the_body():
+    body = gradel.Body.from_shape("box", 6)
+    sim = gradel.Simulation(body, gravity=[0, 0, 0], damping=0.0, youngs_modulus=1e5)
+    i = sim.add_manipulator("sphere", radius=0.02, position=[-0.05, 0.03, 0.03])
+    x0 = sim.positions[:, 0].mean()
+    t = 0.0
+    while t < 0.15:
+        t += 0.005
+        sim.move_manipulator(i, [-0.05 + 0.5 * t, 0.03, 0.03], [0.5, 0, 0])
+        sim.advance_to(t)
+    assert sim.positions[:, 0].mean() > x0 + 0.005
+    assert sim.metrics()["max_penetration"] < 1e-3
+    assert np.allclose(sim.manipulator_positions[0], [-0.05 + 0.5 * t, 0.03, 0.03])
+    with pytest.raises(IndexError):
+        sim.move_manipulator(5, [0, 0, 0])
+
+
+def test_layouts_materials_integrators_and_scene_files():
+    body = gradel.Body.from_file(sample("mushroom.vox"), voxel_size=0.01)
+    counts = {k: gradel.Simulation(body, layout=k).num_elements for k in ("gradational", "uniform", "voxel")}
+    assert counts["gradational"] < counts["uniform"] < counts["voxel"] == body.filled
+    fe = gradel.Simulation(body, integrator="forward_euler", scaling="paper", k=5000)
+    fe.step(10)
+    with pytest.raises(ValueError, match="layout"):
+        gradel.Simulation(body, layout="octree")
+    sim = gradel.Simulation.from_scene(os.path.join(ROOT, "scenes", "ct-nrrd.json"))
+    sim.advance_to(0.02)
+    assert sim.num_vertices > 100 and sim.voxels.sum() > 1000
+
+
+def test_2d_body_and_surface_arrays():
+    sim = gradel.Simulation(gradel.Body.from_array(np.ones((8, 6), bool)), gravity=[0, -9.81])
+    sim.step(5)
+    assert np.all(sim.positions[:, 2] == 0)
+    body = gradel.Simulation(gradel.Body.from_shape("sphere", 8))
+    for kind in ("voxel", "smooth"):
+        v, t, n = body.surface(kind)
+        assert v.shape[1] == 3 and t.shape[1] == 3 and t.dtype == np.uint32 and n.shape == v.shape
+        assert t.max() < len(v) and len(t) > 50

@@ -1,0 +1,183 @@
+#include "gradel/projective.h"
+
+#include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
+#include <cmath>
+
+#include "gradel/element.h"
+#include "gradel/rotation_fit.h"
+
+namespace gradel {
+
+using SpMat = Eigen::SparseMatrix<Real>;
+using Rhs = Eigen::Matrix<Real, Eigen::Dynamic, 3>;
+
+struct ProjectiveSolver::Impl {
+  const RestModel* model = nullptr;
+  Real dt = 0;                       ///< [s]; 0 = static solver (no inertia term).
+  std::vector<int32_t> freeIndex;    ///< Per vertex: row in the reduced system, -1 if pinned.
+  std::vector<uint32_t> pinned;      ///< Pinned vertex ids (ascending).
+  Eigen::SimplicialLDLT<SpMat> ldlt;  ///< Factor of the reduced global matrix.
+  Rhs rhs, sol;                      ///< Scratch, numFree x 3.
+
+  // Local step for every element, and the right-hand side sum_e k_e G_e^T (M_e R0) plus the
+  // pinned vertices' coupling k_e/n sum_{pinned b in e} x_b (the -A_fp x_p term), added into rhs.
+  void addElementTerms(const std::vector<Vec3>& x, std::vector<Quat>& q, int rotationIterations) {
+    const RestModel& m = *model;
+    std::vector<Vec3> p;
+    for (size_t e = 0; e < m.numElements(); ++e) {
+      const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
+      const uint32_t* verts = &m.elemVerts[b];
+      const Vec3* R0 = &m.restOffsets[b];
+      const Mat3 A = elementCovariance(x.data(), verts, R0, int(n));
+      if (m.dim == 2) q[e] = Quat(Eigen::AngleAxisd(fitRotation2(A), Vec3::UnitZ()));
+      else fitRotation3(A, q[e], rotationIterations, 1e-12);
+      const Mat3 M = q[e].toRotationMatrix();
+      const Real k = m.stiffness[e];
+      p.resize(n);
+      Vec3 mean = Vec3::Zero(), pinnedSum = Vec3::Zero();
+      for (uint32_t i = 0; i < n; ++i) {
+        p[i] = M * R0[i];
+        mean += p[i];
+        if (freeIndex[verts[i]] < 0) pinnedSum += x[verts[i]];
+      }
+      mean /= Real(n);
+      const Vec3 coupling = k / Real(n) * pinnedSum;
+      for (uint32_t i = 0; i < n; ++i) {
+        const int32_t r = freeIndex[verts[i]];
+        if (r < 0) continue;
+        rhs.row(r) += (k * (p[i] - mean) + coupling).transpose();
+      }
+    }
+  }
+
+  // Held vertices: rows of the reduced system, Z = A^-1 E and the factor of S = E^T Z.
+  std::vector<int32_t> heldRows;
+  Eigen::MatrixXd Z;
+  Eigen::LDLT<Eigen::MatrixXd> S;
+  Rhs heldTargets;
+
+  void prepareHeld(const std::vector<uint32_t>& held, const std::vector<Vec3>& targets) {
+    heldRows.clear();
+    for (size_t j = 0; j < held.size(); ++j)
+      if (freeIndex.at(held[j]) >= 0) heldRows.push_back(freeIndex[held[j]]);
+    if (heldRows.empty()) return;
+    const Eigen::Index n = rhs.rows(), c = Eigen::Index(heldRows.size());
+    Eigen::MatrixXd E = Eigen::MatrixXd::Zero(n, c);
+    heldTargets.resize(c, 3);
+    for (Eigen::Index j = 0, k = 0; j < Eigen::Index(held.size()); ++j)
+      if (freeIndex[held[size_t(j)]] >= 0) E(heldRows[size_t(k)], k) = 1, heldTargets.row(k++) = targets[size_t(j)].transpose();
+    Z = ldlt.solve(E);
+    Eigen::MatrixXd Sm(c, c);
+    for (Eigen::Index k = 0; k < c; ++k) Sm.row(k) = Z.row(heldRows[size_t(k)]);
+    S.compute(Sm);
+  }
+
+  void solveInto(std::vector<Vec3>& x) {
+    sol = ldlt.solve(rhs);
+    if (!heldRows.empty()) {
+      // x = A^-1 b + Z lambda with S lambda = p - x_held: the held rows land exactly on p.
+      Rhs r(Eigen::Index(heldRows.size()), 3);
+      for (size_t k = 0; k < heldRows.size(); ++k) r.row(Eigen::Index(k)) = heldTargets.row(Eigen::Index(k)) - sol.row(heldRows[k]);
+      sol += Z * Rhs(S.solve(r));
+    }
+    for (size_t i = 0; i < freeIndex.size(); ++i)
+      if (freeIndex[i] >= 0) x[i] = sol.row(freeIndex[i]).transpose();
+  }
+};
+
+ProjectiveSolver::ProjectiveSolver(const RestModel& model, Real dt, const std::vector<uint32_t>& pinned)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& s = *impl_;
+  s.model = &model;
+  s.dt = dt;
+  s.pinned = pinned;
+  const size_t V = model.numVertices();
+  s.freeIndex.assign(V, 0);
+  for (uint32_t i : pinned) s.freeIndex.at(i) = -1;
+  int32_t nFree = 0;
+  for (size_t i = 0; i < V; ++i)
+    if (s.freeIndex[i] >= 0) s.freeIndex[i] = nFree++;
+
+  std::vector<Eigen::Triplet<Real>> t;
+  t.reserve(V + model.numPairs() * 8);
+  if (dt > 0)
+    for (size_t i = 0; i < V; ++i)
+      if (s.freeIndex[i] >= 0) t.emplace_back(s.freeIndex[i], s.freeIndex[i], model.mass[i] / (dt * dt));
+  // k_e G_e^T G_e = k_e (I - 11^T / n) on the element's vertices (G_e is a projection).
+  for (size_t e = 0; e < model.numElements(); ++e) {
+    const uint32_t b = model.elemStart[e], n = model.elemStart[e + 1] - b;
+    const Real k = model.stiffness[e], off = -k / Real(n);
+    for (uint32_t i = 0; i < n; ++i) {
+      const int32_t ri = s.freeIndex[model.elemVerts[b + i]];
+      if (ri < 0) continue;
+      for (uint32_t j = 0; j < n; ++j) {
+        const int32_t rj = s.freeIndex[model.elemVerts[b + j]];
+        if (rj >= 0) t.emplace_back(ri, rj, i == j ? k + off : off);
+      }
+    }
+  }
+  SpMat A(nFree, nFree);
+  A.setFromTriplets(t.begin(), t.end());
+  s.ldlt.compute(A);
+  if (s.ldlt.info() != Eigen::Success)
+    throw InputError("implicit integrator: the global matrix could not be factored (a body without pins in a static solve?)");
+  s.rhs.resize(nFree, 3);
+}
+
+ProjectiveSolver::~ProjectiveSolver() = default;
+
+Real ProjectiveSolver::dt() const { return impl_->dt; }
+size_t ProjectiveSolver::numFree() const { return size_t(impl_->rhs.rows()); }
+
+void ProjectiveSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vector<Quat>& q, const Vec3& gravity,
+                            Real damping, int iterations, const std::vector<Vec3>& pinTargets, int rotationIterations,
+                            const std::vector<uint32_t>& held, const std::vector<Vec3>& heldTargets) {
+  Impl& s = *impl_;
+  s.prepareHeld(held, heldTargets);
+  const RestModel& m = *s.model;
+  const Real dt = s.dt, invDt2 = 1.0 / (dt * dt);
+  const size_t V = m.numVertices();
+  const std::vector<Vec3> x0 = x;
+  // Inertial prediction y. The first iterate is x_n + dt v_n without the gravity term: with a
+  // few passes the iteration stops short of the minimum in the direction it started from, and
+  // starting at y would leave a resting body sagging by about (passes to converge / passes) dt^2 g
+  // more than its equilibrium (a clamped bar 4x its static sag); this start has the equilibrium
+  // as its fixed point. Rigid motion is still exact (one pass). Pinned vertices go to their targets.
+  std::vector<Vec3> y(V);
+  for (size_t i = 0; i < V; ++i) y[i] = x[i] + dt * v[i] + dt * dt * gravity;
+  for (size_t j = 0; j < s.pinned.size(); ++j) y[s.pinned[j]] = pinTargets.at(j);
+  for (size_t i = 0; i < V; ++i) x[i] += dt * v[i];
+  for (size_t j = 0; j < s.pinned.size(); ++j) x[s.pinned[j]] = pinTargets.at(j);
+  for (int it = 0; it < std::max(iterations, 1); ++it) {
+    for (size_t i = 0; i < V; ++i)
+      if (s.freeIndex[i] >= 0) s.rhs.row(s.freeIndex[i]) = (m.mass[i] * invDt2 * y[i]).transpose();
+    s.addElementTerms(x, q, rotationIterations);
+    s.solveInto(x);
+  }
+  const Real damp = 1.0 / (1.0 + damping * dt);
+  for (size_t i = 0; i < V; ++i) v[i] = (x[i] - x0[i]) / dt * damp;
+  s.heldRows.clear();
+}
+
+int ProjectiveSolver::solveStatic(std::vector<Vec3>& x, std::vector<Quat>& q, const Vec3& gravity,
+                                  const std::vector<Vec3>& pinTargets, int maxIterations, Real tolerance) {
+  Impl& s = *impl_;
+  const RestModel& m = *s.model;
+  for (size_t j = 0; j < s.pinned.size(); ++j) x[s.pinned[j]] = pinTargets.at(j);
+  std::vector<Vec3> before;
+  s.heldRows.clear();
+  for (int it = 1; it <= maxIterations; ++it) {
+    for (size_t i = 0; i < m.numVertices(); ++i)
+      if (s.freeIndex[i] >= 0) s.rhs.row(s.freeIndex[i]) = (m.mass[i] * gravity).transpose();
+    s.addElementTerms(x, q, 20);
+    before = x;
+    s.solveInto(x);
+    Real change = 0;
+    for (size_t i = 0; i < x.size(); ++i) change = std::max(change, (x[i] - before[i]).norm());
+    if (change < tolerance) return it;
+  }
+  return maxIterations;
+}
+
+}  // namespace gradel

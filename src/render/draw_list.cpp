@@ -1,0 +1,307 @@
+#include "gradel/render/draw_list.h"
+
+#include "gradel/isosurface.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <set>
+#include <unordered_map>
+
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wunused-function"
+#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
+#include <stb_easy_font.h>
+#pragma GCC diagnostic pop
+
+namespace gradel::render {
+
+SurfaceMode parseSurfaceMode(const std::string& name) {
+  if (name == "smooth") return SurfaceMode::Smooth;
+  if (name == "voxel") return SurfaceMode::Voxel;
+  if (name == "embedded") return SurfaceMode::Embedded;
+  if (name == "none") return SurfaceMode::None;
+  throw InputError("unknown surface \"" + name + "\" (expected smooth, voxel, embedded or none)");
+}
+
+namespace {
+
+using Color = std::array<float, 3>;
+
+constexpr Color kBodyColor{0.86f, 0.72f, 0.50f};
+constexpr Color kManipulatorColor{0.35f, 0.47f, 0.62f};
+constexpr Color kWallColor{0.55f, 0.57f, 0.62f};
+constexpr Color kFloorGridColor{0.78f, 0.80f, 0.84f};
+constexpr Color kVertexColor{0.10f, 0.10f, 0.12f};
+constexpr Color kTextColor{0.10f, 0.10f, 0.12f};
+constexpr Real kFloorGridStep = 0.05;  // [m]
+
+DrawVertex vertex(const Vec3& p, const Vec3& n, const Color& c, float alpha = 1) {
+  return {{float(p.x()), float(p.y()), float(p.z())}, {float(n.x()), float(n.y()), float(n.z())}, {c[0], c[1], c[2], alpha}};
+}
+
+void addLine(std::vector<DrawVertex>& out, const Vec3& a, const Vec3& b, const Color& c) {
+  out.push_back(vertex(a, Vec3::Zero(), c));
+  out.push_back(vertex(b, Vec3::Zero(), c));
+}
+
+void addQuad2D(DrawList& list, float x0, float y0, float x1, float y1, const Color& top, const Color& bottom) {
+  const Vec3 n = Vec3::Zero();
+  const DrawVertex a = vertex({x0, y0, 0}, n, top), b = vertex({x1, y0, 0}, n, top), c = vertex({x1, y1, 0}, n, bottom),
+                   d = vertex({x0, y1, 0}, n, bottom);
+  list.overlay.insert(list.overlay.end(), {a, b, c, a, c, d});
+}
+
+// Triangles of a mesh; flat = one normal per face (the voxel staircase), otherwise the mesh's
+// vertex normals (the smooth display).
+void addMesh(DrawList& list, const TriangleMesh& m, const std::vector<Color>& colors, bool flat) {
+  for (const auto& t : m.triangles) {
+    const Vec3 fn = (m.vertices[t[1]] - m.vertices[t[0]]).cross(m.vertices[t[2]] - m.vertices[t[0]]).normalized();
+    for (uint32_t v : t) list.triangles.push_back(vertex(m.vertices[v], flat ? fn : m.normals[v], colors[v]));
+  }
+}
+
+void addSphere(DrawList& list, const Vec3& c, Real r, const Color& color) {
+  constexpr int kRings = 14, kSegments = 24;
+  auto point = [&](int i, int j) {
+    const Real th = M_PI * i / kRings, ph = 2 * M_PI * j / kSegments;
+    return Vec3(std::sin(th) * std::cos(ph), std::cos(th), std::sin(th) * std::sin(ph));
+  };
+  for (int i = 0; i < kRings; ++i)
+    for (int j = 0; j < kSegments; ++j) {
+      const Vec3 a = point(i, j), b = point(i + 1, j), d = point(i + 1, j + 1), e = point(i, j + 1);
+      for (const Vec3& n : {a, d, b, a, e, d}) list.triangles.push_back(vertex(c + r * n, n, color));
+    }
+}
+
+void addCylinder(DrawList& list, const Manipulator& m, const Color& color) {
+  constexpr int kSegments = 28;
+  const Vec3 axis = m.settings.axis.normalized();
+  const Vec3 u = axis.unitOrthogonal(), v = axis.cross(u);
+  const Real r = m.settings.radius, hl = m.settings.halfLength;
+  for (int j = 0; j < kSegments; ++j) {
+    const Real a0 = 2 * M_PI * j / kSegments, a1 = 2 * M_PI * (j + 1) / kSegments;
+    const Vec3 n0 = std::cos(a0) * u + std::sin(a0) * v, n1 = std::cos(a1) * u + std::sin(a1) * v;
+    const Vec3 top = m.position + hl * axis, bot = m.position - hl * axis;
+    for (const auto& [p, n] : {std::pair<Vec3, Vec3>{bot + r * n0, n0}, {bot + r * n1, n1}, {top + r * n1, n1}, {bot + r * n0, n0},
+                               {top + r * n1, n1}, {top + r * n0, n0}})
+      list.triangles.push_back(vertex(p, n, color));
+    for (int s = -1; s <= 1; s += 2) {
+      const Vec3 c = m.position + s * hl * axis;
+      for (const Vec3& p : {c, Vec3(c + r * n0), Vec3(c + r * n1)}) list.triangles.push_back(vertex(p, s * axis, color));
+    }
+  }
+}
+
+void addDisk(DrawList& list, const Vec3& c, Real r, const Color& color) {
+  constexpr int kSegments = 40;
+  const Vec3 front = c + Vec3(0, 0, 1e-4);  // just in front of the z = 0 body
+  for (int j = 0; j < kSegments; ++j) {
+    const Real a0 = 2 * M_PI * j / kSegments, a1 = 2 * M_PI * (j + 1) / kSegments;
+    for (const Vec3& p : {front, Vec3(front + r * Vec3(std::cos(a0), std::sin(a0), 0)), Vec3(front + r * Vec3(std::cos(a1), std::sin(a1), 0))})
+      list.triangles.push_back(vertex(p, Vec3(0, 0, 1), color));
+  }
+}
+
+void addWalls(DrawList& list, const DomainSettings& d, int dim) {
+  const Vec3 lo = d.min, hi = d.max;
+  if (dim == 2) {
+    const Vec3 c[4] = {{lo.x(), lo.y(), 0}, {hi.x(), lo.y(), 0}, {hi.x(), hi.y(), 0}, {lo.x(), hi.y(), 0}};
+    for (int i = 0; i < 4; ++i) addLine(list.lines, c[i], c[(i + 1) % 4], kWallColor);
+    return;
+  }
+  for (Real x = std::ceil(lo.x() / kFloorGridStep) * kFloorGridStep; x <= hi.x(); x += kFloorGridStep)
+    addLine(list.lines, {x, lo.y(), lo.z()}, {x, lo.y(), hi.z()}, kFloorGridColor);
+  for (Real z = std::ceil(lo.z() / kFloorGridStep) * kFloorGridStep; z <= hi.z(); z += kFloorGridStep)
+    addLine(list.lines, {lo.x(), lo.y(), z}, {hi.x(), lo.y(), z}, kFloorGridColor);
+  for (int a = 0; a < 3; ++a)
+    for (int k = 0; k < 4; ++k) {
+      Vec3 p = lo, q;
+      const int b = (a + 1) % 3, c = (a + 2) % 3;
+      p[b] = (k & 1) ? hi[b] : lo[b];
+      p[c] = (k & 2) ? hi[c] : lo[c];
+      q = p;
+      q[a] = hi[a];
+      addLine(list.lines, p, q, kWallColor);
+    }
+}
+
+void addLegend(DrawList& list, Real scale, int width, int height) {
+  const float x0 = float(width) - 46, x1 = float(width) - 26, y0 = 40, y1 = std::max(120.0f, float(height) * 0.45f);
+  constexpr int kSteps = 24;
+  const Color backdrop{0.97f, 0.97f, 0.98f};
+  addQuad2D(list, x0 - 56, y0 - 28, float(width) - 4, y1 + 10, backdrop, backdrop);
+  for (int i = 0; i < kSteps; ++i) {
+    // Top of the bar = high stress (dark).
+    const float ya = y0 + (y1 - y0) * i / kSteps, yb = y0 + (y1 - y0) * (i + 1) / kSteps;
+    addQuad2D(list, x0, ya, x1, yb, stressColor(scale * (1 - Real(i) / kSteps), scale),
+              stressColor(scale * (1 - Real(i + 1) / kSteps), scale));
+  }
+  char top[32];
+  std::snprintf(top, sizeof top, "%.3g", scale);
+  addText(list, "stress", x0 - 24, y0 - 22, 1.6f, kTextColor);
+  addText(list, top, x0 - 10 - 9.6f * float(std::strlen(top)), y0 - 4, 1.6f, kTextColor);
+  addText(list, "0", x0 - 20, y1 - 8, 1.6f, kTextColor);
+}
+
+}  // namespace
+
+std::array<float, 3> stressColor(Real s, Real scale) {
+  // Cream -> orange -> dark red-brown: luminance falls monotonically with stress.
+  constexpr Color stops[3] = {{0.98f, 0.95f, 0.84f}, {0.93f, 0.55f, 0.20f}, {0.35f, 0.04f, 0.04f}};
+  const Real t = std::clamp(scale > 0 ? s / scale : 0.0, 0.0, 1.0) * 2;
+  const int i = std::min(int(t), 1);
+  const float f = float(t - i);
+  Color c;
+  for (int k = 0; k < 3; ++k) c[size_t(k)] = stops[i][size_t(k)] * (1 - f) + stops[i + 1][size_t(k)] * f;
+  return c;
+}
+
+std::array<float, 3> levelColor(int level) {
+  constexpr Color palette[8] = {{0.15f, 0.35f, 0.85f}, {0.10f, 0.65f, 0.20f}, {0.95f, 0.55f, 0.05f}, {0.85f, 0.10f, 0.10f},
+                                {0.55f, 0.20f, 0.75f}, {0.45f, 0.30f, 0.15f}, {0.05f, 0.65f, 0.65f}, {0.90f, 0.30f, 0.70f}};
+  return palette[size_t(level) % 8];
+}
+
+BodyView makeBodyView(const BuiltScene& scene, const TriangleMesh* restMesh) {
+  const Layout& layout = scene.layout;
+  const RestModel& model = *scene.model;
+  BodyView v;
+  if (restMesh) {
+    v.embedded = embedMesh(*restMesh, layout, model);
+  } else if (layout.dim == 3) {
+    // restPositions = origin + lattice * h (model.h).
+    const Vec3 origin = model.restPositions[0] - layout.vertices[0].cast<Real>() * model.voxelSize;
+    v.embedded = embedMesh(isosurface(scene.volume, origin), layout, model);
+  }
+  v.smooth = buildDisplaySurface(layout, scene.volume, SurfaceKind::Smooth);
+  v.voxel = buildDisplaySurface(layout, scene.volume, SurfaceKind::Voxel);
+  v.levels = layout.numLevels();
+  std::unordered_map<uint64_t, uint32_t> id;
+  auto key = [](const Int3& p) { return uint64_t(uint32_t(p.x())) | uint64_t(uint32_t(p.y())) << 21 | uint64_t(uint32_t(p.z())) << 42; };
+  for (size_t i = 0; i < layout.numVertices(); ++i) id.emplace(key(layout.vertices[i]), uint32_t(i));
+  const int dim = layout.dim, corners = dim == 3 ? 8 : 4;
+  for (size_t e = 0; e < layout.numElements(); ++e) {
+    // Outline of a full element: its block; of an incomplete one: its filled cells (fig. 6).
+    // Both only connect the element's own vertices.
+    const bool full = layout.isFull(e);
+    const int32_t c = layout.cellSize[e], span = full ? 2 * c : c;
+    std::set<std::pair<uint32_t, uint32_t>> edges;
+    for (int k = 0; k < (full ? 1 : corners); ++k) {
+      if (!full && !(layout.cellMask[e] >> k & 1)) continue;
+      const Int3 lo = layout.origin[e] + c * Int3(k & 1, k >> 1 & 1, k >> 2 & 1);
+      for (int corner = 0; corner < corners; ++corner)
+        for (int a = 0; a < dim; ++a) {
+          if (corner >> a & 1) continue;
+          const Int3 p = lo + span * Int3(corner & 1, corner >> 1 & 1, corner >> 2 & 1);
+          Int3 q = p;
+          q[a] += span;
+          auto ip = id.find(key(p)), iq = id.find(key(q));
+          if (ip != id.end() && iq != id.end()) edges.insert(std::minmax(ip->second, iq->second));
+        }
+    }
+    // The section plane runs through voxel centres (z = nz/2 + 1/2), so no element only touches it.
+    const double mid = dim == 3 ? layout.dims[2] / 2 + 0.5 : 0.0;
+    const bool cut = dim == 2 || (layout.origin[e].z() < mid && mid < layout.origin[e].z() + 2 * c);
+    for (const auto& [a, b] : edges) {
+      v.edges.push_back({a, b});
+      v.edgeLevel.push_back(layout.level[e]);
+      v.edgeInSection.push_back(cut ? 1 : 0);
+    }
+  }
+  return v;
+}
+
+void addText(DrawList& list, const std::string& text, float x, float y, float scale, std::array<float, 3> color) {
+  // stb_easy_font emits quads of 16-byte vertices (x, y, z floats + RGBA bytes) at 1 unit per pixel.
+  std::vector<char> buffer(text.size() * 300 + 1024);
+  std::string copy = text;
+  const int quads = stb_easy_font_print(0, 0, copy.data(), nullptr, buffer.data(), int(buffer.size()));
+  for (int q = 0; q < quads; ++q) {
+    float v[4][2];
+    for (int k = 0; k < 4; ++k) {
+      const float* f = reinterpret_cast<const float*>(buffer.data() + 16 * (4 * q + k));
+      v[k][0] = x + f[0] * scale;
+      v[k][1] = y + f[1] * scale;
+    }
+    addQuad2D(list, v[0][0], v[0][1], v[2][0], v[2][1], color, color);
+  }
+}
+
+void sceneBounds(const World& world, Vec3* lo, Vec3* hi) {
+  Vec3 a = Vec3::Constant(std::numeric_limits<Real>::infinity()), b = -a;
+  for (const Vec3& p : world.state().positions) a = a.cwiseMin(p), b = b.cwiseMax(p);
+  for (const Manipulator& m : world.manipulators()) {
+    std::vector<Vec3> centres{m.position};
+    for (const Keyframe& k : m.settings.path.keys) centres.push_back(k.position);
+    const Real r = m.settings.radius + (m.settings.shape == ManipulatorShape::Cylinder ? m.settings.halfLength : 0);
+    for (const Vec3& c : centres) a = a.cwiseMin(c - Vec3::Constant(r)), b = b.cwiseMax(c + Vec3::Constant(r));
+  }
+  if (world.model().dim == 2) a.z() = b.z() = 0;
+  *lo = a;
+  *hi = b;
+}
+
+DrawList buildDrawList(const BodyView& body, const World& world, const ViewOptions& o, int width, int height) {
+  DrawList list;
+  const std::vector<Vec3>& x = world.state().positions;
+  const int dim = world.model().dim;
+  std::vector<Real> stress;
+  if (o.stress) stress = world.vertexStress();
+
+  // ---- the body's surface ----
+  const bool embedded = o.surface == SurfaceMode::Embedded && body.embedded.has_value();
+  if (embedded) {
+    const EmbeddedMesh& em = *body.embedded;
+    const TriangleMesh m = embeddedMesh(em, x);
+    std::vector<Color> colors(m.vertices.size(), kBodyColor);
+    if (o.stress)
+      for (size_t v = 0; v < colors.size(); ++v) {
+        Real s = 0;
+        for (uint32_t k = em.weightStart[v]; k < em.weightStart[v + 1]; ++k) s += em.weight[k] * stress[em.weightVertex[k]];
+        colors[v] = stressColor(std::max(s, 0.0), o.stressScale);
+      }
+    addMesh(list, m, colors, false);
+  } else if (o.surface != SurfaceMode::None) {
+    const DisplaySurface& s = o.surface == SurfaceMode::Voxel ? body.voxel : body.smooth;
+    const TriangleMesh m = surfaceMesh(s, x);
+    std::vector<Color> colors(m.vertices.size(), kBodyColor);
+    if (o.stress)
+      for (size_t v = 0; v < colors.size(); ++v) colors[v] = stressColor(stress[s.modelVertex[v]], o.stressScale);
+    addMesh(list, m, colors, o.surface == SurfaceMode::Voxel);
+  }
+
+  if (o.wireframe)
+    for (size_t i = 0; i < body.edges.size(); ++i)
+      if (!o.section || body.edgeInSection[i]) addLine(list.lines, x[body.edges[i][0]], x[body.edges[i][1]], levelColor(body.edgeLevel[i]));
+  if (o.vertices)
+    for (const Vec3& p : x) list.points.push_back(vertex(p, Vec3::Zero(), kVertexColor));
+
+  // ---- manipulators and walls ----
+  if (o.manipulators)
+    for (const Manipulator& m : world.manipulators()) {
+      if (dim == 2)
+        addDisk(list, m.position, m.settings.radius, kManipulatorColor);
+      else if (m.settings.shape == ManipulatorShape::Cylinder)
+        addCylinder(list, m, kManipulatorColor);
+      else
+        addSphere(list, m.position, m.settings.radius, kManipulatorColor);
+    }
+  if (o.walls && world.domain().enabled) addWalls(list, world.domain(), dim);
+
+  // ---- overlay ----
+  if (o.stress) addLegend(list, o.stressScale, width, height);
+  if (o.wireframe) {
+    float y = float(height) - 14.0f * float(body.levels) - 10;
+    for (int l = 0; l < body.levels; ++l, y += 14) {
+      addQuad2D(list, 12, y + 1, 24, y + 11, levelColor(l), levelColor(l));
+      addText(list, "level " + std::to_string(l), 30, y, 1.6f, kTextColor);
+    }
+  }
+  if (!o.caption.empty()) addText(list, o.caption, 12, 12, 2.0f, kTextColor);
+  return list;
+}
+
+}  // namespace gradel::render

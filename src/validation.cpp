@@ -1,0 +1,159 @@
+#include "gradel/validation.h"
+
+#include <cmath>
+#include <numbers>
+
+#include "gradel/element.h"
+#include "gradel/projective.h"
+
+namespace gradel {
+
+namespace {
+// A pin holding the face x = x0 of the bar (a slab half a voxel thick around it).
+PinSettings facePin(const BarSpec& bar, Real x0) {
+  const Real h = bar.voxelSize();
+  PinSettings p;
+  p.min = Vec3(x0 - 0.25 * h, -0.25 * h, -0.25 * h);
+  p.max = Vec3(x0 + 0.25 * h, bar.width + 0.25 * h, bar.width + 0.25 * h);
+  return p;
+}
+}  // namespace
+
+Scene barScene(const BarSpec& bar, const SimulationSettings& sim, bool clamped) {
+  Scene s;
+  s.name = "bar";
+  s.dim = 3;
+  ShapeSpec& shape = s.body.shape;
+  shape.dim = 3;
+  shape.dims = {bar.along, bar.across, bar.across};
+  shape.voxelSize = bar.voxelSize();
+  Primitive box;
+  box.kind = PrimitiveKind::Box;
+  box.min = Vec3::Zero();
+  box.max = Vec3(bar.along, bar.across, bar.across);
+  shape.primitives = {box};
+  s.body.layout = bar.layout;
+  s.body.material = bar.material;
+  s.simulation = sim;
+  if (clamped) s.pins = {facePin(bar, 0)};
+  return s;
+}
+
+Real beamTipSag(Real L, Real a, Real rho, Real E, Real g) {
+  const Real A = a * a, I = a * a * a * a / 12;
+  return rho * g * A * std::pow(L, 4) / (8 * E * I);
+}
+
+Real beamFrequency(Real L, Real a, Real rho, Real E) {
+  const Real A = a * a, I = a * a * a * a / 12;
+  return 1.875104 * 1.875104 / (2 * std::numbers::pi * L * L) * std::sqrt(E * I / (rho * A));
+}
+
+std::vector<uint32_t> tipVertices(const RestModel& model, Real length) {
+  std::vector<uint32_t> ids;
+  const Real tol = 1e-6 * length;
+  for (size_t i = 0; i < model.numVertices(); ++i)
+    if (std::abs(model.restPositions[i].x() - length) < tol) ids.push_back(uint32_t(i));
+  return ids;
+}
+
+Real stretchModulus(const BarSpec& bar, Real strain) {
+  SimulationSettings sim;
+  sim.gravity.setZero();
+  Scene scene = barScene(bar, sim, true);
+  const Real L = bar.length(), dL = strain * L;
+  PinSettings far = facePin(bar, L);
+  far.path.keys = {Keyframe{0, Vec3(dL, 0, 0), std::nullopt}};
+  scene.pins.push_back(far);
+  BuiltScene b = buildScene(scene);
+  World& w = *b.world;
+  const RestModel& m = w.model();
+  const PinSet& pins = w.pinned();
+  std::vector<Vec3> targets;
+  for (uint32_t i : pins.vertices) targets.push_back(w.state().positions[i]);
+  // Start from the affine stretch: the static solve then only removes its small non-affine part.
+  for (Vec3& x : w.state().positions) x.x() *= 1 + strain;
+  ProjectiveSolver solver(m, 0, pins.vertices);
+  solver.solveStatic(w.state().positions, w.state().rotations, Vec3::Zero(), targets, 20000, 1e-14 * L);
+  // Elastic force on the moved face (pin index 1): the reaction pulling it back.
+  std::vector<Vec3> force(m.numVertices(), Vec3::Zero()), f;
+  for (size_t e = 0; e < m.numElements(); ++e) {
+    const uint32_t s = m.elemStart[e], n = m.elemStart[e + 1] - s;
+    f.resize(n);
+    Quat q = w.state().rotations[e];
+    elementForces(3, w.state().positions.data(), &m.elemVerts[s], &m.restOffsets[s], int(n), m.stiffness[e], q, f.data(), 20);
+    for (uint32_t i = 0; i < n; ++i) force[m.elemVerts[s + i]] += f[i];
+  }
+  Real F = 0;
+  for (size_t j = 0; j < pins.vertices.size(); ++j)
+    if (pins.pinOf[j] == 1) F -= force[pins.vertices[j]].x();
+  return F * L / (bar.width * bar.width * dL);
+}
+
+SagResult staticTipSag(const BarSpec& bar, size_t maxSteps, Real tolerance) {
+  SimulationSettings sim;
+  sim.damping = 0;
+  BuiltScene b = buildScene(barScene(bar, sim, true));
+  World& w = *b.world;
+  const RestModel& m = w.model();
+  const std::vector<uint32_t> tip = tipVertices(m, bar.length());
+  auto sag = [&] {
+    Real s = 0;
+    for (uint32_t i : tip) s += m.restPositions[i].y() - w.state().positions[i].y();
+    return s / Real(tip.size());
+  };
+  SagResult r;
+  r.elements = m.numElements();
+  r.vertices = m.numVertices();
+  Real previousKE = 0, lastSag = -1;
+  int calm = 0;
+  for (r.steps = 0; r.steps < maxSteps; ++r.steps) {
+    w.step();
+    Real ke = 0;
+    for (size_t i = 0; i < m.numVertices(); ++i) ke += m.mass[i] * w.state().velocities[i].squaredNorm();
+    if (ke < previousKE) {
+      for (Vec3& v : w.state().velocities) v.setZero();
+      previousKE = 0;
+      const Real s = sag();
+      calm = std::abs(s - lastSag) < tolerance * std::abs(s) ? calm + 1 : 0;
+      lastSag = s;
+      if (calm >= 3) break;
+    } else {
+      previousKE = ke;
+    }
+  }
+  r.sag = sag();
+  return r;
+}
+
+Real dominantFrequency(const std::vector<Real>& signal, Real sampleInterval) {
+  const size_t N = signal.size();
+  if (N < 4) return 0;
+  Real mean = 0;
+  for (Real s : signal) mean += s;
+  mean /= Real(N);
+  std::vector<Real> w(N);
+  for (size_t i = 0; i < N; ++i)
+    w[i] = (signal[i] - mean) * (0.5 - 0.5 * std::cos(2 * std::numbers::pi * Real(i) / Real(N - 1)));
+  auto power = [&](Real f) {
+    Real re = 0, im = 0;
+    for (size_t i = 0; i < N; ++i) {
+      const Real ph = 2 * std::numbers::pi * f * Real(i) * sampleInterval;
+      re += w[i] * std::cos(ph), im += w[i] * std::sin(ph);
+    }
+    return re * re + im * im;
+  };
+  // Coarse scan on the FFT bins (skipping DC), then a fine scan around the best bin.
+  const Real df = 1.0 / (Real(N) * sampleInterval), fMax = 0.5 / sampleInterval;
+  Real best = df, bestP = -1;
+  for (Real f = df; f < fMax; f += df)
+    if (const Real p = power(f); p > bestP) bestP = p, best = f;
+  const Real lo = std::max(best - df, 0.0), hi = best + df;
+  for (int i = 0; i <= 200; ++i) {
+    const Real f = lo + (hi - lo) * i / 200.0;
+    if (const Real p = power(f); p > bestP) bestP = p, best = f;
+  }
+  return best;
+}
+
+}  // namespace gradel

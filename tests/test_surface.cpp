@@ -1,0 +1,175 @@
+// Display surfaces (surface.h, paper sec. 3.3): closed, outward, over simulated vertices only.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+
+#include "gradel/isosurface.h"
+#include "gradel/surface.h"
+#include "test_support.h"
+
+namespace gradel {
+namespace {
+
+struct Case {
+  std::string name;
+  VoxelVolume volume;
+};
+
+// A 10^3 box with a 4-voxel-deep notch cut into one face: concave steps on three axes.
+VoxelVolume notchedBox() {
+  VoxelVolume v = rasterize(presetShape("box", 10, 3));
+  for (int k = 3; k < 7; ++k)
+    for (int j = 6; j < 10; ++j)
+      for (int i = 2; i < 5; ++i) v.set(i, j, k, false);
+  return v;
+}
+
+std::vector<Case> cases3D() {
+  return {{"box", rasterize(presetShape("box", 6, 3))},
+          {"sphere", rasterize(presetShape("sphere", 12, 3))},
+          {"sphere_odd", rasterize(presetShape("sphere", 9, 3))},
+          {"cylinder", rasterize(presetShape("cylinder", 10, 3))},
+          {"notch", notchedBox()}};
+}
+
+std::vector<Vec3> restLattice(const Layout& layout, const DisplaySurface& s) {
+  std::vector<Vec3> x(s.modelVertex.size());
+  for (size_t i = 0; i < x.size(); ++i) x[i] = layout.vertices[s.modelVertex[i]].cast<Real>();
+  return x;
+}
+
+// Six times the signed volume enclosed (divergence theorem), in lattice units.
+Real signedVolume(const std::vector<Vec3>& x, const DisplaySurface& s) {
+  Real v6 = 0;
+  for (const auto& t : s.triangles) v6 += x[t[0]].dot(x[t[1]].cross(x[t[2]]));
+  return v6 / 6;
+}
+
+void expectClosedAndOriented(const DisplaySurface& s, const std::string& what) {
+  std::map<std::pair<uint32_t, uint32_t>, int> directed;
+  for (const auto& t : s.triangles)
+    for (int k = 0; k < 3; ++k) ++directed[{t[k], t[(k + 1) % 3]}];
+  size_t bad = 0;
+  for (const auto& [e, n] : directed) {
+    auto rev = directed.find({e.second, e.first});
+    if (rev == directed.end() || rev->second != n) ++bad;
+  }
+  EXPECT_EQ(bad, 0u) << what << ": every directed edge must be matched by exactly one reverse edge";
+}
+
+TEST(DisplaySurface, VoxelAndSmoothSurfacesAreClosedOutwardAndUseSimulatedVerticesOnly) {
+  for (const Case& c : cases3D())
+    for (LayoutKind kind : {LayoutKind::Gradational, LayoutKind::Uniform, LayoutKind::Voxel})
+      for (SurfaceKind sk : {SurfaceKind::Voxel, SurfaceKind::Smooth}) {
+        const std::string what = c.name + "/" + layoutKindName(kind) + "/" + surfaceKindName(sk);
+        const Layout layout = buildLayout(c.volume, kind);
+        const DisplaySurface s = buildDisplaySurface(layout, c.volume, sk);
+        ASSERT_FALSE(s.triangles.empty()) << what;
+        for (uint32_t m : s.modelVertex) ASSERT_LT(m, layout.numVertices()) << what;
+        for (const auto& t : s.triangles)
+          for (uint32_t v : t) ASSERT_LT(v, s.modelVertex.size()) << what;
+        expectClosedAndOriented(s, what);
+
+        const std::vector<Vec3> x = restLattice(layout, s);
+        size_t degenerate = 0;
+        for (const auto& t : s.triangles)
+          if ((x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]).norm() < 1e-9) ++degenerate;
+        EXPECT_EQ(degenerate, 0u) << what;
+
+        // Outward normals: the enclosed volume is positive. The staircase encloses exactly the
+        // voxels; faces laid over concave steps only add volume.
+        const Real vol = signedVolume(x, s), voxels = Real(c.volume.countFilled());
+        if (sk == SurfaceKind::Voxel)
+          EXPECT_NEAR(vol, voxels, 1e-9) << what;
+        else
+          EXPECT_GE(vol, voxels - 1e-9) << what;
+      }
+}
+
+TEST(DisplaySurface, SmoothSurfaceCoversConcaveSteps) {
+  // The sphere's staircase has concave steps; the smooth surface must lay faces over them
+  // (more enclosed volume, different triangles) while the box has none to cover.
+  const VoxelVolume sphere = rasterize(presetShape("sphere", 12, 3));
+  const Layout ls = buildLayout(sphere, LayoutKind::Gradational);
+  const DisplaySurface vs = buildDisplaySurface(ls, sphere, SurfaceKind::Voxel);
+  const DisplaySurface ss = buildDisplaySurface(ls, sphere, SurfaceKind::Smooth);
+  EXPECT_GT(signedVolume(restLattice(ls, ss), ss), signedVolume(restLattice(ls, vs), vs) + 10);
+
+  const VoxelVolume box = rasterize(presetShape("box", 8, 3));
+  const Layout lb = buildLayout(box, LayoutKind::Gradational);
+  EXPECT_EQ(buildDisplaySurface(lb, box, SurfaceKind::Smooth).triangles,
+            buildDisplaySurface(lb, box, SurfaceKind::Voxel).triangles);
+}
+
+TEST(DisplaySurface, TwoDimensionalSurfaceTilesTheRegionFacingPlusZ) {
+  for (const std::string shape : {"box", "sphere"}) {
+    const VoxelVolume v = rasterize(presetShape(shape, 12, 2));
+    const Layout layout = buildLayout(v, LayoutKind::Gradational);
+    for (SurfaceKind sk : {SurfaceKind::Voxel, SurfaceKind::Smooth}) {
+      const DisplaySurface s = buildDisplaySurface(layout, v, sk);
+      const std::vector<Vec3> x = restLattice(layout, s);
+      Real area = 0;
+      for (const auto& t : s.triangles) {
+        const Real a2 = (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]).z();
+        EXPECT_GT(a2, 0) << shape << ": every triangle faces +z";
+        area += a2 / 2;
+      }
+      if (sk == SurfaceKind::Voxel)
+        EXPECT_NEAR(area, Real(v.countFilled()), 1e-9) << shape;
+      else
+        EXPECT_GE(area, Real(v.countFilled())) << shape;
+    }
+  }
+}
+
+TEST(DisplaySurface, SurfaceMeshMovesWithTheModelVertices) {
+  const test::Body b = test::makeBody("sphere", 8, 3, LayoutKind::Gradational);
+  const DisplaySurface s = buildDisplaySurface(b.layout, b.volume, SurfaceKind::Smooth);
+  std::vector<Vec3> x = b.model->restPositions;
+  const Vec3 shift(0.3, -0.1, 0.2);
+  for (Vec3& p : x) p += shift;
+  const TriangleMesh rest = surfaceMesh(s, b.model->restPositions), moved = surfaceMesh(s, x);
+  ASSERT_EQ(rest.vertices.size(), moved.vertices.size());
+  for (size_t i = 0; i < rest.vertices.size(); ++i) {
+    EXPECT_LT((moved.vertices[i] - rest.vertices[i] - shift).norm(), 1e-12);
+    EXPECT_NEAR(moved.normals[i].norm(), 1.0, 1e-12);
+    EXPECT_NEAR(moved.normals[i].dot(rest.normals[i]), 1.0, 1e-12);
+  }
+  // Normals never point into the sphere (at the rim of a flat step they may be tangential).
+  Vec3 c = Vec3::Zero();
+  for (const Vec3& p : rest.vertices) c += p;
+  c /= Real(rest.vertices.size());
+  for (size_t i = 0; i < rest.vertices.size(); ++i) EXPECT_GT(rest.normals[i].dot((rest.vertices[i] - c).normalized()), -1e-9);
+}
+
+TEST(DisplaySurface, ParseSurfaceKindRejectsUnknownNames) {
+  EXPECT_EQ(parseSurfaceKind("smooth"), SurfaceKind::Smooth);
+  EXPECT_THROW(parseSurfaceKind("marching"), InputError);
+}
+
+}  // namespace
+}  // namespace gradel
+
+namespace gradel {
+namespace {
+
+TEST(Isosurface, ClosedOutwardAndCloseToTheVoxelVolume) {
+  for (const Case& c : cases3D()) {
+    const TriangleMesh m = isosurface(c.volume, Vec3(0.1, 0.2, 0.3));
+    ASSERT_FALSE(m.triangles.empty()) << c.name;
+    DisplaySurface s;
+    s.triangles = m.triangles;
+    expectClosedAndOriented(s, "isosurface " + c.name);
+    Real v6 = 0;
+    for (const auto& t : m.triangles) v6 += m.vertices[t[0]].dot(m.vertices[t[1]].cross(m.vertices[t[2]]));
+    const Real h3 = std::pow(c.volume.voxelSize(), 3), voxels = Real(c.volume.countFilled()) * h3;
+    // Rounded edges and corners: somewhat less than the voxels, never inside out.
+    EXPECT_GT(v6 / 6, 0.6 * voxels) << c.name;
+    EXPECT_LT(v6 / 6, 1.05 * voxels) << c.name;
+  }
+  EXPECT_THROW(isosurface(rasterize(presetShape("box", 4, 2)), Vec3::Zero()), InputError);
+}
+
+}  // namespace
+}  // namespace gradel
