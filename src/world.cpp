@@ -1,7 +1,6 @@
 #include "gradel/world.h"
 
 #include <cmath>
-#include <cstring>
 #ifdef _OPENMP
 #include <omp.h>
 #endif
