@@ -1,6 +1,8 @@
 #include "gradel/embedding.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 
 #include "gradel/surface.h"
@@ -26,6 +28,52 @@ std::vector<int32_t> voxelOwners(const Layout& layout) {
     }
   }
   return owner;
+}
+
+// Squared distance [voxels^2] from lattice point q to voxel (i, j, k)'s cube (in 2D: its square).
+Real boxDistance2(const Vec3& q, int i, int j, int k, int dim) {
+  Real d2 = 0;
+  const int c[3] = {i, j, k};
+  for (int a = 0; a < dim; ++a) {
+    const Real lo = c[a], hi = c[a] + 1.0;
+    const Real d = q[a] < lo ? lo - q[a] : q[a] > hi ? q[a] - hi : 0.0;
+    d2 += d * d;
+  }
+  return d2;
+}
+
+// Owner of the filled voxel nearest to lattice point q (in voxel cell `cell`, possibly outside
+// the grid): the element whose region is nearest. Shells of growing Chebyshev radius around the
+// cell first (a voxel in shell r is at least r - 1 voxels away, so the search stops once the best
+// is nearer than that), then, for a point far from the body, every filled voxel.
+int32_t nearestOwner(const Layout& layout, const std::vector<int32_t>& owner, const Vec3& q, const Int3& cell) {
+  const auto& n = layout.dims;
+  const int dim = layout.dim;
+  auto at = [&](int i, int j, int k) { return owner[size_t(i) + size_t(n[0]) * (size_t(j) + size_t(n[1]) * size_t(k))]; };
+  Real best = std::numeric_limits<Real>::infinity();
+  int32_t e = -1;
+  constexpr int kMaxShell = 8;
+  for (int r = 1; r <= kMaxShell; ++r) {
+    const int k0 = dim == 3 ? std::max(0, cell.z() - r) : 0, k1 = dim == 3 ? std::min(n[2] - 1, cell.z() + r) : 0;
+    const int j0 = std::max(0, cell.y() - r), j1 = std::min(n[1] - 1, cell.y() + r);
+    const int i0 = std::max(0, cell.x() - r), i1 = std::min(n[0] - 1, cell.x() + r);
+    for (int k = k0; k <= k1; ++k)
+      for (int j = j0; j <= j1; ++j)
+        for (int i = i0; i <= i1; ++i) {
+          const int cheb = std::max({std::abs(i - cell.x()), std::abs(j - cell.y()), dim == 3 ? std::abs(k - cell.z()) : 0});
+          if (cheb != r) continue;  // inner shells are done
+          const int32_t o = at(i, j, k);
+          if (o < 0) continue;
+          if (const Real d = boxDistance2(q, i, j, k, dim); d < best) best = d, e = o;
+        }
+    if (e >= 0 && best <= Real(r) * Real(r)) return e;  // shell r + 1 is at least r away
+  }
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i)
+        if (const int32_t o = at(i, j, k); o >= 0)
+          if (const Real d = boxDistance2(q, i, j, k, dim); d < best) best = d, e = o;
+  return e;
 }
 
 Vec3 restMean(const RestModel& m, size_t e) {
@@ -56,27 +104,14 @@ EmbeddedMesh embedMesh(const TriangleMesh& restMesh, const Layout& layout, const
   out.weightStart.push_back(0);
   for (const Vec3& p : restMesh.vertices) {
     const Vec3 q = (p - origin) / h;
-    const int x = int(std::floor(q.x())), y = int(std::floor(q.y())), z = layout.dim == 3 ? int(std::floor(q.z())) : 0;
+    // Clamped first: a vertex a million voxels away still finds the nearest element, without overflow.
+    auto cellOf = [](Real c) { return int(std::floor(std::clamp(c, -1e6, 1e6))); };
+    const int x = cellOf(q.x()), y = cellOf(q.y()), z = layout.dim == 3 ? cellOf(q.z()) : 0;
     int32_t e = -1;
     if (x >= 0 && y >= 0 && z >= 0 && x < layout.dims[0] && y < layout.dims[1] && z < layout.dims[2])
       e = owner[size_t(x) + size_t(layout.dims[0]) * (size_t(y) + size_t(layout.dims[1]) * size_t(z))];
-    if (e < 0) {  // just outside: the owner of the nearest filled voxel among the 26 neighbours
-      Real best = std::numeric_limits<Real>::infinity();
-      for (int dz = (layout.dim == 3 ? -1 : 0); dz <= (layout.dim == 3 ? 1 : 0); ++dz)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx) {
-            const int i = x + dx, j = y + dy, k = z + dz;
-            if (i < 0 || j < 0 || k < 0 || i >= layout.dims[0] || j >= layout.dims[1] || k >= layout.dims[2]) continue;
-            const int32_t o = owner[size_t(i) + size_t(layout.dims[0]) * (size_t(j) + size_t(layout.dims[1]) * size_t(k))];
-            const Vec3 centre = origin + h * Vec3(i + 0.5, j + 0.5, layout.dim == 3 ? k + 0.5 : p.z() / h);
-            if (o >= 0 && (centre - p).squaredNorm() < best) best = (centre - p).squaredNorm(), e = o;
-          }
-    }
-    if (e < 0) {  // farther out: the element with the nearest rest mean
-      Real best = std::numeric_limits<Real>::infinity();
-      for (size_t k = 0; k < means.size(); ++k)
-        if (const Real d = (means[k] - p).squaredNorm(); d < best) best = d, e = int32_t(k);
-    }
+    if (e < 0) e = nearestOwner(layout, owner, q, {x, y, z});
+    if (e < 0) throw InputError("embedded mesh: the body has no elements");
     const uint32_t b = model.elemStart[size_t(e)], n = model.elemStart[size_t(e) + 1] - b;
     Mat3 B = Mat3::Zero();
     for (uint32_t i = b; i < b + n; ++i) {

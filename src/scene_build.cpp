@@ -4,8 +4,9 @@ namespace gradel {
 
 BuiltScene buildScene(const Scene& scene) {
   BuiltScene b;
+  TriangleMesh latticeMesh;  // a mesh source's mesh, in lattice units
   if (scene.body.source) {
-    b.volume = scene.body.source->load();
+    b.volume = scene.body.source->loadWithMesh(&latticeMesh);
     if (b.volume.dim() != scene.dim)
       throw InputError(scene.body.source->describe() + ": a " + std::to_string(b.volume.dim()) + "D volume in a " +
                        std::to_string(scene.dim) + "D scene");
@@ -19,6 +20,17 @@ BuiltScene buildScene(const Scene& scene) {
   if (scene.dim == 2) origin.z() = 0;
   auto model = std::make_shared<RestModel>(buildRestModel(b.layout, b.volume, scene.body.material, origin));
   b.model = model;
+  if (!latticeMesh.triangles.empty() && scene.dim == 3) {
+    // restPositions = origin + lattice * h (model.h): the mesh goes exactly where it was voxelised.
+    TriangleMesh rest = std::move(latticeMesh);
+    for (Vec3& p : rest.vertices) p = origin + model->voxelSize * p;
+    try {
+      b.embedded = embedMesh(rest, b.layout, *model);
+    } catch (const InputError& e) {
+      throw InputError(scene.body.source->describe() + ": " + e.what());
+    }
+    b.sourceMesh = std::move(rest);
+  }
   b.world = std::make_unique<World>(b.model, scene.simulation, scene.domain, scene.manipulators);
   if (!scene.pins.empty()) b.world->setPins(scene.pins);
   Vec3 v0 = scene.body.velocity;

@@ -3,10 +3,12 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "gradel/contacts.h"
+#include "gradel/embedding.h"
 #include "gradel/integrator.h"
 #include "gradel/layout.h"
 #include "gradel/material.h"
@@ -53,9 +55,15 @@ struct BuiltScene {
   Layout layout;
   std::shared_ptr<const RestModel> model;
   std::unique_ptr<World> world;
+  /// A body voxelised from a mesh file (body.source obj / stl / ply): that mesh in rest
+  /// coordinates [m] (where it was voxelised, at body.position), and the same mesh embedded in
+  /// the model (embedding.h), the body's render mesh. Empty for volumes and shapes.
+  std::optional<TriangleMesh> sourceMesh;
+  std::optional<EmbeddedMesh> embedded;
 };
 
-/// Rasterises the shape, builds the layout, rest model and world. Throws InputError.
+/// Rasterises the shape (or reads body.source), builds the layout, rest model and world, and
+/// embeds a source mesh. Throws InputError.
 BuiltScene buildScene(const Scene& scene);
 
 }  // namespace gradel

@@ -19,6 +19,8 @@
 
 namespace gradel {
 
+struct TriangleMesh;  // mesh.h
+
 class VoxelVolume {
  public:
   VoxelVolume() = default;
@@ -63,6 +65,10 @@ class VolumeSource {
  public:
   virtual ~VolumeSource() = default;
   virtual VoxelVolume load() const = 0;
+  /// The volume and, for a source voxelised from a triangle mesh, that mesh in lattice units
+  /// (io/voxelize.h) in `*latticeMesh`, the body's embedded render mesh, from one read of the
+  /// file. Other sources leave `*latticeMesh` untouched (pass an empty one).
+  virtual VoxelVolume loadWithMesh(TriangleMesh* /*latticeMesh*/) const { return load(); }
   virtual std::string describe() const = 0;
 };
 

@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <vector>
 
 namespace gradel::io {
@@ -14,10 +15,10 @@ namespace {
 // Buffered byte-at-a-time access for text formats (ByteStream::read is a virtual call).
 class TextReader {
  public:
-  explicit TextReader(ByteStream& in) : in_(in), buf_(1u << 16) {}
+  explicit TextReader(ByteStream& in) : in_(in), buf_(std::make_unique_for_overwrite<uint8_t[]>(kBufferSize)) {}
   int get() {
     if (pos_ == len_) {
-      len_ = in_.read(buf_.data(), buf_.size());
+      len_ = in_.read(buf_.get(), kBufferSize);
       pos_ = 0;
       if (len_ == 0) return -1;
     }
@@ -54,7 +55,7 @@ class TextReader {
   /// Hands back the bytes read into the buffer but not consumed (PLY: binary data after a text header).
   size_t takeBuffered(uint8_t* dst, size_t n) {
     const size_t k = std::min(n, len_ - pos_);
-    std::memcpy(dst, buf_.data() + pos_, k);
+    std::memcpy(dst, buf_.get() + pos_, k);
     pos_ += k;
     return k;
   }
@@ -63,7 +64,8 @@ class TextReader {
 
  private:
   ByteStream& in_;
-  std::vector<uint8_t> buf_;
+  static constexpr size_t kBufferSize = size_t(1) << 16;
+  std::unique_ptr<uint8_t[]> buf_;  // not zeroed: only bytes read into it are looked at
   size_t pos_ = 0, len_ = 0;
   size_t lineNo_ = 0;
 };
@@ -287,22 +289,35 @@ struct PlyElement {
   std::vector<PlyProperty> props;
 };
 
+// Names a value of the PLY body in messages ("element 'face' 12 list entry"). Built only when a
+// message needs it: a row costs a few bytes of input, so a string per row would dominate.
+struct PlyWhere {
+  const std::string& element;
+  uint64_t row;
+  const char* part;  // "", " list count", " list entry"
+  std::string str() const { return "element '" + element.substr(0, 30) + "' " + std::to_string(row) + part; }
+};
+
 // Reads values of a PLY body: text tokens, or binary in either byte order.
 class PlyValues {
  public:
   PlyValues(TextReader& r, int format) : r_(r), format_(format) {}
-  double next(PlyType t, const std::string& what) {
+  double next(PlyType t, const PlyWhere& where) {
     ByteStream& in = r_.stream();
     if (format_ == 0) {
       const std::string tok = r_.token();
-      if (tok.empty()) in.fail("truncated: the data ends in " + what);
-      return number(in, tok, what);
+      if (tok.empty()) in.fail("truncated: the data ends in " + where.str());
+      double v = 0;
+      const char* end = tok.data() + tok.size();
+      const auto res = std::from_chars(tok.data(), end, v);
+      if (res.ec == std::errc() && res.ptr == end && std::isfinite(v)) return v;
+      return number(in, tok, where.str());  // the same rule, with its message
     }
     uint8_t b[8];
     const size_t n = plyBytes(t);
     size_t got = r_.takeBuffered(b, n);
     if (got < n) got += in.read(b + got, n - got);
-    if (got < n) in.fail("truncated: the data ends in " + what);
+    if (got < n) in.fail("truncated: the data ends in " + where.str());
     if ((format_ == 2) != (std::endian::native == std::endian::big)) std::reverse(b, b + n);
     switch (t) {
       case PlyType::Int8: return double(std::bit_cast<int8_t>(b[0]));
@@ -388,40 +403,45 @@ TriangleMesh readPly(ByteStream& in, const ReadLimits& limits) {
       if (indices < 0) in.fail("header: element 'face' lacks list property 'vertex_indices'");
       haveFaces = true;
     }
-    if (isVertex) m.vertices.reserve(size_t(std::min<uint64_t>(e.count, 1u << 20)));
+    // Rows of an element without properties hold no data: nothing to read, however many.
+    if (e.props.empty()) continue;
+    // A header's count is only a claim until the rows arrive: reserve a little, grow as read.
+    if (isVertex) m.vertices.reserve(size_t(std::min<uint64_t>(e.count, 1u << 12)));
     for (uint64_t k = 0; k < e.count; ++k) {
-      const std::string what = "element '" + e.name.substr(0, 30) + "' " + std::to_string(k);
+      const PlyWhere row{e.name, k, ""}, listCount{e.name, k, " list count"}, listEntry{e.name, k, " list entry"};
+      auto what = [&] { return row.str(); };
       Vec3 x(0, 0, 0);
       poly.clear();
       for (size_t i = 0; i < e.props.size(); ++i) {
         const PlyProperty& p = e.props[i];
         if (!p.list) {
-          const double v = values.next(p.type, what);
+          const double v = values.next(p.type, row);
           if (isVertex)
             for (int c = 0; c < 3; ++c)
               if (xyz[c] == int(i)) x[c] = v;
           continue;
         }
-        const double n = values.next(p.countType, what + " list count");
+        const double n = values.next(p.countType, listCount);
         // A polygon of more than 2^16 corners is not a mesh face; the cap bounds the work.
-        if (!(n >= 0 && n <= 65536) || n != std::floor(n)) in.fail(what + ": list count " + std::to_string(n) + " (expected 0 to 65536)");
+        if (!(n >= 0 && n <= 65536) || n != std::floor(n)) in.fail(what() + ": list count " + std::to_string(n) + " (expected 0 to 65536)");
         for (int64_t j = 0; j < int64_t(n); ++j) {
-          const double id = values.next(p.type, what + " list entry");
+          const double id = values.next(p.type, listEntry);
           if (isFace && int(i) == indices) {
             if (!(id >= 0 && id < double(m.vertices.size())) || id != std::floor(id))
-              in.fail(what + ": vertex index " + std::to_string(id) + " (the file has " + std::to_string(m.vertices.size()) +
+              in.fail(what() + ": vertex index " + std::to_string(id) + " (the file has " + std::to_string(m.vertices.size()) +
                       " vertices before its faces)");
             poly.push_back(uint32_t(id));
           }
         }
       }
       if (isVertex) {
-        if (!x.allFinite()) in.fail(what + ": coordinates are not finite");
+        if (!x.allFinite()) in.fail(what() + ": coordinates are not finite");
         m.vertices.push_back(x);
       }
       if (isFace) {
-        if (poly.size() < 3) in.fail(what + ": a face with " + std::to_string(poly.size()) + " vertices (expected at least 3)");
-        checkCount(in, m.triangles.size() + poly.size() - 2, limits, what + ": triangle count");
+        if (poly.size() < 3) in.fail(what() + ": a face with " + std::to_string(poly.size()) + " vertices (expected at least 3)");
+        const uint64_t triangles = m.triangles.size() + poly.size() - 2;
+        if (triangles > limits.maxMeshElements) checkCount(in, triangles, limits, what() + ": triangle count");
         addPolygon(m, poly);
       }
     }

@@ -64,7 +64,8 @@ VolumeFormat volumeFormatFromPath(const std::string& path) {
 
 bool isMeshFormat(VolumeFormat f) { return f == VolumeFormat::Obj || f == VolumeFormat::Stl || f == VolumeFormat::Ply; }
 
-VoxelVolume readVolumeStream(ByteStream& in, VolumeFormat format, const VolumeFileSpec& spec) {
+VoxelVolume readVolumeStream(ByteStream& in, VolumeFormat format, const VolumeFileSpec& spec, TriangleMesh* latticeMesh) {
+  if (latticeMesh) *latticeMesh = TriangleMesh{};
   switch (format) {
     case VolumeFormat::Binvox: return readBinvox(in, spec.voxelSize, spec.limits);
     case VolumeFormat::Vox: return readVox(in, spec.voxelSize, spec.model, spec.limits);
@@ -77,17 +78,17 @@ VoxelVolume readVolumeStream(ByteStream& in, VolumeFormat format, const VolumeFi
       const TriangleMesh mesh = format == VolumeFormat::Obj   ? readObj(in, spec.limits)
                                 : format == VolumeFormat::Stl ? readStl(in, spec.limits)
                                                               : readPly(in, spec.limits);
-      return voxelize(mesh, {spec.resolution, spec.voxelSize}, in.name());
+      return voxelize(mesh, {spec.resolution, spec.voxelSize, spec.limits.minRayCrossingCap}, in.name(), latticeMesh);
     }
   }
   in.fail("unknown format");
 }
 
-VoxelVolume readVolumeFile(const VolumeFileSpec& spec) {
+VoxelVolume readVolumeFile(const VolumeFileSpec& spec, TriangleMesh* latticeMesh) {
   const VolumeFormat format = spec.format ? *spec.format : volumeFormatFromPath(spec.path);
   std::unique_ptr<ByteStream> in = openFileStream(spec.path);
   if (startsGzip(spec.path)) in = gzipStream(std::move(in));
-  VoxelVolume v = readVolumeStream(*in, format, spec);
+  VoxelVolume v = readVolumeStream(*in, format, spec, latticeMesh);
   if (v.countFilled() == 0) throw InputError(spec.path + ": the volume is empty (no filled voxel)");
   if (spec.dim == 2) {
     if (v.nz() != 1)

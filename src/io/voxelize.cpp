@@ -41,7 +41,7 @@ bool ownsEdge(const P2& a, const P2& b) {
 
 }  // namespace
 
-VoxelVolume voxelize(const TriangleMesh& mesh, const VoxelizeSettings& s, const std::string& name) {
+VoxelVolume voxelize(const TriangleMesh& mesh, const VoxelizeSettings& s, const std::string& name, TriangleMesh* latticeMesh) {
   auto fail = [&](const std::string& what) { throw InputError(name + ": " + what); };
   if (s.resolution < 1 || s.resolution > 1024)
     fail("resolution " + std::to_string(s.resolution) + " (expected 1 to 1024 voxels)");
@@ -76,8 +76,8 @@ VoxelVolume voxelize(const TriangleMesh& mesh, const VoxelizeSettings& s, const 
     const int u = (a + 1) % 3, v = (a + 2) % 3;  // (u, v, a) cyclic, so n_a = area in (u, v)
     crossings.clear();
     // A real surface crosses a ray a few times; thousands of overlapping sheets would only
-    // exhaust memory, so the count per axis is capped (64 per ray on average).
-    const size_t maxCrossings = std::max<size_t>(size_t(1) << 20, size_t(64) * size_t(n[u]) * size_t(n[v]));
+    // exhaust memory and time, so the count per axis is capped (64 per ray on average).
+    const size_t maxCrossings = std::max<size_t>(size_t(s.minCrossingCap), size_t(64) * size_t(n[u]) * size_t(n[v]));
     for (const auto& tri : mesh.triangles) {
       P2 p[3];
       double z[3];
@@ -95,8 +95,24 @@ VoxelVolume voxelize(const TriangleMesh& mesh, const VoxelizeSettings& s, const 
       const double vMin = std::min({p[0].v, p[1].v, p[2].v}), vMax = std::max({p[0].v, p[1].v, p[2].v});
       const int iu0 = std::max(0, int(std::ceil(uMin - 0.5))), iu1 = std::min(n[u] - 1, int(std::floor(uMax - 0.5)));
       const int iv0 = std::max(0, int(std::ceil(vMin - 0.5))), iv1 = std::min(n[v] - 1, int(std::floor(vMax - 0.5)));
-      for (int iv = iv0; iv <= iv1; ++iv)
-        for (int iu = iu0; iu <= iu1; ++iu) {
+      for (int iv = iv0; iv <= iv1; ++iv) {
+        // Only the cells near the triangle's span on this row are tested (a thin triangle across
+        // the grid would otherwise test its whole bounding box): the span of the row's line
+        // through the triangle, widened by a cell for rounding; the exact test below decides.
+        const double vc = iv + 0.5;
+        double sLo = std::numeric_limits<double>::infinity(), sHi = -sLo;
+        for (int k = 0; k < 3; ++k) {
+          const P2& e0 = p[k];
+          const P2& e1 = p[(k + 1) % 3];
+          if ((e0.v < vc) == (e1.v < vc) && e0.v != vc && e1.v != vc) continue;  // the line misses this edge
+          const double f = e1.v == e0.v ? 0.0 : std::clamp((vc - e0.v) / (e1.v - e0.v), 0.0, 1.0);
+          const double su = e0.u + f * (e1.u - e0.u);
+          sLo = std::min({sLo, su, e1.v == e0.v ? e1.u : su});
+          sHi = std::max({sHi, su, e1.v == e0.v ? e1.u : su});
+        }
+        if (!(sLo <= sHi)) continue;
+        const int ju0 = std::max(iu0, int(std::ceil(sLo - 0.5)) - 1), ju1 = std::min(iu1, int(std::floor(sHi - 0.5)) + 1);
+        for (int iu = ju0; iu <= ju1; ++iu) {
           const P2 c{iu + 0.5, iv + 0.5};
           double w[3];
           bool inside = true;
@@ -113,6 +129,7 @@ VoxelVolume voxelize(const TriangleMesh& mesh, const VoxelizeSettings& s, const 
             fail("more than " + std::to_string(maxCrossings) + " ray crossings: too many overlapping triangles for this resolution");
           crossings.push_back({uint32_t(iu + n[u] * iv), float(t), delta});
         }
+      }
     }
     std::sort(crossings.begin(), crossings.end());
     // Every voxel first votes "outside" on this axis (a ray with no crossing is outside all
@@ -146,6 +163,11 @@ VoxelVolume voxelize(const TriangleMesh& mesh, const VoxelizeSettings& s, const 
   }
   if (volume.countFilled() == 0)
     fail("the voxelised volume is empty (an open mesh, or resolution " + std::to_string(s.resolution) + " too coarse for it)");
+  if (latticeMesh) {
+    latticeMesh->vertices = std::move(lattice);
+    latticeMesh->triangles = mesh.triangles;
+    latticeMesh->normals.clear();
+  }
   return volume;
 }
 

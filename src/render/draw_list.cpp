@@ -171,6 +171,8 @@ BodyView makeBodyView(const BuiltScene& scene, const TriangleMesh* restMesh) {
   BodyView v;
   if (restMesh) {
     v.embedded = embedMesh(*restMesh, layout, model);
+  } else if (scene.embedded) {
+    v.embedded = scene.embedded;  // the body's own mesh file
   } else if (layout.dim == 3) {
     // restPositions = origin + lattice * h (model.h).
     const Vec3 origin = model.restPositions[0] - layout.vertices[0].cast<Real>() * model.voxelSize;

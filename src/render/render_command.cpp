@@ -26,7 +26,10 @@ CLI::App* addRenderCommand(CLI::App& app, RenderCommandOptions& o) {
   r->add_option("--out", o.out, "Result directory (default: out/<scene name>-render)");
   r->add_option("--frames", o.frames, "Number of frames at the scene's frame interval (default: the whole duration)");
   r->add_option("--size", o.size, "Picture size WxH [pixels]")->capture_default_str();
-  r->add_option("--surface", o.surface, "smooth | voxel | embedded | none")->capture_default_str();
+  r->add_option("--surface", o.surface,
+                "auto | smooth | voxel | embedded | none (auto: the body's own mesh, embedded, when it comes from a mesh "
+                "file; else smooth)")
+      ->capture_default_str();
   r->add_flag("--stress", o.stress, "Colour the surface by stress (darker = higher), with a legend");
   r->add_flag("--wireframe", o.wireframe, "Draw the element outlines coloured by level");
   r->add_flag("--vertices", o.vertices, "Draw the model vertices");
@@ -36,7 +39,7 @@ CLI::App* addRenderCommand(CLI::App& app, RenderCommandOptions& o) {
   r->add_option("--pitch", o.pitch, "Camera pitch above the horizon [rad]");
   r->add_option("--zoom", o.zoom, "Camera zoom factor (> 1 = closer)")->capture_default_str();
   r->add_option("--stress-scale", o.stressScale, "Stress drawn darkest [-]")->capture_default_str();
-  r->add_option("--export", o.exportFormat, "Also write the display surface per frame: none | obj | ply")->capture_default_str();
+  r->add_option("--export", o.exportFormat, "Also write the shown surface per frame (the embedded mesh with --surface embedded, else the display surface): none | obj | ply")->capture_default_str();
   r->add_flag("--no-pictures", o.noPictures, "Write no PNGs (export only; needs no OpenGL)");
   r->add_flag("--no-video", o.noVideo, "Do not make render.mp4 even if ffmpeg is present");
   return r;
@@ -69,7 +72,8 @@ int runRenderCommand(const RenderCommandOptions& o) {
   int width = 0, height = 0;
   parseSize(o.size, &width, &height);
   ViewOptions view;
-  view.surface = parseSurfaceMode(o.surface);
+  // "auto" is decided once the scene is built (does the body come from a mesh file?).
+  if (o.surface != "auto") view.surface = parseSurfaceMode(o.surface);
   view.stress = o.stress;
   view.wireframe = o.wireframe;
   view.vertices = o.vertices;
@@ -95,6 +99,7 @@ int runRenderCommand(const RenderCommandOptions& o) {
     throw InputError(o.scene + ": " + e.what());
   }
   World& world = *built.world;
+  if (o.surface == "auto") view.surface = built.embedded ? SurfaceMode::Embedded : SurfaceMode::Smooth;
   const BodyView body = makeBodyView(built);
   Vec3 lo, hi;
   sceneBounds(world, &lo, &hi);

@@ -19,6 +19,9 @@ struct ReadLimits {
   uint64_t maxVoxels = uint64_t(1) << 30;
   /// Largest vertex or triangle count of a mesh file.
   uint64_t maxMeshElements = uint64_t(1) << 26;
+  /// Voxelising a mesh (voxelize.h): ray-triangle crossings allowed per axis, at least this many
+  /// and at least 64 per ray; more means thousands of overlapping sheets, an InputError.
+  uint64_t minRayCrossingCap = uint64_t(1) << 20;
 };
 
 /// An empty 3D volume of dims[0] x dims[1] x dims[2] after checking every edge is in

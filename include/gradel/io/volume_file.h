@@ -21,6 +21,7 @@
 #include "gradel/io/grey_levels.h"
 #include "gradel/io/raw_volume.h"
 #include "gradel/io/read_limits.h"
+#include "gradel/mesh.h"
 #include "gradel/volume.h"
 
 namespace gradel::io {
@@ -48,18 +49,21 @@ struct VolumeFileSpec {
 };
 
 /// Reads, converts and checks the volume (non-empty; nz == 1 for dim 2). InputError naming the
-/// file on any problem.
-VoxelVolume readVolumeFile(const VolumeFileSpec& spec);
+/// file on any problem. For a mesh format, `latticeMesh` (when given) receives the mesh as it was
+/// voxelised, in lattice units (voxelize.h); for the others it is cleared.
+VoxelVolume readVolumeFile(const VolumeFileSpec& spec, TriangleMesh* latticeMesh = nullptr);
 
 /// Reads a volume of known format from a stream (already decompressed); used by readVolumeFile
-/// and by the fuzz targets. `dim` and emptiness are not checked here.
-VoxelVolume readVolumeStream(ByteStream& in, VolumeFormat format, const VolumeFileSpec& spec);
+/// and by the fuzz targets. `dim` and emptiness are not checked here. `latticeMesh` as above.
+VoxelVolume readVolumeStream(ByteStream& in, VolumeFormat format, const VolumeFileSpec& spec,
+                             TriangleMesh* latticeMesh = nullptr);
 
 /// A VolumeSource reading `spec` each time it is loaded.
 class FileVolumeSource : public VolumeSource {
  public:
   explicit FileVolumeSource(VolumeFileSpec spec) : spec_(std::move(spec)) {}
   VoxelVolume load() const override { return readVolumeFile(spec_); }
+  VoxelVolume loadWithMesh(TriangleMesh* latticeMesh) const override { return readVolumeFile(spec_, latticeMesh); }
   std::string describe() const override { return spec_.path; }
   const VolumeFileSpec& spec() const { return spec_; }
 

@@ -29,10 +29,17 @@ namespace gradel::io {
 struct VoxelizeSettings {
   int resolution = 64;    ///< [voxels] along the mesh's longest bounding-box edge, 1 to 1024.
   Real voxelSize = 0.01;  ///< [m] edge of one voxel in the resulting volume.
+  /// Crossings allowed per axis: max(this, 64 per ray) (ReadLimits::minRayCrossingCap).
+  uint64_t minCrossingCap = uint64_t(1) << 20;
 };
 
 /// Voxelises `mesh` (3D). `name` (the file) starts every InputError: no triangles, indices out
 /// of range, non-finite or flat extent, a resolution out of range, or nothing inside.
-VoxelVolume voxelize(const TriangleMesh& mesh, const VoxelizeSettings& settings, const std::string& name);
+/// When `latticeMesh` is given it receives `mesh` placed in the volume's lattice (units of one
+/// voxel edge, lattice point (0,0,0) = voxel (0,0,0)'s lower corner): the same vertices and
+/// triangles, scaled and shifted exactly as they were voxelised, no normals. A body built from the
+/// volume at origin o then has the mesh at rest at o + voxelSize * p (its embedded render mesh).
+VoxelVolume voxelize(const TriangleMesh& mesh, const VoxelizeSettings& settings, const std::string& name,
+                     TriangleMesh* latticeMesh = nullptr);
 
 }  // namespace gradel::io

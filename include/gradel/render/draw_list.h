@@ -48,7 +48,8 @@ struct BodyView {
 };
 
 /// Builds the surfaces and element outlines of a built scene. The embedded mesh is `restMesh`
-/// (rest coordinates [m]) when given, else (3D) the isosurface of the volume (isosurface.h).
+/// (rest coordinates [m]) when given, else the scene's own (a body voxelised from a mesh file:
+/// BuiltScene::embedded), else (3D) the isosurface of the volume (isosurface.h).
 BodyView makeBodyView(const BuiltScene& scene, const TriangleMesh* restMesh = nullptr);
 
 struct DrawVertex {

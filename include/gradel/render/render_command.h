@@ -16,7 +16,7 @@ struct RenderCommandOptions {
   std::string out;
   std::optional<int> frames;        ///< Frames at the scene's frame interval; default: the whole duration.
   std::string size = "640x480";     ///< WxH [pixels].
-  std::string surface = "smooth";   ///< smooth | voxel | embedded | none
+  std::string surface = "auto";     ///< auto | smooth | voxel | embedded | none (auto: embedded for a body from a mesh file, else smooth)
   bool stress = false;
   bool wireframe = false;
   bool vertices = false;
