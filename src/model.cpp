@@ -1,9 +1,11 @@
 #include "gradel/model.h"
 
-#include <cmath>
 #include <array>
+#include <cmath>
 #include <numbers>
 #include <unordered_map>
+
+#include <Eigen/Eigenvalues>
 
 namespace gradel {
 
@@ -103,19 +105,25 @@ RestModel buildRestModel(const Layout& layout, const VoxelVolume& volume, const 
     Vec3 c = Vec3::Zero();
     for (uint32_t p = b; p < b + n; ++p) c += m.restPositions[m.elemVerts[p]];
     c /= Real(n);
-    Real sumSq = 0, minMass = std::numeric_limits<Real>::infinity();
+    Real minMass = std::numeric_limits<Real>::infinity();
     for (uint32_t p = b; p < b + n; ++p) {
       m.restOffsets[p] = m.restPositions[m.elemVerts[p]] - c;
-      sumSq += m.restOffsets[p].squaredNorm();
       minMass = std::min(minMass, m.mass[m.elemVerts[p]]);
     }
     m.size[e] = (layout.kind == LayoutKind::Voxel ? 1 : 2) * layout.cellSize[e] * h;
     if (material.scaling == Scaling::Paper) {
       m.stiffness[e] = material.paperK / m.size[e];  // displacement / element size (sec. 2.2)
     } else {
-      // Equal energy density for a uniform strain (material.h): k_e = D E V_e / sum |R0_i|^2.
+      // No direction stiffer than the continuum (material.h): k_e = E V_e / lambda_max(S),
+      // S = sum R0_i R0_i^T. A complete element's S is isotropic and this is D E V_e / tr S.
+      Mat3 S = Mat3::Zero();
+      for (uint32_t p = b; p < b + n; ++p) S.noalias() += m.restOffsets[p] * m.restOffsets[p].transpose();
+      const Real lambdaMax = D == 3 ? Eigen::SelfAdjointEigenSolver<Mat3>(S, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff()
+                                    : Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(S.topLeftCorner<2, 2>(), Eigen::EigenvaluesOnly)
+                                          .eigenvalues()
+                                          .maxCoeff();
       const Real regionVolume = Real(layout.regionVoxels(e)) * voxelVolume;
-      m.stiffness[e] = D * material.youngsModulus * regionVolume / sumSq;
+      m.stiffness[e] = material.youngsModulus * regionVolume / lambdaMax;
     }
     // Every non-rigid mode of a shape-matching element with masses m has omega^2 = k_e / m; the
     // lightest vertex bounds the period from below (sec. 3.4).
