@@ -357,6 +357,7 @@ int main(int argc, char** argv) {
   costs.push_back(measureCost(strike, IntegratorKind::SymplecticEuler, 100, quick ? 0.05 : 0.2));
   costs.push_back(measureCost(strike, IntegratorKind::Implicit, 100, 1.0));
   costs.push_back(measureCost(grasp, IntegratorKind::Implicit, 100, 1.5));
+  costs.push_back(measureCost(grasp, IntegratorKind::SymplecticEuler, 1, quick ? 0.3 : 1.5));
 
   // ---- plots ----
   {
@@ -417,6 +418,64 @@ fig.tight_layout(); fig.savefig(os.path.join(d, "tip_explicit_implicit.png"), dp
   md << " voxels across (L = 8x that along). Euler-Bernoulli with E = " << fmt(kE) << " Pa: tip sag "
      << fmt(sagEB * 1000) << " mm, first frequency " << fmt(fTheory) << " Hz. The element model is a Poisson-ratio-0 "
      << "corotational material, so beam theory (which has no Poisson effect in bending either) is the right reference.\n\n";
+
+  // ---- targets (issue 5), read off the measurements below ----
+  {
+    auto sagAt = [&](Scaling sc, LayoutKind l, int n) {
+      for (const SagRow& r : sags) if (r.s == sc && r.l == l && r.n == n) return r.r.sag;
+      return 0.0;
+    };
+    auto freqAt = [&](Scaling sc, LayoutKind l, int n) {
+      for (const FreqRow& r : freqs) if (r.s == sc && r.l == l && r.n == n) return r.v.frequency;
+      return 0.0;
+    };
+    auto ratioRow = [&](const std::string& target, Real ratio, Real tolerance, const std::string& detail) {
+      const bool met = std::abs(ratio - 1) <= tolerance;
+      md << "| " << target << " | " << pct(ratio) << " (" << detail << ") | " << (met ? "yes" : "**no**") << " |\n";
+    };
+    const Real sagEB0 = beamTipSag(kAspect * kWidth, kWidth, kRho, kE);
+    const Real fEB0 = beamFrequency(kAspect * kWidth, kWidth, kRho, kE);
+    md << "## Targets (issue 5)\n\n"
+       << "Read off the sections below at the finest resolution, n = " << finest << " voxels across; the issue sets "
+       << "them for `consistent` scaling, and `paper` is measured against the same numbers. `met` is computed, not "
+       << "written by hand.\n\n";
+    for (Scaling sc : scalings) {
+      const Real gs = sagAt(sc, LayoutKind::Gradational, finest), us = sagAt(sc, LayoutKind::Uniform, finest);
+      const Real gf = freqAt(sc, LayoutKind::Gradational, finest), uf = freqAt(sc, LayoutKind::Uniform, finest);
+      md << "### `" << scalingName(sc) << "` scaling\n\n| target | measured | met |\n| --- | --- | --- |\n";
+      ratioRow("gradational sag within 5 % of uniform", gs / us, 0.05,
+               fmt(gs * 1000) + " vs " + fmt(us * 1000) + " mm");
+      ratioRow("gradational first frequency within 5 % of uniform", gf / uf, 0.05, fmt(gf) + " vs " + fmt(uf) + " Hz");
+      ratioRow("gradational sag within 10 % of Euler-Bernoulli", gs / sagEB0, 0.10,
+               fmt(gs * 1000) + " vs " + fmt(sagEB0 * 1000) + " mm");
+      ratioRow("gradational first frequency within 10 % of Euler-Bernoulli", gf / fEB0, 0.10,
+               fmt(gf) + " vs " + fmt(fEB0) + " Hz");
+      ratioRow("uniform sag within 10 % of Euler-Bernoulli", us / sagEB0, 0.10, fmt(us * 1000) + " mm");
+      ratioRow("uniform first frequency within 10 % of Euler-Bernoulli", uf / fEB0, 0.10, fmt(uf) + " Hz");
+      ratioRow("gradational bar's stretch modulus within 5 % of E (not an issue target; the cause of the sag error)",
+               modulus[{int(sc), int(LayoutKind::Gradational), finest}] / kE, 0.05,
+               fmt(modulus[{int(sc), int(LayoutKind::Gradational), finest}] / kE, 4) + " E");
+      md << "\n";
+    }
+    // Stability at 100x stiffness: finite throughout, and the largest energy sampled below 1000x
+    // that of the explicit run at the scene's own E (a blow-up grows without bound; squeezing a
+    // 100x stiffer body along the same paths may legitimately store up to ~100x the energy).
+    md << "### implicit mode at dt = 1/60 s, E x100\n\n| target | measured | met |\n| --- | --- | --- |\n";
+    for (const std::string scene : {std::string("strike"), std::string("grasp-two")}) {
+      const Cost* stiff = nullptr;
+      const Cost* ref = nullptr;
+      for (const Cost& c : costs) {
+        if (c.scene == scene && c.integrator == "implicit" && c.eScale == 100) stiff = &c;
+        if (c.scene == scene && c.integrator != "implicit" && c.eScale == 1) ref = &c;
+      }
+      if (!stiff || !ref) continue;
+      const bool met = stiff->finite && std::isfinite(stiff->maxEnergy) && stiff->maxEnergy <= 1000 * ref->maxEnergy;
+      md << "| " << scene << ": no NaN, energy bounded (max <= 1000x the explicit run at E x1) | "
+         << (stiff->finite ? "finite" : "**NaN**") << ", max energy " << fmt(stiff->maxEnergy, 3) << " J (explicit, E x1: "
+         << fmt(ref->maxEnergy, 3) << " J) | " << (met ? "yes" : "**no**") << " |\n";
+    }
+    md << "\n";
+  }
 
   md << "## 1. Uniaxial stretch: the effective Young's modulus\n\n"
      << "Both end faces pinned, the far one moved by 0.1 % of L, static equilibrium (projective.h `solveStatic`, "
