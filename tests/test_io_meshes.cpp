@@ -281,3 +281,85 @@ TEST(Ply, readPly_rejectsMalformedFiles) {
 
 }  // namespace
 }  // namespace gradel
+
+namespace gradel {
+namespace {
+
+// Inputs that once cost the fuzz_ply target seconds per execution (fuzz/fuzz_reader.cpp): they
+// still read and voxelise right, and the crossing cap is a clear InputError.
+std::string tetraPlyHeader(const std::string& before, int faces, const std::string& listTypes) {
+  return "ply\nformat binary_little_endian 1.0\n" + before +
+         "element vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face " + std::to_string(faces) +
+         "\nproperty list " + listTypes + " vertex_indices\nend_header\n";
+}
+std::string tetraVertices() {
+  const float v[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+  return std::string(reinterpret_cast<const char*>(v), sizeof v);
+}
+TriangleMesh readPlyText(const std::string& text) {
+  auto in = io::memoryStream(reinterpret_cast<const uint8_t*>(text.data()), text.size(), "t.ply");
+  return io::readPly(*in);
+}
+
+TEST(PlySpeed, rowsWithoutPropertiesAreSkippedWhateverTheirCount) {
+  const std::string faces = std::string("\x03\x00\x02\x01\x03\x00\x01\x03\x03\x00\x03\x02\x03\x01\x02\x03", 16);
+  const TriangleMesh m = readPlyText(tetraPlyHeader("element junk 65536\n", 4, "uchar uchar") + tetraVertices() + faces);
+  EXPECT_EQ(m.vertices.size(), 4u);
+  EXPECT_EQ(m.triangles.size(), 4u);
+  // A row-less element still counts against the limit.
+  io::ReadLimits small;
+  small.maxMeshElements = 1000;
+  const std::string text = tetraPlyHeader("element junk 65536\n", 4, "uchar uchar") + tetraVertices() + faces;
+  auto in2 = io::memoryStream(reinterpret_cast<const uint8_t*>(text.data()), text.size(), "t.ply");
+  EXPECT_NE(errorOf([&] { io::readPly(*in2, small); }).find("element 'junk' count 65536: more than the limit of 1000"),
+            std::string::npos);
+}
+
+TEST(PlySpeed, repeatedFacesHitTheCrossingCapAndFewCopiesGiveTheShell) {
+  // 16000 copies of the tetrahedron's faces: 1.0e6 crossings per axis at resolution 16.
+  std::string faces;
+  const uint8_t tet[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  for (int i = 0; i < 16000; ++i) faces += std::string{char(3), char(tet[i % 4][0]), char(tet[i % 4][1]), char(tet[i % 4][2])};
+  const TriangleMesh many = readPlyText(tetraPlyHeader("", 16000, "uchar uchar") + tetraVertices() + faces);
+  ASSERT_EQ(many.triangles.size(), 16000u);
+  io::VoxelizeSettings s{16, 0.01};
+  s.minCrossingCap = 1 << 14;
+  EXPECT_NE(errorOf([&] { io::voxelize(many, s, "t.ply"); }).find("t.ply: more than 16384 ray crossings"), std::string::npos);
+  // Four copies only: the tetrahedron, the same voxels as one copy (a union of identical shells).
+  TriangleMesh one = many, four = many;
+  one.triangles.resize(4);
+  four.triangles.resize(16);
+  const VoxelVolume a = io::voxelize(one, s, "one"), b = io::voxelize(four, s, "four");
+  EXPECT_GT(a.countFilled(), 100u);
+  EXPECT_EQ(a.data(), b.data());
+}
+
+TEST(Voxelize, thinTrianglesAcrossTheGridCrossOnlyTheirRays) {
+  // A closed sliver prism along the grid's diagonal: the per-row span must not drop any ray.
+  const Real w = 0.037;
+  const Vec3 A(0, 0.0031, 0), B(1, 1, 0), C(w, 0, 0);
+  TriangleMesh m;
+  m.vertices = {A, B, C, A + Vec3(0, 0, 1), B + Vec3(0, 0, 1), C + Vec3(0, 0, 1)};
+  m.triangles = {{0, 1, 2}, {3, 5, 4}, {0, 2, 5}, {0, 5, 3}, {2, 1, 4}, {2, 4, 5}, {1, 0, 3}, {1, 3, 4}};
+  auto side = [](const Vec3& a, const Vec3& b, Real x, Real y) { return (b.x() - a.x()) * (y - a.y()) - (b.y() - a.y()) * (x - a.x()); };
+  for (int res : {16, 64, 200}) {
+    const VoxelVolume v = io::voxelize(m, {res, 0.01}, "sliver");
+    ASSERT_EQ(v.nx(), res);
+    ASSERT_EQ(v.ny(), res);
+    const Real h = 1.0 / res;
+    size_t expected = 0, got = 0;
+    for (int j = 0; j < v.ny(); ++j)
+      for (int i = 0; i < v.nx(); ++i) {
+        const Real x = (i + 0.5) * h, y = (j + 0.5) * h;
+        const Real s0 = side(A, B, x, y), s1 = side(B, C, x, y), s2 = side(C, A, x, y);
+        const bool inside = (s0 > 0 && s1 > 0 && s2 > 0) || (s0 < 0 && s1 < 0 && s2 < 0);
+        expected += inside;
+        got += v.at(i, j, v.nz() / 2);
+        EXPECT_EQ(v.at(i, j, v.nz() / 2), inside) << "resolution " << res << " voxel " << i << ", " << j;
+      }
+    EXPECT_GT(expected, size_t(res / 3)) << "resolution " << res;
+  }
+}
+
+}  // namespace
+}  // namespace gradel

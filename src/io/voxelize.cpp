@@ -46,15 +46,26 @@ VoxelVolume voxelize(const TriangleMesh& mesh, const VoxelizeSettings& s, const 
   if (s.resolution < 1 || s.resolution > 1024)
     fail("resolution " + std::to_string(s.resolution) + " (expected 1 to 1024 voxels)");
   if (mesh.triangles.empty()) fail("the mesh has no triangles");
-  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  // The bounding box of the vertices the triangles use (each looked at once: a fan of 60000
+  // triangles over four vertices must not cost 180000 vector operations).
+  std::vector<uint8_t> used(mesh.vertices.size(), 0);
   for (const auto& t : mesh.triangles)
     for (uint32_t id : t) {
       if (id >= mesh.vertices.size()) fail("triangle vertex index " + std::to_string(id) + " out of range");
-      const Vec3& p = mesh.vertices[id];
-      if (!p.allFinite()) fail("a vertex is not finite");
-      lo = lo.cwiseMin(p);
-      hi = hi.cwiseMax(p);
+      used[id] = 1;
     }
+  double bl[3], bh[3];
+  for (int a = 0; a < 3; ++a) bl[a] = std::numeric_limits<double>::infinity(), bh[a] = -bl[a];
+  for (size_t i = 0; i < used.size(); ++i) {
+    if (!used[i]) continue;
+    const double* p = mesh.vertices[i].data();
+    for (int a = 0; a < 3; ++a) {
+      if (!std::isfinite(p[a])) fail("a vertex is not finite");
+      bl[a] = std::min(bl[a], p[a]);
+      bh[a] = std::max(bh[a], p[a]);
+    }
+  }
+  const Vec3 lo(bl[0], bl[1], bl[2]), hi(bh[0], bh[1], bh[2]);
   const Vec3 extent = hi - lo;
   const double longest = extent.maxCoeff();
   if (!std::isfinite(longest) || !(longest > 0)) fail("the mesh's bounding box is not a finite, non-empty box");
