@@ -650,16 +650,47 @@ Path readPath(Fields& f) {
   return path;
 }
 
-// A pinned box; its path's positions are offsets from rest (pins.h).
-PinSettings readPin(Fields& f, int dim) {
+// A pinned box or voxel mask; its path's positions are offsets from rest (pins.h). A mask lives
+// on the body's lattice: mask voxel (i, j, k) is body voxel offset + (i, j, k).
+PinSettings readPin(Fields& f, const Scene& scene) {
+  const int dim = scene.dim;
   PinSettings p;
-  p.min = f.requireVec("min", kAny, "m");
-  p.max = f.requireVec("max", kAny, "m");
-  if (dim == 2) {
-    p.min.z() = -1;  // the z = 0 plane is inside, as for the domain
-    p.max.z() = 1;
+  if (auto mf = f.optObject("mask")) {
+    f.forbid("min", "a pin takes a box (\"min\", \"max\") or a \"mask\", not both");
+    f.forbid("max", "a pin takes a box (\"min\", \"max\") or a \"mask\", not both");
+    auto mask = std::make_shared<PinMask>();
+    mask->voxelSize = scene.body.shape.voxelSize;
+    Vec3 offset = Vec3::Zero();
+    if (mf->take("offset")) {
+      const std::array<int, 3> o = mf->requireIntVec("offset", -kMaxGridEdge, kMaxGridEdge);
+      offset = Vec3(o[0], o[1], dim == 3 ? o[2] : 0);
+    }
+    Vec3 origin = scene.body.position;
+    if (dim == 2) origin.z() = 0;
+    mask->origin = origin + offset * mask->voxelSize;
+    for (Fields& bf : mf->objectArray("boxes", false)) {
+      const std::array<int, 3> lo = bf.requireIntVec("min", 0, kMaxGridEdge), hi = bf.requireIntVec("max", 0, kMaxGridEdge);
+      for (int a = 0; a < dim; ++a)
+        if (hi[a] < lo[a]) bf.fail("max", "is below \"min\" on axis " + std::to_string(a) + " (expected max >= min; both inclusive voxel indices)");
+      bf.finish();
+      mask->boxes.push_back({Int3(lo[0], lo[1], dim == 3 ? lo[2] : 0), Int3(hi[0], hi[1], dim == 3 ? hi[2] : 0)});
+    }
+    if (mf->take("file")) {
+      mask->source = readSource(*mf, dim, mask->voxelSize);  // also finishes mf
+    } else {
+      if (mask->boxes.empty()) mf->fail("file", "missing (expected a volume file, or \"boxes\": voxel index boxes)");
+      mf->finish();
+    }
+    p.mask = mask;
+  } else {
+    p.min = f.requireVec("min", kAny, "m");
+    p.max = f.requireVec("max", kAny, "m");
+    if (dim == 2) {
+      p.min.z() = -1;  // the z = 0 plane is inside, as for the domain
+      p.max.z() = 1;
+    }
+    checkMaxAboveMin(f, p.min, p.max);
   }
-  checkMaxAboveMin(f, p.min, p.max);
   p.path = readPath(f);
   f.finish();
   return p;
@@ -718,7 +749,7 @@ Scene parseScene(const std::string& jsonText, const std::string& sourceName) {
   if (auto s = top.optObject("simulation")) readSimulation(*s, scene);
   if (auto d = top.optObject("domain")) readDomain(*d, scene);
   for (Fields& mf : top.objectArray("manipulators", false)) scene.manipulators.push_back(readManipulator(mf, scene.dim));
-  for (Fields& pf : top.objectArray("pins", false)) scene.pins.push_back(readPin(pf, scene.dim));
+  for (Fields& pf : top.objectArray("pins", false)) scene.pins.push_back(readPin(pf, scene));
   top.finish();
 
   if (scene.dim == 2) {

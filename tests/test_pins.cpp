@@ -2,6 +2,13 @@
 // prescribed path, and the scene keys.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <functional>
+#include <fstream>
+
 #include "gradel/pins.h"
 #include "gradel/scene.h"
 #include "gradel/validation.h"
@@ -97,6 +104,99 @@ TEST(Pins, buildScene_pinHoldingNoVertex_isInputError) {
   text.replace(text.find("[-0.001, -0.001, -0.001]"), 24, "[ 0.5,    0.5,    0.5  ]");
   text.replace(text.find("[0.001, 0.041, 0.041]"), 21, "[0.6,   0.6,   0.6  ]");
   EXPECT_THROW(buildScene(parseScene(text, "pins.json")), InputError);
+}
+
+// ---- voxel-mask pins ----
+
+TEST(Pins, maskBoxes_selectTheCornersOfTheirVoxels_andFollowThePath) {
+  // smallBar: 2 x 2 x 8 voxels, 2-voxel blocks, so vertices sit at even lattice coordinates.
+  // Mask voxels x in [0, 2] hold the vertices with lattice x <= 3: the planes x = 0 and x = 2.
+  SimulationSettings sim;
+  sim.gravity.setZero();
+  Scene scene = barScene(smallBar(), sim, false);
+  auto mask = std::make_shared<PinMask>();
+  mask->voxelSize = smallBar().voxelSize();
+  mask->boxes = {{Int3(0, 0, 0), Int3(2, 1, 1)}};
+  PinSettings pin;
+  pin.mask = mask;
+  pin.path.keys = {Keyframe{0, Vec3::Zero(), std::nullopt}, Keyframe{0.01, Vec3(0, 0.002, 0), std::nullopt}};
+  scene.pins = {pin};
+  BuiltScene b = buildScene(scene);
+  World& w = *b.world;
+  ASSERT_EQ(w.pinned().vertices.size(), 8u);
+  const Real h = smallBar().voxelSize();
+  for (uint32_t i : w.pinned().vertices) EXPECT_LT(w.model().restPositions[i].x(), 2.5 * h);
+  for (size_t i = 0; i < w.model().numVertices(); ++i)
+    if (w.model().restPositions[i].x() < 2.5 * h)
+      EXPECT_TRUE(std::binary_search(w.pinned().vertices.begin(), w.pinned().vertices.end(), uint32_t(i)));
+  w.advanceTo(0.02);
+  for (uint32_t i : w.pinned().vertices)
+    EXPECT_NEAR((w.state().positions[i] - w.model().restPositions[i] - Vec3(0, 0.002, 0)).norm(), 0, 1e-12);
+  const std::vector<uint32_t> tip = tipVertices(w.model(), smallBar().length());
+  EXPECT_GT(w.state().positions[tip[0]].y(), w.model().restPositions[tip[0]].y() + 1e-4);
+}
+
+// A label volume the size of the body (raw uint8, 4 x 4 x 4): the voxels with x index == slab.
+std::string writeMask(const std::string& name, int slab) {
+  const auto path = std::filesystem::temp_directory_path() / ("gradel-pins-" + std::to_string(::getpid()) + "-" + name);
+  std::ofstream out(path, std::ios::binary);
+  for (int k = 0; k < 4; ++k)
+    for (int j = 0; j < 4; ++j)
+      for (int i = 0; i < 4; ++i) out.put(char(i == slab ? 7 : 0));
+  return path.string();
+}
+
+std::string maskScene(const std::string& maskFields) {
+  return R"({ "body": { "shape": "box", "size": 4, "voxel_size": 0.01, "position": [1, 0, 0] },
+             "simulation": { "gravity": [0, 0, 0] },
+             "pins": [ { "mask": { )" + maskFields + R"( },
+                         "path": [ { "t": 0, "position": [0, 0, 0] }, { "t": 0.01, "position": [0, 0, 0.003] } ] } ] })";
+}
+
+TEST(Pins, maskFile_onTheBodyLattice_pinsTheFilledVoxelsCorners_withOffset) {
+  const std::string file = writeMask("slab0.raw", 0);
+  const std::string raw = "\"file\": \"" + file + "\", \"dims\": [4, 4, 4], \"type\": \"uint8\"";
+  for (int offset : {0, 2}) {
+    const Scene s = parseScene(maskScene(raw + ", \"offset\": [" + std::to_string(offset) + ", 0, 0]"), "scene.json");
+    BuiltScene b = buildScene(s);
+    World& w = *b.world;
+    // Mask voxels x = offset: the vertex plane x = offset (2-voxel blocks: 3 x 3 vertices).
+    ASSERT_EQ(w.pinned().vertices.size(), 9u) << "offset " << offset;
+    for (uint32_t i : w.pinned().vertices) EXPECT_NEAR(w.model().restPositions[i].x(), 1 + 0.01 * offset, 1e-12);
+    w.advanceTo(0.02);
+    for (uint32_t i : w.pinned().vertices)
+      EXPECT_NEAR((w.state().positions[i] - w.model().restPositions[i] - Vec3(0, 0, 0.003)).norm(), 0, 1e-12);
+  }
+  std::filesystem::remove(file);
+}
+
+void expectInputError(const std::function<void()>& f, const std::vector<std::string>& needles) {
+  try {
+    f();
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    for (const std::string& n : needles) EXPECT_NE(std::string(e.what()).find(n), std::string::npos) << e.what();
+  }
+}
+
+TEST(Pins, maskErrors_nameTheFieldAndTheFile) {
+  const std::string missing = "/nonexistent/gradel-mask.raw";
+  expectInputError([&] { parseScene(maskScene("\"file\": \"" + missing + "\", \"dims\": [4, 4, 4], \"type\": \"uint8\""), "s.json"); },
+                   {"s.json", "pins[0].mask.file", "gradel-mask.raw"});
+  expectInputError([&] { parseScene(maskScene("\"offset\": [0, 0, 0]"), "s.json"); }, {"pins[0].mask.file", "boxes"});
+  expectInputError([&] { parseScene(maskScene("\"boxes\": [ { \"min\": [2, 0, 0], \"max\": [1, 3, 3] } ]"), "s.json"); },
+                   {"pins[0].mask.boxes[0].max"});
+  std::string both = maskScene("\"boxes\": [ { \"min\": [0, 0, 0], \"max\": [0, 3, 3] } ]");
+  both.replace(both.find("\"mask\""), 6, "\"min\": [0, 0, 0], \"mask\"");
+  expectInputError([&] { parseScene(both, "s.json"); }, {"pins[0].min", "not both"});
+  // An empty label volume: read when the scene is built; the message names the pin and the file.
+  const std::string empty = writeMask("empty.raw", 99);
+  const Scene s = parseScene(maskScene("\"file\": \"" + empty + "\", \"dims\": [4, 4, 4], \"type\": \"uint8\""), "s.json");
+  expectInputError([&] { buildScene(s); }, {"pins[0].mask", "empty.raw"});
+  std::filesystem::remove(empty);
+  // A mask outside the body.
+  expectInputError([&] { buildScene(parseScene(maskScene("\"boxes\": [ { \"min\": [10, 10, 10], \"max\": [11, 11, 11] } ]"), "s.json")); },
+                   {"pins[0]", "mask holds no vertex"});
 }
 
 }  // namespace

@@ -1,19 +1,37 @@
-// Boundary conditions: pinned regions (a clamped beam, a held organ). A pin selects every model
-// vertex whose rest position lies in an axis-aligned box and prescribes its position: the rest
-// position plus the pin's path offset at time t (no path: fixed at rest). Explicit integrators
+// Boundary conditions: pinned regions (a clamped beam, a held organ). A pin selects model
+// vertices by their rest positions, either every vertex in an axis-aligned box or every corner of
+// a filled voxel of a voxel mask (a label volume from a segmentation, or voxel index boxes), and
+// prescribes their positions: the rest position plus the pin's path offset at time t (no path:
+// fixed at rest). Explicit integrators
 // overwrite pinned vertices' position and velocity after each step; the implicit integrator
 // eliminates them from its linear system (projective.h).
 #pragma once
 
+#include <array>
+#include <memory>
 #include <vector>
 
 #include "gradel/contacts.h"
+#include "gradel/volume.h"
 
 namespace gradel {
 
+/// A voxel mask: the union of the filled voxels of `source` (if any) and of `boxes`, on a lattice
+/// of edge `voxelSize` whose voxel (0, 0, 0) has its lower corner at `origin` (world, at rest).
+/// A vertex is selected when it lies on the closed cube of a filled mask voxel; on the body's own
+/// lattice (origin = body.position + offset * h, voxelSize = h, what scenes use) these are exactly
+/// the corners of the filled voxels. In 2D the mask is one voxel thick (z index 0).
+struct PinMask {
+  std::shared_ptr<const VolumeSource> source;  ///< A volume (e.g. io::openVolume); null: boxes only.
+  std::vector<std::array<Int3, 2>> boxes;      ///< Inclusive voxel index ranges {lo, hi} on the mask lattice.
+  Vec3 origin{0, 0, 0};                        ///< [m] lower corner of mask voxel (0, 0, 0).
+  Real voxelSize = 0;                          ///< [m] mask voxel edge (> 0).
+};
+
 struct PinSettings {
-  Vec3 min{0, 0, 0};  ///< [m] lower corner of the box, world coordinates at rest.
+  Vec3 min{0, 0, 0};  ///< [m] lower corner of the box, world coordinates at rest (ignored with a mask).
   Vec3 max{0, 0, 0};  ///< [m] upper corner (closed box: vertices on its faces are pinned).
+  std::shared_ptr<const PinMask> mask;  ///< When set, selects the vertices instead of the box.
   Path path;          ///< Keyframe `position` = offset [m] of the pinned vertices from rest; empty = fixed.
 };
 
@@ -25,8 +43,10 @@ struct PinSet {
   bool empty() const { return vertices.empty(); }
 };
 
-/// Selects the pinned vertices from rest positions. Throws InputError when a pin holds no vertex
-/// or its box is inverted (message "pins[i]: ...").
+/// Selects the pinned vertices from rest positions (a vertex held by several pins goes to the
+/// first). Throws InputError when a pin holds no vertex, its box is inverted, or its mask cannot
+/// be read or is malformed (messages "pins[i]: ..." and "pins[i].mask: ...", the latter naming
+/// the file).
 PinSet selectPins(const std::vector<PinSettings>& pins, const std::vector<Vec3>& restPositions);
 
 }  // namespace gradel
