@@ -13,6 +13,7 @@
 #include "gradel/io/volume_data_source.h"
 #include "gradel/io/volume_file.h"
 #include "gradel/scene.h"
+#include "gradel/isosurface.h"
 #include "gradel/surface.h"
 
 namespace py = pybind11;
@@ -112,6 +113,7 @@ struct Simulation {
   Scene scene;
   BuiltScene built;
   std::map<SurfaceKind, DisplaySurface> surfaces;
+  std::optional<EmbeddedMesh> isoEmbedded;  ///< surface("embedded") of a volume: its isosurface, built on first use.
 
   World& world() { return *built.world; }
 };
@@ -330,10 +332,27 @@ PYBIND11_MODULE(gradel, m) {
       .def(
           "surface",
           [](Simulation& s, const std::string& kind) {
-            const SurfaceKind k = parseSurfaceKind(kind);
-            auto it = s.surfaces.find(k);
-            if (it == s.surfaces.end()) it = s.surfaces.emplace(k, buildDisplaySurface(s.built.layout, s.built.volume, k)).first;
-            TriangleMesh mesh = surfaceMesh(it->second, s.world().state().positions);
+            TriangleMesh mesh;
+            if (kind == "embedded") {
+              // The body's mesh file carried by the elements; for a volume, its isosurface.
+              const EmbeddedMesh* em = s.built.embedded ? &*s.built.embedded : nullptr;
+              if (!em) {
+                if (s.scene.dim != 3) throw InputError("surface: 'embedded' needs a 3D body or a mesh");
+                if (!s.isoEmbedded) {
+                  const Layout& layout = s.built.layout;
+                  const RestModel& model = *s.built.model;
+                  const Vec3 origin = model.restPositions[0] - layout.vertices[0].cast<Real>() * model.voxelSize;
+                  s.isoEmbedded = embedMesh(isosurface(s.built.volume, origin), layout, model);
+                }
+                em = &*s.isoEmbedded;
+              }
+              mesh = embeddedMesh(*em, s.world().state().positions);
+            } else {
+              const SurfaceKind k = parseSurfaceKind(kind);
+              auto it = s.surfaces.find(k);
+              if (it == s.surfaces.end()) it = s.surfaces.emplace(k, buildDisplaySurface(s.built.layout, s.built.volume, k)).first;
+              mesh = surfaceMesh(it->second, s.world().state().positions);
+            }
             auto tris = std::move(mesh.triangles);
             auto* owner = new std::vector<std::array<uint32_t, 3>>(std::move(tris));
             py::capsule base(owner, [](void* p) { delete static_cast<std::vector<std::array<uint32_t, 3>>*>(p); });
@@ -343,5 +362,6 @@ PYBIND11_MODULE(gradel, m) {
             return py::make_tuple(vec3Array(std::move(mesh.vertices)), triangles, vec3Array(std::move(mesh.normals)));
           },
           py::arg("kind") = "smooth",
-          "The display surface now: (vertices (V, 3) [m], triangles (T, 3) uint32, normals (V, 3)); kind 'smooth' or 'voxel'.");
+          "The display surface now: (vertices (V, 3) [m], triangles (T, 3) uint32, normals (V, 3)); kind 'smooth', 'voxel' "
+          "or 'embedded' (the body's mesh file carried by the elements; for a volume, its isosurface).");
 }

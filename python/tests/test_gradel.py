@@ -107,3 +107,34 @@ def test_2d_body_and_surface_arrays():
         v, t, n = body.surface(kind)
         assert v.shape[1] == 3 and t.shape[1] == 3 and t.dtype == np.uint32 and n.shape == v.shape
         assert t.max() < len(v) and len(t) > 50
+
+
+def read_obj(path):
+    vertices, faces = [], []
+    with open(path) as f:
+        for line in f:
+            w = line.split()
+            if w and w[0] == "v":
+                vertices.append([float(x) for x in w[1:4]])
+            elif w and w[0] == "f":
+                faces.append([int(x.split("/")[0]) for x in w[1:]])
+    return np.array(vertices), faces
+
+
+def test_embedded_surface_is_the_mesh_file_carried_by_the_body():
+    file_v, file_f = read_obj(sample("torus.obj"))
+    sim = gradel.Simulation.from_scene(os.path.join(ROOT, "scenes", "torus-obj.json"))
+    v0, t0, n0 = sim.surface("embedded")
+    assert v0.shape == file_v.shape and len(t0) == sum(len(f) - 2 for f in file_f)
+    # A uniformly scaled, shifted copy of the file's vertices (voxel_size 0.01, resolution 24).
+    scale = 0.24 / np.ptp(file_v, axis=0).max()
+    np.testing.assert_allclose(v0 - v0[0], scale * (file_v - file_v[0]), atol=1e-12)
+    # It moves with the body: a rigid shift of every vertex shifts it exactly.
+    sim.positions[:] += [0.1, 0.2, 0.3]
+    v1, _, _ = sim.surface("embedded")
+    np.testing.assert_allclose(v1, v0 + [0.1, 0.2, 0.3], atol=1e-12)
+    # A volume body embeds its isosurface instead; a 2D body has none.
+    iso, _, _ = gradel.Simulation(gradel.Body.from_shape("sphere", 8)).surface("embedded")
+    assert len(iso) > 50
+    with pytest.raises(gradel.InputError):
+        gradel.Simulation(gradel.Body.from_array(np.ones((8, 6), bool))).surface("embedded")
