@@ -102,6 +102,8 @@ class Viewer {
     scene_ = std::move(scene);
     original_ = scene_;
     rebuild(true);
+    // A body from a mesh file shows that mesh (embedded) first; other bodies the smooth surface.
+    view_.surface = built_.embedded ? SurfaceMode::Embedded : SurfaceMode::Smooth;
     // The body keeps its physical size when the resolution changes.
     const VoxelVolume& v = built_.volume;
     bodyExtent_ = v.voxelSize() * std::max(v.nx(), v.ny());
