@@ -62,6 +62,21 @@ def main():
     for tri in [(0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3)]:
         be += struct.pack(">B3I", 3, *tri)
     put("ply", "tetra-be.ply", be)
+    ply_extra()
+
+
+def ply_extra():
+    """Shapes that once cost fuzz_ply seconds per execution (tests/test_io_meshes.cpp, PlySpeed):
+    an element of many rows without properties, and one face repeated many times."""
+    put("ply", "rowless-element.ply", b"ply\nformat ascii 1.0\nelement junk 65536\nelement vertex 3\nproperty float x\n"
+        b"property float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+        b"0 0 0\n1 0 0\n0 1 1\n3 0 1 2\n")
+    rep = (b"ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+           b"element face 256\nproperty list uchar uchar vertex_indices\nend_header\n")
+    rep += np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], "<f4").tobytes()
+    tets = [(0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3)]
+    rep += b"".join(struct.pack("<4B", 3, *tets[i % 4]) for i in range(256))
+    put("ply", "repeated-faces.ply", rep)
 
 
 if __name__ == "__main__":
