@@ -39,7 +39,10 @@ CLI::App* addRenderCommand(CLI::App& app, RenderCommandOptions& o) {
   r->add_option("--pitch", o.pitch, "Camera pitch above the horizon [rad]");
   r->add_option("--zoom", o.zoom, "Camera zoom factor (> 1 = closer)")->capture_default_str();
   r->add_option("--stress-scale", o.stressScale, "Stress drawn darkest [-]")->capture_default_str();
-  r->add_option("--export", o.exportFormat, "Also write the shown surface per frame (the embedded mesh with --surface embedded, else the display surface): none | obj | ply")->capture_default_str();
+  r->add_option("--export", o.exportFormat,
+                "Also write the drawn surface per frame (the embedded mesh when it is drawn, else the display surface): "
+                "none | obj | ply")
+      ->capture_default_str();
   r->add_flag("--no-pictures", o.noPictures, "Write no PNGs (export only; needs no OpenGL)");
   r->add_flag("--no-video", o.noVideo, "Do not make render.mp4 even if ffmpeg is present");
   return r;
