@@ -85,14 +85,6 @@ ElementResult elementForces(int dim, const Vec3* x, const uint32_t* verts, const
                       [f](int i, Real fx, Real fy, Real fz) { f[i] = Vec3(fx, fy, fz); });
 }
 
-void elementForcesAccumulate(int dim, const Vec3* x, const uint32_t* verts, const Vec3* R0, int n, Real k, Quat& q,
-                             Vec3* forces, int maxIterations) {
-  kernel<false>(dim, x, verts, R0, n, k, q, maxIterations, [forces, verts](int i, Real fx, Real fy, Real fz) {
-    Real* f = forces[verts[i]].data();
-    f[0] += fx, f[1] += fy, f[2] += fz;
-  });
-}
-
 Real elementDeterminant(int dim, const Vec3* x, const uint32_t* verts, const Vec3* R0, int n) {
   const Mat3 A = elementCovariance(x, verts, R0, n);
   Mat3 Q = Mat3::Zero();

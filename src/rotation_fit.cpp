@@ -107,4 +107,97 @@ Real fitRotation2(const Mat3& A) {
   return std::atan2(s, c);
 }
 
+
+// ---- four fits at once ----------------------------------------------------------------------
+// GCC/clang vector extensions: one lane per element; compiles to AVX2 where the build has it.
+namespace {
+using d4 = Real __attribute__((vector_size(32)));
+using m4 = long long __attribute__((vector_size(32)));  // lane masks: all ones or zero
+
+inline d4 splat(Real v) { return d4{v, v, v, v}; }
+inline d4 load4(const Real* p) {
+  d4 r;
+  __builtin_memcpy(&r, p, sizeof r);
+  return r;
+}
+inline void store4(Real* p, d4 v) { __builtin_memcpy(p, &v, sizeof v); }
+inline d4 select(m4 m, d4 a, d4 b) { return (d4)(((m4)a & m) | ((m4)b & ~m)); }
+inline d4 abs4(d4 a) { return (d4)((m4)a & ~(m4)splat(-0.0)); }  // clears the sign bit
+inline d4 sqrt4(d4 a) {
+  for (int l = 0; l < 4; ++l) a[l] = std::sqrt(a[l]);
+  return a;
+}
+inline bool none(m4 m) { return !(m[0] | m[1] | m[2] | m[3]); }
+}  // namespace
+
+void fitRotation3Batch(RotationBatch& b, int maxIterations, Real tolerance) {
+  d4 qw = load4(b.q[0]), qx = load4(b.q[1]), qy = load4(b.q[2]), qz = load4(b.q[3]);
+  d4 A[9];
+  for (int k = 0; k < 9; ++k) A[k] = load4(b.A[k]);
+  d4 scaleA = splat(0);
+  for (int k = 0; k < 9; ++k) scaleA += abs4(A[k]);
+  const d4 tol = splat(tolerance), tol2 = splat(tolerance * tolerance);
+  m4 active = (m4)splat(0) == (m4)splat(0);  // all ones
+  for (int it = 0; it < maxIterations; ++it) {
+    const d4 xx = qx * qx, yy = qy * qy, zz = qz * qz, xy = qx * qy, xz = qx * qz, yz = qy * qz;
+    const d4 wx = qw * qx, wy = qw * qy, wz = qw * qz;
+    const d4 R00 = 1 - 2 * (yy + zz), R01 = 2 * (xy - wz), R02 = 2 * (xz + wy);
+    const d4 R10 = 2 * (xy + wz), R11 = 1 - 2 * (xx + zz), R12 = 2 * (yz - wx);
+    const d4 R20 = 2 * (xz - wy), R21 = 2 * (yz + wx), R22 = 1 - 2 * (xx + yy);
+    d4 B[3][3];
+    for (int c = 0; c < 3; ++c) {
+      B[0][c] = R00 * A[c] + R10 * A[3 + c] + R20 * A[6 + c];
+      B[1][c] = R01 * A[c] + R11 * A[3 + c] + R21 * A[6 + c];
+      B[2][c] = R02 * A[c] + R12 * A[3 + c] + R22 * A[6 + c];
+    }
+    const d4 g0 = B[2][1] - B[1][2], g1 = B[0][2] - B[2][0], g2 = B[1][0] - B[0][1];
+    const d4 tr = B[0][0] + B[1][1] + B[2][2];
+    const d4 h00 = tr - B[0][0], h11 = tr - B[1][1], h22 = tr - B[2][2];
+    const d4 h01 = -0.5 * (B[0][1] + B[1][0]), h02 = -0.5 * (B[0][2] + B[2][0]), h12 = -0.5 * (B[1][2] + B[2][1]);
+    const d4 c00 = h11 * h22 - h12 * h12, c01 = h02 * h12 - h01 * h22, c02 = h01 * h12 - h02 * h11;
+    const d4 det = h00 * c00 + h01 * c01 + h02 * c02;
+    const d4 m2 = h00 * h11 - h01 * h01;
+    const d4 scale = abs4(tr) + 1e-300;
+    const m4 newton = (h00 > 1e-6 * scale) & (m2 > 1e-12 * scale * scale) & (det > 1e-18 * scale * scale * scale);
+    const d4 c11 = h00 * h22 - h02 * h02, c12 = h01 * h02 - h00 * h12, c22 = m2;
+    const d4 invDet = 1 / select(newton, det, splat(1));
+    const d4 invMueller = 1 / (scale + 1e-9 * scaleA);
+    d4 w0 = select(newton, (c00 * g0 + c01 * g1 + c02 * g2) * invDet, g0 * invMueller);
+    d4 w1 = select(newton, (c01 * g0 + c11 * g1 + c12 * g2) * invDet, g1 * invMueller);
+    d4 w2 = select(newton, (c02 * g0 + c12 * g1 + c22 * g2) * invDet, g2 * invMueller);
+    d4 angle2 = w0 * w0 + w1 * w1 + w2 * w2;
+    active &= angle2 >= tol2;  // converged (or NaN): this lane stops unchanged
+    if (none(active)) break;
+    const m4 big = angle2 > 1.0;  // trust region: at most one radian a step
+    const d4 s = select(big, 1 / sqrt4(select(big, angle2, splat(1))), splat(1));
+    w0 *= s, w1 *= s, w2 *= s;
+    angle2 = select(big, splat(1), angle2);
+    // q <- q * exp(w / 2): cos(h) and sin(h) / (2 h), h = angle / 2 <= 1/2, from their series
+    // to h^14 (the next terms are below 1e-18).
+    const d4 u = 0.25 * angle2;  // h^2
+    const d4 cw =
+        1 + u * (-1.0 / 2 + u * (1.0 / 24 + u * (-1.0 / 720 + u * (1.0 / 40320 + u * (-1.0 / 3628800 +
+        u * (1.0 / 479001600 + u * (-1.0 / 87178291200.0)))))));
+    const d4 sw = 0.5 * (1 + u * (-1.0 / 6 + u * (1.0 / 120 + u * (-1.0 / 5040 + u * (1.0 / 362880 +
+                  u * (-1.0 / 39916800 + u * (1.0 / 6227020800.0 + u * (-1.0 / 1307674368000.0))))))));
+    const d4 dx = sw * w0, dy = sw * w1, dz = sw * w2;
+    const d4 nw = qw * cw - qx * dx - qy * dy - qz * dz;
+    const d4 nx = qw * dx + qx * cw + qy * dz - qz * dy;
+    const d4 ny = qw * dy - qx * dz + qy * cw + qz * dx;
+    const d4 nz = qw * dz + qx * dy - qy * dx + qz * cw;
+    const d4 norm = 1 / sqrt4(nw * nw + nx * nx + ny * ny + nz * nz);
+    qw = select(active, nw * norm, qw), qx = select(active, nx * norm, qx);
+    qy = select(active, ny * norm, qy), qz = select(active, nz * norm, qz);
+    // Newton converges quadratically: after a step this small the next would be below tolerance.
+    active &= ~(newton & (angle2 < tol));
+    if (none(active)) break;
+  }
+  store4(b.q[0], qw), store4(b.q[1], qx), store4(b.q[2], qy), store4(b.q[3], qz);
+  const d4 xx = qx * qx, yy = qy * qy, zz = qz * qz, xy = qx * qy, xz = qx * qz, yz = qy * qz;
+  const d4 wx = qw * qx, wy = qw * qy, wz = qw * qz;
+  store4(b.M[0], 1 - 2 * (yy + zz)), store4(b.M[1], 2 * (xy - wz)), store4(b.M[2], 2 * (xz + wy));
+  store4(b.M[3], 2 * (xy + wz)), store4(b.M[4], 1 - 2 * (xx + zz)), store4(b.M[5], 2 * (yz - wx));
+  store4(b.M[6], 2 * (xz - wy)), store4(b.M[7], 2 * (yz + wx)), store4(b.M[8], 1 - 2 * (xx + yy));
+}
+
 }  // namespace gradel

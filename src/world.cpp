@@ -6,6 +6,7 @@
 #endif
 
 #include "gradel/element.h"
+#include "gradel/rotation_fit.h"
 
 namespace gradel {
 
@@ -31,8 +32,10 @@ const char* periodRuleName(PeriodRule r) { return r == PeriodRule::Element ? "el
 
 World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& sim, const DomainSettings& domain,
              std::vector<ManipulatorSettings> manipulators)
-    : model_(std::move(model)), sim_(sim), domain_(domain) {
-  if (!model_) throw std::invalid_argument("World: no model");
+    : model_(model ? std::move(model) : throw std::invalid_argument("World: no model")),
+      stageRest_(*model_),
+      sim_(sim),
+      domain_(domain) {
   if (sim_.threads < 1) sim_.threads = 1;
   if (!(sim_.dt >= 0) || !std::isfinite(sim_.dt)) throw InputError("simulation.dt must be 'auto' or a positive number of seconds");
   if (!(sim_.dtFraction > 0 && sim_.dtFraction <= 1)) throw InputError("simulation.dt_fraction must be in (0, 1]");
@@ -49,7 +52,7 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   state_.positions = model_->restPositions;
   state_.velocities.assign(V, Vec3::Zero());
   state_.rotations.assign(E, Quat::Identity());
-  scratch_.forces.assign(V, Vec3::Zero());
+  scratch_.frames.resize(E);
   scratch_.contactDepth.assign(V, 0.0);
 
   for (ManipulatorSettings& s : manipulators) {
@@ -72,65 +75,70 @@ void World::setManipulatorPose(size_t i, const Vec3& position, const Vec3& veloc
   m.velocity = velocity;
 }
 
-// Stage 1: elastic forces of the elements [begin, end) of one colour (eq. 1), added into the
-// per-vertex force array; elements of one colour share no vertex.
-void World::stageElementForces(size_t colour, size_t begin, size_t end) {
-  const RestModel& m = *model_;
-  const Vec3* x = state_.positions.data();
-  const uint32_t* ids = &m.colourElements[m.colourStart[colour]];
-  for (size_t j = begin; j < end; ++j) {
-    const uint32_t e = ids[j];
-    const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
-    elementForcesAccumulate(m.dim, x, &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[e], state_.rotations[e],
-                            scratch_.forces.data(), sim_.rotationIterations);
-  }
+// Stage 1: the elements [begin, end): rotations fitted (eq. 1) and their frames (element_stage.h).
+void World::stageElementFrames(size_t begin, size_t end) {
+  computeElementFrames(*model_, stageRest_, begin, end, state_.positions.data(), state_.rotations.data(),
+                       scratch_.frames.data(), sim_.rotationIterations);
 }
 
-// Stage 2: integrate (eqs. 2-3), and clear the force slots for the next step.
-void World::stageIntegrate(size_t begin, size_t end) {
+// Stage 2, per vertex [begin, end): gather the elastic force from the element frames, integrate
+// (eqs. 2-3), then resolve contacts. A vertex reads only its own position here, so the three
+// parts fuse into one pass over the vertices.
+void World::stageVertices(size_t begin, size_t end, bool contacts) {
   const RestModel& m = *model_;
   const Real dt = dt_;
   const Real damp = 1.0 / (1.0 + sim_.damping * dt);
   const bool forward = sim_.integrator == IntegratorKind::ForwardEuler;
   Vec3 g = sim_.gravity;
   if (m.dim == 2) g.z() = 0;
-  for (size_t i = begin; i < end; ++i) {
-    const Vec3 a = scratch_.forces[i] * m.invMass[i] + g;
-    scratch_.forces[i].setZero();
-    Vec3& x = state_.positions[i];
-    Vec3& v = state_.velocities[i];
-    if (forward) {
-      x += dt * v;  // eq. 3 with V(T): the paper's literal order
-      v = (v + dt * a) * damp;
-    } else {
-      v = (v + dt * a) * damp;
-      x += dt * v;  // symplectic: P(T+dT) = P(T) + V(T+dT) dT
+  constexpr size_t kBlock = 256;  // forces gathered a block at a time (stays in L1)
+  Vec3 force[kBlock];
+  for (size_t b0 = begin; b0 < end; b0 += kBlock) {
+    const size_t b1 = std::min(end, b0 + kBlock);
+    gatherVertexForces(m, stageRest_, scratch_.frames.data(), state_.positions.data(), b0, b1, force);
+    for (size_t i = b0; i < b1; ++i) {
+      const Vec3 a = force[i - b0] * m.invMass[i] + g;
+      Vec3& x = state_.positions[i];
+      Vec3& v = state_.velocities[i];
+      const Vec3 previous = x;
+      if (forward) {
+        x += dt * v;  // eq. 3 with V(T): the paper's literal order
+        v = (v + dt * a) * damp;
+      } else {
+        v = (v + dt * a) * damp;
+        x += dt * v;  // symplectic: P(T+dT) = P(T) + V(T+dT) dT
+      }
+      if (contacts) scratch_.contactDepth[i] = resolveVertexContacts(previous, x, v);
     }
   }
 }
 
-// Stage 3: contacts, per vertex (independent). The first pass bounces (sec. 3.5). A vertex
-// pinched between surfaces (a manipulator and a wall, or two manipulators) is resolved again, up
-// to three more passes, inelastically: repeated elastic reflections between two surfaces would
-// pump energy into it. The walls go last in every pass, so no vertex ever leaves the box.
-void World::stageContacts(size_t begin, size_t end) {
+// Contacts of one vertex, swept from `previous` (independent per vertex). The first pass bounces
+// (sec. 3.5). A vertex pinched between surfaces (a manipulator and a wall, or two manipulators) is
+// resolved again, up to three more passes, inelastically: repeated elastic reflections between
+// two surfaces would pump energy into it. The walls go last in every pass, so no vertex ever
+// leaves the box. Returns the deepest penetration found [m].
+Real World::resolveVertexContacts(const Vec3& previous, Vec3& x, Vec3& v) const {
   const int dim = model_->dim;
   const size_t surfaces = manipulators_.size() + (domain_.enabled ? 1 : 0);
-  for (size_t i = begin; i < end; ++i) {
-    Vec3& x = state_.positions[i];
-    Vec3& v = state_.velocities[i];
-    Real depth = 0;
-    for (int pass = 0; pass < 4; ++pass) {
-      const bool bounce = pass == 0;
-      Real passDepth = 0;
-      for (const Manipulator& mp : manipulators_)
-        passDepth = std::max(passDepth, resolveManipulator(mp, scratch_.previousPositions[i], x, v, dim, bounce).depth);
-      passDepth = std::max(passDepth, resolveDomain(domain_, scratch_.previousPositions[i], x, v, dim, bounce).depth);
-      depth = std::max(depth, passDepth);
-      if (passDepth == 0 || surfaces < 2) break;
-    }
-    scratch_.contactDepth[i] = depth;
+  Real depth = 0;
+  for (int pass = 0; pass < 4; ++pass) {
+    const bool bounce = pass == 0;
+    Real passDepth = 0;
+    for (const Manipulator& mp : manipulators_)
+      passDepth = std::max(passDepth, resolveManipulator(mp, previous, x, v, dim, bounce).depth);
+    passDepth = std::max(passDepth, resolveDomain(domain_, previous, x, v, dim, bounce).depth);
+    depth = std::max(depth, passDepth);
+    if (passDepth == 0 || surfaces < 2) break;
   }
+  return depth;
+}
+
+// Contacts of every vertex from scratch_.previousPositions (the implicit step).
+void World::stageContacts(size_t begin, size_t end) {
+  for (size_t i = begin; i < end; ++i)
+    scratch_.contactDepth[i] =
+        resolveVertexContacts(scratch_.previousPositions[i], state_.positions[i], state_.velocities[i]);
 }
 
 void World::moveManipulators(Real tNext) {
@@ -147,18 +155,23 @@ namespace {
 inline std::pair<size_t, size_t> share(size_t n, int t, int threads) {
   return {n * size_t(t) / size_t(threads), n * size_t(t + 1) / size_t(threads)};
 }
+// The same in whole runs of `unit` items (the last worker takes the remainder): the element
+// kernel fits rotations kRotationLanes at a time.
+inline std::pair<size_t, size_t> shareRuns(size_t n, int t, int threads, size_t unit) {
+  const size_t runs = (n + unit - 1) / unit;
+  const auto [b, e] = share(runs, t, threads);
+  return {std::min(n, b * unit), std::min(n, e * unit)};
+}
 }  // namespace
 
 void World::step() {
   if (sim_.integrator == IntegratorKind::Implicit) return stepImplicit();
-  const size_t V = model_->numVertices();
-  const size_t colours = model_->numColours();
+  const size_t V = model_->numVertices(), E = model_->numElements();
   const bool contacts = !manipulators_.empty() || domain_.enabled;
   // Small bodies are not worth waking threads for.
   const int threads = V < 2048 ? 1 : sim_.threads;
-  if (contacts) scratch_.previousPositions = state_.positions;
-  // One parallel region per step; each `omp for` ends with a barrier, so the colours run one
-  // after the other and the stages in order.
+  moveManipulators(state_.time + dt_);  // the elements do not see them; the contacts see t + dt
+  // One parallel region per step, one barrier between the element and the vertex stage.
 #pragma omp parallel num_threads(threads) if (threads > 1)
   {
 #ifdef _OPENMP
@@ -166,22 +179,13 @@ void World::step() {
 #else
     const int t = 0, T = 1;
 #endif
-    for (size_t c = 0; c < colours; ++c) {
-      const auto [b, e] = share(model_->colourStart[c + 1] - model_->colourStart[c], t, T);
-      stageElementForces(c, b, e);
-#pragma omp barrier
-    }
     {
-      const auto [b, e] = share(V, t, T);
-      stageIntegrate(b, e);
+      const auto [b, e] = shareRuns(E, t, T, kRotationLanes);
+      stageElementFrames(b, e);
     }
 #pragma omp barrier
-#pragma omp single
-    moveManipulators(state_.time + dt_);
-    if (contacts) {
-      const auto [b, e] = share(V, t, T);
-      stageContacts(b, e);
-    }
+    const auto [b, e] = share(V, t, T);
+    stageVertices(b, e, contacts);
   }
   for (Manipulator& m : manipulators_) m.previousPosition = m.position;
   state_.time += dt_;
@@ -344,9 +348,9 @@ uint64_t World::stateHash() const {
 
 size_t World::memoryBytes() const {
   auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
-  size_t b = sizeof(*this) + model_->memoryBytes();
+  size_t b = sizeof(*this) + model_->memoryBytes() + stageRest_.memoryBytes();
   b += bytes(state_.positions) + bytes(state_.velocities) + bytes(state_.rotations);
-  b += bytes(scratch_.forces) + bytes(scratch_.previousPositions) + bytes(scratch_.contactDepth);
+  b += bytes(scratch_.frames) + bytes(scratch_.previousPositions) + bytes(scratch_.contactDepth);
   for (const Manipulator& m : manipulators_) b += sizeof(m) + bytes(m.settings.path.keys);
   return b;
 }

@@ -7,6 +7,8 @@
 //   A   = sum_i r_i R0_i^T;  M = best-fit proper rotation of A (rotation_fit.h)
 //   f_i = k_e (M R0_i - r_i)            forces sum to zero and have zero torque (eq. 1)
 //   E   = k_e / 2 sum_i |M R0_i - r_i|^2  (f_i = -dE/dx_i: the elastic energy)
+// This is the reference form (metrics, stress, tests); the explicit step runs the same element in
+// element_stage.h's data-parallel layout.
 #pragma once
 
 #include "gradel/types.h"
@@ -23,11 +25,6 @@ struct ElementResult {
 /// a rotation about z). dim is 2 or 3. maxIterations bounds the 3D rotation refinement.
 ElementResult elementForces(int dim, const Vec3* x, const uint32_t* verts, const Vec3* R0, int n,
                             Real k, Quat& q, Vec3* f, int maxIterations = 4);
-
-/// The same forces added into a global per-vertex array (forces[verts[i]] += f_i), without the
-/// energy: the stepping loop's form. The caller makes sure no two concurrent calls share a vertex.
-void elementForcesAccumulate(int dim, const Vec3* x, const uint32_t* verts, const Vec3* R0, int n, Real k, Quat& q,
-                             Vec3* forces, int maxIterations = 4);
 
 /// A = sum_i r_i R0_i^T about the current centroid (also returns the centroid).
 Mat3 elementCovariance(const Vec3* x, const uint32_t* verts, const Vec3* R0, int n, Vec3* centroid = nullptr);

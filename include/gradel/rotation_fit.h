@@ -18,6 +18,19 @@ namespace gradel {
 /// Returns the number of iterations used.
 int fitRotation3(const Mat3& A, Quat& q, int maxIterations = 20, Real tolerance = 1e-12);
 
+/// Four 3D fits at once (structure of arrays, one lane per element): exactly fitRotation3's
+/// iteration in every lane (Newton or Mueller step, trust region, the same stopping rules), with
+/// sin/cos of the step from their series (exact to rounding for the trust region's angles).
+/// Lanes stop independently; a lane's result does not depend on the other lanes. A lane with
+/// A = identity and q = identity is a no-op (use it to pad a short batch).
+constexpr int kRotationLanes = 4;
+struct RotationBatch {
+  alignas(32) Real A[9][kRotationLanes];  ///< A(r, c) at [3 r + c].
+  alignas(32) Real q[4][kRotationLanes];  ///< In: warm start, out: fit; w, x, y, z.
+  alignas(32) Real M[9][kRotationLanes];  ///< Out: the rotation matrix of q, M(r, c) at [3 r + c].
+};
+void fitRotation3Batch(RotationBatch& batch, int maxIterations = 20, Real tolerance = 1e-12);
+
 /// 3D without a warm start: a robust cold start (the rotation of the SVD, sign-corrected to
 /// det +1) refined by fitRotation3. Used at initialisation and by tests.
 Quat fitRotation3Cold(const Mat3& A);

@@ -1,14 +1,15 @@
 // A simulated body: rest model (shared, immutable) + runtime state + manipulators + walls,
-// advanced by named stages (Box2D style): elastic forces -> integrate (velocities, positions)
-// -> contacts. Every stage runs over an index range; threads only split ranges and never change
-// the order in which any sum is formed (element forces are added colour by colour, see
-// model.h), so results are identical at any thread count.
+// advanced by named stages (Box2D style): element frames (eq. 1, per element) -> per vertex:
+// gather the elastic force, integrate (eqs. 2-3), contacts (element_stage.h). Every stage runs
+// over an index range; threads only split ranges and never change the order in which any sum is
+// formed (a vertex sums its elements in id order), so results are identical at any thread count.
 #pragma once
 
 #include <memory>
 #include <vector>
 
 #include "gradel/contacts.h"
+#include "gradel/element_stage.h"
 #include "gradel/integrator.h"
 #include "gradel/model.h"
 #include "gradel/pins.h"
@@ -26,8 +27,8 @@ struct State {
 
 /// Per-step scratch (never read across steps except for output).
 struct StepScratch {
-  std::vector<Vec3> forces;         ///< [N] per vertex, accumulated colour by colour by the element stage.
-  std::vector<Vec3> previousPositions;  ///< [m] positions at the start of the step (swept contacts).
+  std::vector<ElementFrame> frames;     ///< Per element: k M and (k e, k), written by the element stage.
+  std::vector<Vec3> previousPositions;  ///< [m] positions at the start of an implicit step (swept contacts).
   std::vector<Real> contactDepth;   ///< [m] per vertex: depth before correction in the last step.
 };
 
@@ -91,15 +92,17 @@ class World {
   size_t memoryBytes() const;
 
  private:
-  void stageElementForces(size_t colour, size_t begin, size_t end);
-  void stageIntegrate(size_t begin, size_t end);
+  void stageElementFrames(size_t begin, size_t end);
+  void stageVertices(size_t begin, size_t end, bool contacts);
   void stageContacts(size_t begin, size_t end);
+  Real resolveVertexContacts(const Vec3& previous, Vec3& x, Vec3& v) const;
   void moveManipulators(Real tNext);
   void stepImplicit();
   void applyPins(Real t);
   std::vector<Vec3> pinTargets(Real t) const;
 
   std::shared_ptr<const RestModel> model_;
+  ElementStageRest stageRest_;  ///< Derived rest data of the explicit stages (element_stage.h).
   SimulationSettings sim_;
   DomainSettings domain_;
   std::vector<Manipulator> manipulators_;
