@@ -2,54 +2,37 @@
 
 #include <algorithm>
 #include <cmath>
-#if defined(__AVX__)
-#include <immintrin.h>
-#endif
 
 #include "gradel/rotation_fit.h"
+#include "gradel/simd.h"
 
 namespace gradel {
 
 namespace {
 
-using d4 = Real __attribute__((vector_size(32)));
-
-inline d4 splat(Real v) { return d4{v, v, v, v}; }
-inline d4 load4(const Real* p) {
-  d4 r;
-  __builtin_memcpy(&r, p, sizeof r);
-  return r;
-}
-inline void store4(Real* p, d4 v) { __builtin_memcpy(p, &v, sizeof v); }
-
-// (x, y, z, 0) of a Vec3, without reading past it.
-inline d4 loadVec3(const Vec3& v) {
-#if defined(__AVX__)
-  return (d4)_mm256_maskload_pd(v.data(), _mm256_setr_epi64x(-1, -1, -1, 0));
-#else
-  return d4{v.x(), v.y(), v.z(), 0};
-#endif
-}
+using namespace simd;
 
 // Sums over one element's pairs: s = sum x_i and the columns a_c = sum x_i R0_i[c] (A before
-// centring). Two interleaved accumulator sets keep the fused multiply-adds' latency hidden.
+// centring), with R0_i = X_i - C formed on the fly from the rest positions X (bit for bit the
+// model's restOffsets, computed the same way, without streaming them: a vertex's X is read with
+// its x and shared by its elements). Two interleaved accumulator sets hide the fused
+// multiply-adds' latency.
 struct ElementMoments {
   d4 s, a0, a1, a2;
 };
 
-inline ElementMoments elementMoments(const Vec3* x, const uint32_t* verts, const Vec3* R0, uint32_t n) {
+inline ElementMoments elementMoments(const Vec3* x, const Vec3* X, const uint32_t* verts, d4 C, uint32_t n) {
   d4 s0 = splat(0), s1 = splat(0), a0 = s0, a1 = s0, a2 = s0, b0 = s0, b1 = s0, b2 = s0;
   uint32_t i = 0;
   for (; i + 1 < n; i += 2) {
-    const d4 p = loadVec3(x[verts[i]]), q = loadVec3(x[verts[i + 1]]);
-    const Real* r = R0[i].data();
-    const Real* t = R0[i + 1].data();
+    const uint32_t u = verts[i], w = verts[i + 1];
+    const d4 p = loadVec3(x[u]), q = loadVec3(x[w]);
+    const d4 r = loadVec3(X[u]) - C, t = loadVec3(X[w]) - C;
     s0 += p, a0 += p * r[0], a1 += p * r[1], a2 += p * r[2];
     s1 += q, b0 += q * t[0], b1 += q * t[1], b2 += q * t[2];
   }
   if (i < n) {
-    const d4 p = loadVec3(x[verts[i]]);
-    const Real* r = R0[i].data();
+    const d4 p = loadVec3(x[verts[i]]), r = loadVec3(X[verts[i]]) - C;
     s0 += p, a0 += p * r[0], a1 += p * r[1], a2 += p * r[2];
   }
   return {s0 + s1, a0 + b0, a1 + b1, a2 + b2};
@@ -102,7 +85,7 @@ void computeElementFrames(const RestModel& m, const ElementStageRest& rest, size
       }
       const size_t e = e0 + l;
       const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
-      const ElementMoments mo = elementMoments(x, &m.elemVerts[b], &m.restOffsets[b], n);
+      const ElementMoments mo = elementMoments(x, m.restPositions.data(), &m.elemVerts[b], loadVec3(rest.restCentroids[e]), n);
       const d4 c = mo.s / Real(n);
       const Vec3& sr = rest.sumRestOffsets[e];
       const d4 col[3] = {mo.a0 - c * sr.x(), mo.a1 - c * sr.y(), mo.a2 - c * sr.z()};
@@ -142,24 +125,6 @@ void computeElementFrames(const RestModel& m, const ElementStageRest& rest, size
       ElementFrame& f = frames[e];
       store4(f.c0, k * col0), store4(f.c1, k * col1), store4(f.c2, k * col2), store4(f.t, t);
     }
-  }
-}
-
-void gatherVertexForces(const RestModel& m, const ElementStageRest& rest, const ElementFrame* frames, const Vec3* x,
-                        size_t begin, size_t end, Vec3* forces) {
-  const uint32_t* start = rest.vertexStart.data();
-  const uint32_t* elements = rest.vertexElements.data();
-  const Vec3* X = m.restPositions.data();
-  for (size_t v = begin; v < end; ++v) {
-    // sum G, sum t; lane 3 of sum t is sum k, which multiplies -x_v.
-    d4 g0 = splat(0), g1 = g0, g2 = g0, t = g0;
-    for (uint32_t j = start[v]; j < start[v + 1]; ++j) {
-      const ElementFrame& f = frames[elements[j]];
-      g0 += load4(f.c0), g1 += load4(f.c1), g2 += load4(f.c2), t += load4(f.t);
-    }
-    const Real* r = X[v].data();
-    const d4 force = g0 * r[0] + g1 * r[1] + g2 * r[2] + t - t[3] * loadVec3(x[v]);
-    forces[v - begin] = Vec3(force[0], force[1], force[2]);
   }
 }
 

@@ -3,6 +3,8 @@
 #include <Eigen/SVD>
 #include <cmath>
 
+#include "gradel/simd.h"
+
 namespace gradel {
 
 int fitRotation3(const Mat3& A, Quat& q, int maxIterations, Real tolerance) {
@@ -109,33 +111,14 @@ Real fitRotation2(const Mat3& A) {
 
 
 // ---- four fits at once ----------------------------------------------------------------------
-// GCC/clang vector extensions: one lane per element; compiles to AVX2 where the build has it.
-namespace {
-using d4 = Real __attribute__((vector_size(32)));
-using m4 = long long __attribute__((vector_size(32)));  // lane masks: all ones or zero
-
-inline d4 splat(Real v) { return d4{v, v, v, v}; }
-inline d4 load4(const Real* p) {
-  d4 r;
-  __builtin_memcpy(&r, p, sizeof r);
-  return r;
-}
-inline void store4(Real* p, d4 v) { __builtin_memcpy(p, &v, sizeof v); }
-inline d4 select(m4 m, d4 a, d4 b) { return (d4)(((m4)a & m) | ((m4)b & ~m)); }
-inline d4 abs4(d4 a) { return (d4)((m4)a & ~(m4)splat(-0.0)); }  // clears the sign bit
-inline d4 sqrt4(d4 a) {
-  for (int l = 0; l < 4; ++l) a[l] = std::sqrt(a[l]);
-  return a;
-}
-inline bool none(m4 m) { return !(m[0] | m[1] | m[2] | m[3]); }
-}  // namespace
-
+// One lane per element (simd.h).
 void fitRotation3Batch(RotationBatch& b, int maxIterations, Real tolerance) {
+  using namespace simd;
   d4 qw = load4(b.q[0]), qx = load4(b.q[1]), qy = load4(b.q[2]), qz = load4(b.q[3]);
   d4 A[9];
   for (int k = 0; k < 9; ++k) A[k] = load4(b.A[k]);
   d4 scaleA = splat(0);
-  for (int k = 0; k < 9; ++k) scaleA += abs4(A[k]);
+  for (int k = 0; k < 9; ++k) scaleA += abs(A[k]);
   const d4 tol = splat(tolerance), tol2 = splat(tolerance * tolerance);
   m4 active = (m4)splat(0) == (m4)splat(0);  // all ones
   for (int it = 0; it < maxIterations; ++it) {
@@ -157,7 +140,7 @@ void fitRotation3Batch(RotationBatch& b, int maxIterations, Real tolerance) {
     const d4 c00 = h11 * h22 - h12 * h12, c01 = h02 * h12 - h01 * h22, c02 = h01 * h12 - h02 * h11;
     const d4 det = h00 * c00 + h01 * c01 + h02 * c02;
     const d4 m2 = h00 * h11 - h01 * h01;
-    const d4 scale = abs4(tr) + 1e-300;
+    const d4 scale = abs(tr) + 1e-300;
     const m4 newton = (h00 > 1e-6 * scale) & (m2 > 1e-12 * scale * scale) & (det > 1e-18 * scale * scale * scale);
     const d4 c11 = h00 * h22 - h02 * h02, c12 = h01 * h02 - h00 * h12, c22 = m2;
     const d4 invDet = 1 / select(newton, det, splat(1));
@@ -169,7 +152,7 @@ void fitRotation3Batch(RotationBatch& b, int maxIterations, Real tolerance) {
     active &= angle2 >= tol2;  // converged (or NaN): this lane stops unchanged
     if (none(active)) break;
     const m4 big = angle2 > 1.0;  // trust region: at most one radian a step
-    const d4 s = select(big, 1 / sqrt4(select(big, angle2, splat(1))), splat(1));
+    const d4 s = select(big, 1 / sqrt(select(big, angle2, splat(1))), splat(1));
     w0 *= s, w1 *= s, w2 *= s;
     angle2 = select(big, splat(1), angle2);
     // q <- q * exp(w / 2): cos(h) and sin(h) / (2 h), h = angle / 2 <= 1/2, from their series
@@ -185,7 +168,7 @@ void fitRotation3Batch(RotationBatch& b, int maxIterations, Real tolerance) {
     const d4 nx = qw * dx + qx * cw + qy * dz - qz * dy;
     const d4 ny = qw * dy - qx * dz + qy * cw + qz * dx;
     const d4 nz = qw * dz + qx * dy - qy * dx + qz * cw;
-    const d4 norm = 1 / sqrt4(nw * nw + nx * nx + ny * ny + nz * nz);
+    const d4 norm = 1 / sqrt(nw * nw + nx * nx + ny * ny + nz * nz);
     qw = select(active, nw * norm, qw), qx = select(active, nx * norm, qx);
     qy = select(active, ny * norm, qy), qz = select(active, nz * norm, qz);
     // Newton converges quadratically: after a step this small the next would be below tolerance.

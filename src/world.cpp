@@ -1,5 +1,6 @@
 #include "gradel/world.h"
 
+#include <algorithm>
 #include <cmath>
 #ifdef _OPENMP
 #include <omp.h>
@@ -7,6 +8,7 @@
 
 #include "gradel/element.h"
 #include "gradel/rotation_fit.h"
+#include "gradel/simd.h"
 
 namespace gradel {
 
@@ -85,32 +87,36 @@ void World::stageElementFrames(size_t begin, size_t end) {
 // (eqs. 2-3), then resolve contacts. A vertex reads only its own position here, so the three
 // parts fuse into one pass over the vertices.
 void World::stageVertices(size_t begin, size_t end, bool contacts) {
+  using namespace simd;
   const RestModel& m = *model_;
   const Real dt = dt_;
   const Real damp = 1.0 / (1.0 + sim_.damping * dt);
   const bool forward = sim_.integrator == IntegratorKind::ForwardEuler;
-  Vec3 g = sim_.gravity;
-  if (m.dim == 2) g.z() = 0;
-  constexpr size_t kBlock = 256;  // forces gathered a block at a time (stays in L1)
-  Vec3 force[kBlock];
-  for (size_t b0 = begin; b0 < end; b0 += kBlock) {
-    const size_t b1 = std::min(end, b0 + kBlock);
-    gatherVertexForces(m, stageRest_, scratch_.frames.data(), state_.positions.data(), b0, b1, force);
-    for (size_t i = b0; i < b1; ++i) {
-      const Vec3 a = force[i - b0] * m.invMass[i] + g;
-      Vec3& x = state_.positions[i];
-      Vec3& v = state_.velocities[i];
-      const Vec3 previous = x;
-      if (forward) {
-        x += dt * v;  // eq. 3 with V(T): the paper's literal order
-        v = (v + dt * a) * damp;
-      } else {
-        v = (v + dt * a) * damp;
-        x += dt * v;  // symplectic: P(T+dT) = P(T) + V(T+dT) dT
-      }
-      if (contacts) scratch_.contactDepth[i] = resolveVertexContacts(previous, x, v);
+  Vec3 gravity = sim_.gravity;
+  if (m.dim == 2) gravity.z() = 0;
+  const d4 g = loadVec3(gravity);
+  Vec3* positions = state_.positions.data();
+  Vec3* velocities = state_.velocities.data();
+  const Real* invMass = m.invMass.data();
+  Real* contactDepth = scratch_.contactDepth.data();
+  gatherVertexForces(m, stageRest_, scratch_.frames.data(), positions, begin, end, [&](size_t i, d4 force) {
+    const d4 a = force * invMass[i] + g;
+    const d4 x0 = loadVec3(positions[i]);
+    d4 x = x0, v = loadVec3(velocities[i]);
+    if (forward) {
+      x = x + dt * v;  // eq. 3 with V(T): the paper's literal order
+      v = (v + dt * a) * damp;
+    } else {
+      v = (v + dt * a) * damp;
+      x = x + dt * v;  // symplectic: P(T+dT) = P(T) + V(T+dT) dT
     }
-  }
+    storeVec3(positions[i], x), storeVec3(velocities[i], v);
+    if (contacts) {
+      Vec3 previous;
+      storeVec3(previous, x0);
+      contactDepth[i] = resolveVertexContacts(previous, positions[i], velocities[i]);
+    }
+  });
 }
 
 // Contacts of one vertex, swept from `previous` (independent per vertex). The first pass bounces
@@ -150,23 +156,26 @@ void World::moveManipulators(Real tNext) {
 }
 
 namespace {
-// The contiguous share [begin, end) of n items for worker `t` of `threads`. Every item is handled
-// by exactly one worker and no result depends on the split.
-inline std::pair<size_t, size_t> share(size_t n, int t, int threads) {
-  return {n * size_t(t) / size_t(threads), n * size_t(t + 1) / size_t(threads)};
+// The contiguous share [begin, end) of the items 0 .. prefix.size() - 1 for worker `t` of
+// `threads`, balanced by work: prefix[i] is the work before item i (a CSR start array), and the
+// split points are multiples of `unit` items. Every item is handled by exactly one worker and no
+// result depends on the split.
+inline size_t splitPoint(const std::vector<uint32_t>& prefix, int t, int threads, size_t unit) {
+  const size_t n = prefix.size() - 1;
+  if (t <= 0) return 0;
+  if (t >= threads) return n;
+  const uint64_t target = uint64_t(prefix.back()) * uint64_t(t) / uint64_t(threads);
+  const size_t i = size_t(std::lower_bound(prefix.begin(), prefix.end() - 1, target) - prefix.begin());
+  return std::min(n, (i + unit / 2) / unit * unit);
 }
-// The same in whole runs of `unit` items (the last worker takes the remainder): the element
-// kernel fits rotations kRotationLanes at a time.
-inline std::pair<size_t, size_t> shareRuns(size_t n, int t, int threads, size_t unit) {
-  const size_t runs = (n + unit - 1) / unit;
-  const auto [b, e] = share(runs, t, threads);
-  return {std::min(n, b * unit), std::min(n, e * unit)};
+inline std::pair<size_t, size_t> share(const std::vector<uint32_t>& prefix, int t, int threads, size_t unit) {
+  return {splitPoint(prefix, t, threads, unit), splitPoint(prefix, t + 1, threads, unit)};
 }
 }  // namespace
 
 void World::step() {
   if (sim_.integrator == IntegratorKind::Implicit) return stepImplicit();
-  const size_t V = model_->numVertices(), E = model_->numElements();
+  const size_t V = model_->numVertices();
   const bool contacts = !manipulators_.empty() || domain_.enabled;
   // Small bodies are not worth waking threads for.
   const int threads = V < 2048 ? 1 : sim_.threads;
@@ -180,11 +189,11 @@ void World::step() {
     const int t = 0, T = 1;
 #endif
     {
-      const auto [b, e] = shareRuns(E, t, T, kRotationLanes);
+      const auto [b, e] = share(model_->elemStart, t, T, kRotationLanes);  // by pairs
       stageElementFrames(b, e);
     }
 #pragma omp barrier
-    const auto [b, e] = share(V, t, T);
+    const auto [b, e] = share(stageRest_.vertexStart, t, T, 1);  // by pairs
     stageVertices(b, e, contacts);
   }
   for (Manipulator& m : manipulators_) m.previousPosition = m.position;

@@ -110,3 +110,18 @@ TEST(RotationFitBatch, EachLaneMatchesTheScalarFit) {
     }
   }
 }
+
+// The element pass forms R0 = X - C from the rest positions instead of streaming restOffsets:
+// that must reproduce the model's offsets bit for bit (else the two would drift apart).
+TEST(ElementStageRest, RestCentroidsReproduceTheRestOffsetsExactly) {
+  for (LayoutKind kind : {LayoutKind::Gradational, LayoutKind::Uniform, LayoutKind::Voxel}) {
+    Body b = makeBody("sphere", 14, 3, kind, {}, 0.01, Vec3(0.3, -0.2, 0.7));
+    const RestModel& m = *b.model;
+    const ElementStageRest rest(m);
+    size_t mismatches = 0;
+    for (size_t e = 0; e < m.numElements(); ++e)
+      for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p)
+        mismatches += (m.restPositions[m.elemVerts[p]] - rest.restCentroids[e]) != m.restOffsets[p];
+    EXPECT_EQ(mismatches, 0u) << layoutKindName(kind);
+  }
+}

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "gradel/model.h"
+#include "gradel/simd.h"
 
 namespace gradel {
 
@@ -44,8 +45,25 @@ struct ElementStageRest {
 void computeElementFrames(const RestModel& model, const ElementStageRest& rest, size_t begin, size_t end,
                           const Vec3* positions, Quat* rotations, ElementFrame* frames, int maxIterations);
 
-/// Pass 2 for vertices [begin, end): their elastic forces [N] into forces[0 .. end - begin).
-void gatherVertexForces(const RestModel& model, const ElementStageRest& rest, const ElementFrame* frames,
-                        const Vec3* positions, size_t begin, size_t end, Vec3* forces);
+/// Pass 2 for vertices [begin, end): calls sink(v, f) with each vertex's elastic force f [N] as
+/// (fx, fy, fz, 0). Inline, so that the caller's integration fuses with the gather.
+template <class Sink>
+inline void gatherVertexForces(const RestModel& model, const ElementStageRest& rest, const ElementFrame* frames,
+                               const Vec3* positions, size_t begin, size_t end, Sink&& sink) {
+  using namespace simd;
+  const uint32_t* start = rest.vertexStart.data();
+  const uint32_t* elements = rest.vertexElements.data();
+  const Vec3* X = model.restPositions.data();
+  for (size_t v = begin; v < end; ++v) {
+    // sum G, sum t; lane 3 of sum t is sum k, which multiplies -x_v.
+    d4 g0 = splat(0), g1 = g0, g2 = g0, t = g0;
+    for (uint32_t j = start[v]; j < start[v + 1]; ++j) {
+      const ElementFrame& f = frames[elements[j]];
+      g0 += load4(f.c0), g1 += load4(f.c1), g2 += load4(f.c2), t += load4(f.t);
+    }
+    const Real* r = X[v].data();
+    sink(v, g0 * r[0] + g1 * r[1] + g2 * r[2] + t - t[3] * loadVec3(positions[v]));
+  }
+}
 
 }  // namespace gradel

@@ -1,0 +1,57 @@
+// Four doubles in one register (GCC / clang vector extensions): AVX2 where the build has it,
+// plain scalar code elsewhere. A Vec3 travels as (x, y, z, 0). Used by the hot kernels only
+// (element_stage.cpp, rotation_fit.cpp, world.cpp).
+#pragma once
+
+#include <cmath>
+#if defined(__AVX__)
+#include <immintrin.h>
+#endif
+
+#include "gradel/types.h"
+
+namespace gradel::simd {
+
+using d4 = Real __attribute__((vector_size(32)));
+using m4 = long long __attribute__((vector_size(32)));  ///< Lane masks: all ones or zero.
+
+inline d4 splat(Real v) { return d4{v, v, v, v}; }
+inline d4 load4(const Real* p) {
+  d4 r;
+  __builtin_memcpy(&r, p, sizeof r);
+  return r;
+}
+inline void store4(Real* p, d4 v) { __builtin_memcpy(p, &v, sizeof v); }
+
+/// (x, y, z, 0) of a Vec3, without reading past it.
+inline d4 loadVec3(const Vec3& v) {
+#if defined(__AVX__)
+  return (d4)_mm256_maskload_pd(v.data(), _mm256_setr_epi64x(-1, -1, -1, 0));
+#else
+  return d4{v.x(), v.y(), v.z(), 0};
+#endif
+}
+/// Writes lanes 0-2 into a Vec3.
+inline void storeVec3(Vec3& v, d4 a) {
+#if defined(__AVX__)
+  const __m256d r = (__m256d)a;
+  _mm_storeu_pd(v.data(), _mm256_castpd256_pd128(r));
+  _mm_store_sd(v.data() + 2, _mm256_extractf128_pd(r, 1));
+#else
+  v = Vec3(a[0], a[1], a[2]);
+#endif
+}
+
+inline d4 select(m4 m, d4 a, d4 b) { return (d4)(((m4)a & m) | ((m4)b & ~m)); }
+inline d4 abs(d4 a) { return (d4)((m4)a & ~(m4)splat(-0.0)); }  ///< Clears the sign bits.
+inline d4 sqrt(d4 a) {
+#if defined(__AVX__)
+  return (d4)_mm256_sqrt_pd((__m256d)a);
+#else
+  for (int l = 0; l < 4; ++l) a[l] = std::sqrt(a[l]);
+  return a;
+#endif
+}
+inline bool none(m4 m) { return !(m[0] | m[1] | m[2] | m[3]); }
+
+}  // namespace gradel::simd
