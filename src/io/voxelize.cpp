@@ -15,12 +15,29 @@ struct Crossing {
   uint32_t ray;
   float t;
   int8_t delta;
-  bool operator<(const Crossing& o) const { return ray != o.ray ? ray < o.ray : t < o.t; }
 };
 
 struct P2 {
   double u, v;
 };
+
+// Orders crossings by ray, then along it: a counting sort by ray (linear), then each ray's few
+// crossings by t. A comparison sort of all of them took most of a fuzz run's time.
+void sortByRay(std::vector<Crossing>& crossings, std::vector<Crossing>& scratch, size_t rays) {
+  std::vector<uint32_t> start(rays + 1, 0);
+  for (const Crossing& c : crossings) ++start[c.ray + 1];
+  for (size_t r = 0; r < rays; ++r) start[r + 1] += start[r];
+  scratch.resize(crossings.size());
+  for (const Crossing& c : crossings) scratch[start[c.ray]++] = c;  // start[r] ends at ray r's end
+  crossings.swap(scratch);
+  auto alongRay = [](const Crossing& a, const Crossing& b) { return a.t < b.t; };
+  size_t b = 0;
+  for (size_t r = 0; r < rays; ++r) {
+    const size_t e = start[r];
+    if (e - b > 1) std::sort(crossings.begin() + std::ptrdiff_t(b), crossings.begin() + std::ptrdiff_t(e), alongRay);
+    b = e;
+  }
+}
 
 bool lexLess(const P2& a, const P2& b) { return a.u < b.u || (a.u == b.u && a.v < b.v); }
 
@@ -82,7 +99,7 @@ VoxelVolume voxelize(const TriangleMesh& mesh, const VoxelizeSettings& s, const 
 
   // votes: low nibble = axes seeing winding != 0, high nibble = axes seeing 0.
   std::vector<uint8_t> votes(volume.size(), 0);
-  std::vector<Crossing> crossings;
+  std::vector<Crossing> crossings, sorted;
   for (int a = 0; a < 3; ++a) {
     const int u = (a + 1) % 3, v = (a + 2) % 3;  // (u, v, a) cyclic, so n_a = area in (u, v)
     crossings.clear();
@@ -142,7 +159,7 @@ VoxelVolume voxelize(const TriangleMesh& mesh, const VoxelizeSettings& s, const 
         }
       }
     }
-    std::sort(crossings.begin(), crossings.end());
+    sortByRay(crossings, sorted, size_t(n[u]) * size_t(n[v]));
     // Every voxel first votes "outside" on this axis (a ray with no crossing is outside all
     // along); rays with crossings then change their voxels' votes.
     for (uint8_t& vote : votes) vote += 0x10;
