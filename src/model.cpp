@@ -141,32 +141,6 @@ RestModel buildRestModel(const Layout& layout, const VoxelVolume& volume, const 
     m.smallestVertexPeriod = tv;
   }
 
-  // ---- greedy colouring (elements in id order; each takes the lowest colour none of its
-  // vertices has seen yet) ----
-  {
-    constexpr int kWords = 4;  // up to 256 colours; a 3D element meets at most ~30 others
-    std::vector<std::array<uint64_t, kWords>> used(V, std::array<uint64_t, kWords>{});
-    std::vector<uint16_t> colour(E);
-    int colours = 0;
-    for (size_t e = 0; e < E; ++e) {
-      std::array<uint64_t, kWords> taken{};
-      for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p)
-        for (int w = 0; w < kWords; ++w) taken[w] |= used[m.elemVerts[p]][w];
-      int c = 0;
-      while (c < 64 * kWords && (taken[c / 64] >> (c % 64) & 1)) ++c;
-      if (c == 64 * kWords) throw std::logic_error("buildRestModel: more than 256 element colours");
-      colour[e] = uint16_t(c);
-      colours = std::max(colours, c + 1);
-      for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) used[m.elemVerts[p]][c / 64] |= uint64_t(1) << (c % 64);
-    }
-    m.colourStart.assign(size_t(colours) + 1, 0);
-    for (size_t e = 0; e < E; ++e) ++m.colourStart[colour[e] + 1];
-    for (int c = 0; c < colours; ++c) m.colourStart[c + 1] += m.colourStart[c];
-    m.colourElements.resize(E);
-    std::vector<uint32_t> fill(m.colourStart.begin(), m.colourStart.end() - 1);
-    for (size_t e = 0; e < E; ++e) m.colourElements[fill[colour[e]]++] = uint32_t(e);
-  }
-
   // ---- surface vertices: corners of boundary faces ----
   m.onSurface.assign(V, 0);
   const auto& n = volume.dims();
@@ -198,8 +172,7 @@ RestModel buildRestModel(const Layout& layout, const VoxelVolume& volume, const 
 size_t RestModel::memoryBytes() const {
   auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
   return sizeof(*this) + bytes(restPositions) + bytes(mass) + bytes(invMass) + bytes(onSurface) + bytes(stiffness) +
-         bytes(size) + bytes(level) + bytes(elemStart) + bytes(elemVerts) + bytes(restOffsets) +
-         bytes(colourStart) + bytes(colourElements);
+         bytes(size) + bytes(level) + bytes(elemStart) + bytes(elemVerts) + bytes(restOffsets);
 }
 
 }  // namespace gradel

@@ -189,23 +189,31 @@ TEST(Dynamics, ConsistentMassIsDensityTimesVolume) {
 
 TEST(Dynamics, SameStateAtAnyThreadCount) {
   // Large enough (>= 2048 vertices, see World::step) that the stages really split across
-  // threads, with many colours.
-  Body b = makeBody("sphere", 16, 3, LayoutKind::Voxel);
-  ASSERT_GE(b.model->numVertices(), 2048u);
-  ASSERT_GT(b.model->numColours(), 8u);
-  auto run = [&](int threads) {
-    SimulationSettings s;
-    s.threads = threads;
-    s.damping = 1.0;
-    World w(b.model, s, {}, {});
-    perturb(w, 0.1 * b.model->voxelSize, 0.05, 21);
-    for (int i = 0; i < 200; ++i) w.step();
-    return w.stateHash();
-  };
-  const uint64_t h1 = run(1);
-  EXPECT_EQ(h1, run(2));
-  EXPECT_EQ(h1, run(3));
-  EXPECT_EQ(h1, run(1));
+  // threads; the gradational body has elements of very different pair counts (the split is by
+  // pairs), and a manipulator and walls add the contact pass.
+  for (LayoutKind kind : {LayoutKind::Voxel, LayoutKind::Gradational}) {
+    Body b = makeBody("sphere", kind == LayoutKind::Voxel ? 16 : 28, 3, kind);
+    ASSERT_GE(b.model->numVertices(), 2048u);
+    auto run = [&](int threads) {
+      SimulationSettings s;
+      s.threads = threads;
+      s.damping = 1.0;
+      DomainSettings d;
+      d.enabled = true;
+      d.min = Vec3(-0.1, 0.0, -0.1), d.max = Vec3(0.4, 0.4, 0.4);
+      ManipulatorSettings mp;
+      mp.radius = 0.05;
+      mp.path.keys = {{0.0, Vec3(-0.05, 0.14, 0.14), std::nullopt}, {0.05, Vec3(0.1, 0.14, 0.14), std::nullopt}};
+      World w(b.model, s, d, {mp});
+      perturb(w, 0.1 * b.model->voxelSize, 0.05, 21);
+      for (int i = 0; i < 200; ++i) w.step();
+      return w.stateHash();
+    };
+    const uint64_t h1 = run(1);
+    EXPECT_EQ(h1, run(2)) << layoutKindName(kind);
+    EXPECT_EQ(h1, run(3)) << layoutKindName(kind);
+    EXPECT_EQ(h1, run(1)) << layoutKindName(kind);
+  }
 }
 
 TEST(Dynamics, CoarseAndFineLayoutsAgreeUnderConsistentScaling) {

@@ -1,4 +1,4 @@
-// model: the rest model built from a layout (masses, stiffness, colouring).
+// model: the rest model built from a layout (masses, stiffness).
 #include <gtest/gtest.h>
 
 #include <set>
@@ -9,29 +9,6 @@
 
 using namespace gradel;
 using namespace gradel::test;
-
-TEST(Model, ColouringIsConflictFreeAndComplete) {
-  for (LayoutKind k : {LayoutKind::Gradational, LayoutKind::Uniform, LayoutKind::Voxel})
-    for (int dim : {2, 3}) {
-      Body b = makeBody("sphere", dim == 3 ? 14 : 40, dim, k);
-      const RestModel& m = *b.model;
-      std::vector<int> seen(m.numElements(), 0);
-      for (size_t c = 0; c < m.numColours(); ++c) {
-        std::set<uint32_t> verts;
-        for (uint32_t j = m.colourStart[c]; j < m.colourStart[c + 1]; ++j) {
-          const uint32_t e = m.colourElements[j];
-          ++seen[e];
-          if (j > m.colourStart[c]) {
-            EXPECT_LT(m.colourElements[j - 1], e);  // ascending within a colour
-          }
-          for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p)
-            EXPECT_TRUE(verts.insert(m.elemVerts[p]).second) << "colour " << c << " shares vertex " << m.elemVerts[p];
-        }
-      }
-      for (int s : seen) EXPECT_EQ(s, 1);
-      EXPECT_LE(m.numColours(), dim == 3 ? 64u : 16u);
-    }
-}
 
 TEST(Model, ConsistentIncompleteElements_exactAlongTheirLongAxis_neverStifferAcross) {
   // The interior of a gradational bar 8 voxels across is made of incomplete level-1 elements

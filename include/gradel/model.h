@@ -31,14 +31,6 @@ struct RestModel {
   std::vector<uint32_t> elemVerts;  ///< Vertex id per pair.
   std::vector<Vec3> restOffsets;    ///< R0 per pair [m]: rest position minus the element's rest centroid.
 
-  // ---- element colouring: no two elements of one colour share a vertex ----
-  std::vector<uint32_t> colourStart;     ///< Size colours + 1.
-  std::vector<uint32_t> colourElements;  ///< Element ids grouped by colour, ascending within a colour.
-  // Elements of one colour can add their forces into the vertices concurrently without
-  // conflicts, and each vertex receives its contributions in colour order whatever the thread
-  // count: deterministic parallel accumulation without atomics.
-
-
   Real totalMass = 0;  ///< [kg]
   Real smallestPeriod = 0;        ///< [s] the paper's "smallest element period": min over elements of 2 pi sqrt(m_min / k_e) (sec. 3.4).
   Real smallestVertexPeriod = 0;  ///< [s] min over vertices of 2 pi sqrt(m_i / sum_{e at i} k_e): a vertex shared by n elements vibrates ~sqrt(n) times faster than one element.
@@ -48,7 +40,6 @@ struct RestModel {
   /// Bytes held by all arrays of the model (capacity, not size).
   size_t memoryBytes() const;
   size_t numPairs() const { return elemVerts.size(); }
-  size_t numColours() const { return colourStart.empty() ? 0 : colourStart.size() - 1; }
 };
 
 /// Builds the rest model. `origin` is the world position [m] of lattice point (0,0,0).
