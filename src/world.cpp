@@ -7,6 +7,7 @@
 #endif
 
 #include "gradel/element.h"
+#include "gradel/huge_pages.h"
 #include "gradel/rotation_fit.h"
 #include "gradel/simd.h"
 
@@ -55,6 +56,11 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   state_.velocities.assign(V, Vec3::Zero());
   state_.rotations.assign(E, Quat::Identity());
   scratch_.frames.resize(E);
+  // The arrays the explicit step walks every step: 2 MiB pages for large bodies.
+  const RestModel& m = *model_;
+  adviseHugePages(state_.positions), adviseHugePages(state_.velocities), adviseHugePages(m.restPositions);
+  adviseHugePages(state_.rotations), adviseHugePages(scratch_.frames), adviseHugePages(m.invMass);
+  adviseHugePages(m.elemVerts), adviseHugePages(stageRest_.vertexElements), adviseHugePages(stageRest_.vertexStart);
   scratch_.contactDepth.assign(V, 0.0);
 
   for (ManipulatorSettings& s : manipulators) {
