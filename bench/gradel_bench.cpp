@@ -94,28 +94,33 @@ void printRow(const Row& r) {
   std::fflush(stdout);
 }
 
-// Largest gradational sphere that runs in real time (real_time_factor >= 1) at `threads`:
-// bisection on the grid size n; the real-time factor falls monotonically with n.
+// Largest gradational sphere that runs in real time (real_time_factor >= 1) at `threads`: the
+// real-time factor falls monotonically with n, so double n from 32 until it drops below 1, then
+// bisect the bracket down to 2 voxels.
 void findRealtime(int threads, int reps, double minTime) {
-  int lo = 12, hi = 1024;
   Row best;
   auto ok = [&](int n) {
     const Row r = measure("sphere", n, LayoutKind::Gradational, threads, reps, minTime);
-    std::fprintf(stderr, "  sphere %d: %zu elements, real-time factor %.3f\n", n, r.elements, r.rtf);
+    std::fprintf(stderr, "  sphere %d: %zu elements, %zu vertices, real-time factor %.3f\n", n, r.elements,
+                 r.vertices, r.rtf);
+    std::printf("# search: sphere %d, %zu elements, %zu unique vertices, real-time factor %.4f\n", n, r.elements,
+                r.vertices, r.rtf);
     if (r.rtf >= 1 && r.elements > best.elements) best = r;
     return r.rtf >= 1;
   };
+  int lo = 12, hi = 32;
   if (!ok(lo)) {
     std::printf("# no sphere runs in real time at %d threads\n", threads);
     return;
   }
+  while (hi <= 1024 && ok(hi)) lo = hi, hi *= 2;
   while (hi - lo > 2) {
     const int mid = (lo + hi) / 2;
     (ok(mid) ? lo : hi) = mid;
   }
   std::printf("# largest real-time gradational sphere at %d threads: n = %d, %zu elements, %zu unique vertices, "
-              "real-time factor %.3f\n",
-              threads, best.n, best.elements, best.vertices, best.rtf);
+              "real-time factor %.3f (n = %d is not real time)\n",
+              threads, best.n, best.elements, best.vertices, best.rtf, hi);
   printRow(best);
 }
 
