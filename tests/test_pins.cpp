@@ -126,9 +126,11 @@ TEST(Pins, maskBoxes_selectTheCornersOfTheirVoxels_andFollowThePath) {
   ASSERT_EQ(w.pinned().vertices.size(), 8u);
   const Real h = smallBar().voxelSize();
   for (uint32_t i : w.pinned().vertices) EXPECT_LT(w.model().restPositions[i].x(), 2.5 * h);
-  for (size_t i = 0; i < w.model().numVertices(); ++i)
-    if (w.model().restPositions[i].x() < 2.5 * h)
+  for (size_t i = 0; i < w.model().numVertices(); ++i) {
+    if (w.model().restPositions[i].x() < 2.5 * h) {
       EXPECT_TRUE(std::binary_search(w.pinned().vertices.begin(), w.pinned().vertices.end(), uint32_t(i)));
+    }
+  }
   w.advanceTo(0.02);
   for (uint32_t i : w.pinned().vertices)
     EXPECT_NEAR((w.state().positions[i] - w.model().restPositions[i] - Vec3(0, 0.002, 0)).norm(), 0, 1e-12);
