@@ -74,8 +74,16 @@ void computeElementFrames(const RestModel& m, const ElementStageRest& rest, size
   constexpr int L = kRotationLanes;
   RotationBatch batch;
   d4 centroid[L];
+  const Vec3* X = m.restPositions.data();
   for (size_t e0 = begin; e0 < end; e0 += L) {
     const int lanes = int(std::min<size_t>(L, end - e0));
+    // The vertices of the batch after next, fetched ahead: the pair list says where they are,
+    // which no hardware prefetcher can guess (large bodies are bound by these gathers).
+    if (e0 + 3 * L <= end)
+      for (uint32_t p = m.elemStart[e0 + 2 * L]; p < m.elemStart[e0 + 3 * L]; ++p) {
+        __builtin_prefetch(&x[m.elemVerts[p]]);
+        __builtin_prefetch(&X[m.elemVerts[p]]);
+      }
     // 1. Moments: centroid and A = sum (x_i - c) R0_i^T = sum x_i R0_i^T - c (sum R0_i)^T.
     for (int l = 0; l < L; ++l) {
       if (l >= lanes) {  // padding: A = I, q = I converges at once
@@ -85,7 +93,7 @@ void computeElementFrames(const RestModel& m, const ElementStageRest& rest, size
       }
       const size_t e = e0 + l;
       const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
-      const ElementMoments mo = elementMoments(x, m.restPositions.data(), &m.elemVerts[b], loadVec3(rest.restCentroids[e]), n);
+      const ElementMoments mo = elementMoments(x, X, &m.elemVerts[b], loadVec3(rest.restCentroids[e]), n);
       const d4 c = mo.s / Real(n);
       const Vec3& sr = rest.sumRestOffsets[e];
       const d4 col[3] = {mo.a0 - c * sr.x(), mo.a1 - c * sr.y(), mo.a2 - c * sr.z()};
