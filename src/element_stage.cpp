@@ -13,26 +13,26 @@ namespace {
 using namespace simd;
 
 // Sums over one element's pairs: s = sum x_i and the columns a_c = sum x_i R0_i[c] (A before
-// centring), with R0_i = X_i - C formed on the fly from the rest positions X (bit for bit the
-// model's restOffsets, computed the same way, without streaming them: a vertex's X is read with
-// its x and shared by its elements). Two interleaved accumulator sets hide the fused
-// multiply-adds' latency.
+// centring). R0 streams in pair order (the hardware prefetches it); the gathers of x are
+// prefetched by the caller. Two interleaved accumulator sets hide the fused multiply-adds'
+// latency.
 struct ElementMoments {
   d4 s, a0, a1, a2;
 };
 
-inline ElementMoments elementMoments(const Vec3* x, const Vec3* X, const uint32_t* verts, d4 C, uint32_t n) {
+inline ElementMoments elementMoments(const Vec3* x, const Vec3* R0, const uint32_t* verts, uint32_t n) {
   d4 s0 = splat(0), s1 = splat(0), a0 = s0, a1 = s0, a2 = s0, b0 = s0, b1 = s0, b2 = s0;
   uint32_t i = 0;
   for (; i + 1 < n; i += 2) {
-    const uint32_t u = verts[i], w = verts[i + 1];
-    const d4 p = loadVec3(x[u]), q = loadVec3(x[w]);
-    const d4 r = loadVec3(X[u]) - C, t = loadVec3(X[w]) - C;
+    const d4 p = loadVec3(x[verts[i]]), q = loadVec3(x[verts[i + 1]]);
+    const Real* r = R0[i].data();
+    const Real* t = R0[i + 1].data();
     s0 += p, a0 += p * r[0], a1 += p * r[1], a2 += p * r[2];
     s1 += q, b0 += q * t[0], b1 += q * t[1], b2 += q * t[2];
   }
   if (i < n) {
-    const d4 p = loadVec3(x[verts[i]]), r = loadVec3(X[verts[i]]) - C;
+    const d4 p = loadVec3(x[verts[i]]);
+    const Real* r = R0[i].data();
     s0 += p, a0 += p * r[0], a1 += p * r[1], a2 += p * r[2];
   }
   return {s0 + s1, a0 + b0, a1 + b1, a2 + b2};
@@ -74,7 +74,6 @@ void computeElementFrames(const RestModel& m, const ElementStageRest& rest, size
   constexpr int L = kRotationLanes;
   RotationBatch batch;
   d4 centroid[L];
-  const Vec3* X = m.restPositions.data();
   for (size_t e0 = begin; e0 < end; e0 += L) {
     const int lanes = int(std::min<size_t>(L, end - e0));
     // The vertices of the batch after next, fetched ahead: the pair list says where they are,
@@ -82,7 +81,6 @@ void computeElementFrames(const RestModel& m, const ElementStageRest& rest, size
     if (e0 + 3 * L <= end)
       for (uint32_t p = m.elemStart[e0 + 2 * L]; p < m.elemStart[e0 + 3 * L]; ++p) {
         __builtin_prefetch(&x[m.elemVerts[p]]);
-        __builtin_prefetch(&X[m.elemVerts[p]]);
       }
     // 1. Moments: centroid and A = sum (x_i - c) R0_i^T = sum x_i R0_i^T - c (sum R0_i)^T.
     for (int l = 0; l < L; ++l) {
@@ -93,7 +91,7 @@ void computeElementFrames(const RestModel& m, const ElementStageRest& rest, size
       }
       const size_t e = e0 + l;
       const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
-      const ElementMoments mo = elementMoments(x, X, &m.elemVerts[b], loadVec3(rest.restCentroids[e]), n);
+      const ElementMoments mo = elementMoments(x, &m.restOffsets[b], &m.elemVerts[b], n);
       const d4 c = mo.s / Real(n);
       const Vec3& sr = rest.sumRestOffsets[e];
       const d4 col[3] = {mo.a0 - c * sr.x(), mo.a1 - c * sr.y(), mo.a2 - c * sr.z()};

@@ -11,7 +11,8 @@
 //     f_v = sum_e k_e (M R0 + e - x_v) = (sum_e G_e) X_v + sum_e t_e - (sum_e k_e) x_v:
 //     four 4-wide additions per pair, in a fixed order (the vertex's elements in id order).
 // Each vertex is one 4-wide register (x, y, z, 0), so a pair of pass 1 costs a load, three
-// broadcasts and four fused multiply-adds. Every sum is formed in an order that does not depend
+// broadcasts and four fused multiply-adds; pass 1 prefetches the vertices of the elements two
+// batches ahead, since large bodies are bound by these indirect gathers. Every sum is formed in an order that does not depend
 // on how ranges are split, so the result is the same at any thread count; it equals element.h's
 // reference kernel to rounding (tested).
 #pragma once
