@@ -350,6 +350,7 @@ class Viewer {
   const Rates& rates() const { return rates_; }
   double realTime() const { return realTime_; }
   bool behind() const { return behind_; }
+  const ViewOptions& view() const { return view_; }
   void setView(const ViewOptions& v) { view_ = v; }
 
   void openScene(const std::string& path) {
@@ -540,6 +541,7 @@ int run(const Options& o) {
     glfwSetCursorEnterCallback(window, ImGui_ImplGlfw_CursorEnterCallback);
     if (!o.screenshot.empty()) {
       ViewOptions v;
+      v.surface = viewer.view().surface;  // the scene's own choice (embedded for a mesh file)
       v.stress = true;
       viewer.setView(v);
     }
