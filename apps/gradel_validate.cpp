@@ -461,7 +461,7 @@ fig.tight_layout(); fig.savefig(os.path.join(d, "tip_explicit_implicit.png"), dp
     // that of the explicit run at the scene's own E (a blow-up grows without bound; squeezing a
     // 100x stiffer body along the same paths may legitimately store up to ~100x the energy).
     md << "### implicit mode at dt = 1/60 s, E x100\n\n| target | measured | met |\n| --- | --- | --- |\n";
-    for (const std::string scene : {std::string("strike"), std::string("grasp-two")}) {
+    for (const std::string& scene : {std::string("strike"), std::string("grasp-two")}) {
       const Cost* stiff = nullptr;
       const Cost* ref = nullptr;
       for (const Cost& c : costs) {

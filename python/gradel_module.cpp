@@ -250,21 +250,18 @@ PYBIND11_MODULE(gradel, m) {
           "add_manipulator",
           [](Simulation& s, const std::string& type, Real radius, std::vector<double> position, Real halfLength,
              std::vector<double> axis, Real restitution, Real friction) {
-            Manipulator mp;
-            mp.settings.shape = parseManipulatorShape(type);
-            if ((mp.settings.shape == ManipulatorShape::Circle) != (s.scene.dim == 2))
+            ManipulatorSettings mp;
+            mp.shape = parseManipulatorShape(type);
+            if ((mp.shape == ManipulatorShape::Circle) != (s.scene.dim == 2))
               throw InputError("type: '" + type + "' does not fit a " + std::to_string(s.scene.dim) + "D body");
             if (!(radius > 0)) throw InputError("radius: must be > 0 [m]");
-            mp.settings.radius = radius;
-            mp.settings.halfLength = halfLength;
-            mp.settings.axis = vec(axis, "axis", s.scene.dim);
-            if (!(mp.settings.axis.norm() > 0)) throw InputError("axis: must be non-zero");
-            mp.settings.axis.normalize();
-            mp.settings.restitution = restitution;
-            mp.settings.friction = friction;
-            mp.position = mp.previousPosition = vec(position, "position", s.scene.dim);
-            s.world().manipulators().push_back(mp);
-            return s.world().manipulators().size() - 1;
+            mp.radius = radius;
+            mp.halfLength = halfLength;
+            mp.axis = vec(axis, "axis", s.scene.dim);
+            if (!(mp.axis.norm() > 0)) throw InputError("axis: must be non-zero");
+            mp.restitution = restitution;
+            mp.friction = friction;
+            return s.world().addManipulator(std::move(mp), vec(position, "position", s.scene.dim));
           },
           py::arg("type") = "sphere", py::kw_only(), py::arg("radius") = 0.02, py::arg("position") = std::vector<double>{0, 0, 0},
           py::arg("half_length") = 0.05, py::arg("axis") = std::vector<double>{0, 0, 1}, py::arg("restitution") = 1.0,

@@ -221,3 +221,29 @@ TEST(Contacts, StaticFrictionHoldsPositionNotJustVelocity) {
     }
   }
 }
+
+// A manipulator added to a running world (the viewer's and Python's "add") appears where it is
+// put, without sweeping in from the origin, and pushes the body out from its first step on; bad
+// settings are input errors.
+TEST(Contacts, ManipulatorAddedLaterActsFromWhereItIsPut) {
+  Body b = makeBody("sphere", 10, 3, LayoutKind::Gradational);
+  World w(b.model, isolated(), {}, {});
+  for (int i = 0; i < 5; ++i) w.step();
+  ManipulatorSettings ms;
+  ms.radius = 0.02;
+  const Vec3 at(0.05, 0.05, 0.10);  // pressed into the top of the ball (centre 0.05, radius 0.05)
+  const size_t i = w.addManipulator(ms, at);
+  EXPECT_EQ(i, 0u);
+  EXPECT_EQ(w.manipulators()[i].position, at);
+  EXPECT_EQ(w.manipulators()[i].previousPosition, at);
+  Real inside = 0;
+  for (const Vec3& x : w.state().positions) inside = std::max(inside, -w.manipulators()[i].signedDistance(x, nullptr));
+  ASSERT_GT(inside, 0.005);  // vertices start inside it
+  w.step();
+  EXPECT_EQ(w.metrics().maxPenetration, 0.0);
+  ms.radius = 0;
+  EXPECT_THROW(w.addManipulator(ms), InputError);
+  ms.radius = 0.01, ms.shape = ManipulatorShape::Cylinder, ms.axis = Vec3::Zero();
+  EXPECT_THROW(w.addManipulator(ms), InputError);
+  EXPECT_EQ(w.manipulators().size(), 1u);
+}

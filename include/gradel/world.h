@@ -67,6 +67,10 @@ class World {
 
   std::vector<Manipulator>& manipulators() { return manipulators_; }
   const std::vector<Manipulator>& manipulators() const { return manipulators_; }
+  /// Adds a manipulator at its path's pose now, or at `position` [m] without a path (then posed
+  /// from outside with setManipulatorPose). Normalises a cylinder's axis; InputError for a
+  /// non-positive radius or a zero axis. Returns its index.
+  size_t addManipulator(ManipulatorSettings settings, const Vec3& position = Vec3::Zero());
   /// Sets a manipulator's pose from outside (viewer, script); used for manipulators without a path.
   void setManipulatorPose(size_t i, const Vec3& position, const Vec3& velocity);
 
