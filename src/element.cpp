@@ -38,14 +38,20 @@ inline Moments moments(const Vec3* x, const uint32_t* verts, const Vec3* R0, int
   return m;
 }
 
-// The element kernel, with the force sink as a parameter: f_i = k (M R0_i - r_i), minus the
-// mean force. In exact arithmetic sum_i f_i = k (M sum R0_i - sum r_i) = 0; in floating point
-// sum R0_i is a constant rounding residue that would push the body with a tiny constant force
-// and make linear momentum drift linearly in time. Its share M sum R0 / n is removed, leaving
-// only unbiased rounding.
-template <bool kEnergy, class Sink>
-inline ElementResult kernel(int dim, const Vec3* x, const uint32_t* verts, const Vec3* R0, int n, Real k, Quat& q,
-                            int maxIterations, Sink&& sink) {
+}  // namespace
+
+Mat3 elementCovariance(const Vec3* x, const uint32_t* verts, const Vec3* R0, int n, Vec3* centroid) {
+  const Moments m = moments(x, verts, R0, n);
+  if (centroid) *centroid = m.c;
+  return m.A;
+}
+
+// f_i = k (M R0_i - r_i), minus the mean force. In exact arithmetic sum_i f_i = k (M sum R0_i -
+// sum r_i) = 0; in floating point sum R0_i is a constant rounding residue that would push the
+// body with a tiny constant force and make linear momentum drift linearly in time. Its share
+// M sum R0 / n is removed, leaving only unbiased rounding.
+ElementResult elementForces(int dim, const Vec3* x, const uint32_t* verts, const Vec3* R0, int n, Real k, Quat& q,
+                            Vec3* f, int maxIterations) {
   const Moments mo = moments(x, verts, R0, n);
   if (dim == 2) {
     q = Quat(Eigen::AngleAxisd(fitRotation2(mo.A), Vec3::UnitZ()));
@@ -54,7 +60,7 @@ inline ElementResult kernel(int dim, const Vec3* x, const uint32_t* verts, const
   }
   const Mat3 M = q.toRotationMatrix();
   const Vec3 e = mo.c - M * mo.sumR0 / Real(n);
-  // Written out in scalars (the hot loop): d_i = M R0_i - x_i + e, f_i = k d_i.
+  // Written out in scalars: d_i = M R0_i - x_i + e, f_i = k d_i.
   const Real m00 = M(0, 0), m01 = M(0, 1), m02 = M(0, 2), m10 = M(1, 0), m11 = M(1, 1), m12 = M(1, 2);
   const Real m20 = M(2, 0), m21 = M(2, 1), m22 = M(2, 2), e0 = e.x(), e1 = e.y(), e2 = e.z();
   ElementResult res;
@@ -64,25 +70,11 @@ inline ElementResult kernel(int dim, const Vec3* x, const uint32_t* verts, const
     const Real d0 = m00 * r[0] + m01 * r[1] + m02 * r[2] - p[0] + e0;
     const Real d1 = m10 * r[0] + m11 * r[1] + m12 * r[2] - p[1] + e1;
     const Real d2 = m20 * r[0] + m21 * r[1] + m22 * r[2] - p[2] + e2;
-    if constexpr (kEnergy) res.sumSqDisp += d0 * d0 + d1 * d1 + d2 * d2;
-    sink(i, k * d0, k * d1, k * d2);
+    res.sumSqDisp += d0 * d0 + d1 * d1 + d2 * d2;
+    f[i] = Vec3(k * d0, k * d1, k * d2);
   }
   res.energy = 0.5 * k * res.sumSqDisp;
   return res;
-}
-
-}  // namespace
-
-Mat3 elementCovariance(const Vec3* x, const uint32_t* verts, const Vec3* R0, int n, Vec3* centroid) {
-  const Moments m = moments(x, verts, R0, n);
-  if (centroid) *centroid = m.c;
-  return m.A;
-}
-
-ElementResult elementForces(int dim, const Vec3* x, const uint32_t* verts, const Vec3* R0, int n, Real k, Quat& q,
-                            Vec3* f, int maxIterations) {
-  return kernel<true>(dim, x, verts, R0, n, k, q, maxIterations,
-                      [f](int i, Real fx, Real fy, Real fz) { f[i] = Vec3(fx, fy, fz); });
 }
 
 Real elementDeterminant(int dim, const Vec3* x, const uint32_t* verts, const Vec3* R0, int n) {
