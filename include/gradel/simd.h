@@ -52,6 +52,8 @@ inline d4 sqrt(d4 a) {
   return a;
 #endif
 }
+inline d4 min(d4 a, d4 b) { return select(a < b, a, b); }
+inline d4 max(d4 a, d4 b) { return select(a > b, a, b); }
 inline bool none(m4 m) { return !(m[0] | m[1] | m[2] | m[3]); }
 
 }  // namespace gradel::simd
