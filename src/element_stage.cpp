@@ -1,10 +1,10 @@
-#include "gradel/element_stage.h"
+#include "element_stage.h"
 
 #include <algorithm>
 #include <cmath>
 
 #include "gradel/rotation_fit.h"
-#include "gradel/simd.h"
+#include "simd.h"
 
 namespace gradel {
 

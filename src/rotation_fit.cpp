@@ -3,7 +3,7 @@
 #include <Eigen/SVD>
 #include <cmath>
 
-#include "gradel/simd.h"
+#include "simd.h"
 
 namespace gradel {
 

@@ -8,13 +8,22 @@
 #include <omp.h>
 #endif
 
+#include "element_stage.h"
 #include "gradel/element.h"
-#include "gradel/huge_pages.h"
+#include "huge_pages.h"
 #include "gradel/rotation_fit.h"
-#include "gradel/simd.h"
+#include "simd.h"
 #include "thread_team.h"
 
 namespace gradel {
+
+/// Per-step scratch (never read across steps except for output).
+struct World::StepScratch {
+  std::vector<ElementFrame> frames;     ///< Per element: k M and (k e, k), written by the element stage.
+  std::vector<Vec3> previousPositions;  ///< [m] positions at the start of an implicit step (swept contacts).
+  std::vector<Real> contactDepth;   ///< [m] per vertex, implicit step only: depth before correction.
+  Real maxContactDepth = 0;         ///< [m] deepest vertex found (and corrected) in the last step.
+};
 
 IntegratorKind parseIntegratorKind(const std::string& name) {
   if (name == "symplectic") return IntegratorKind::SymplecticEuler;
@@ -39,7 +48,8 @@ const char* periodRuleName(PeriodRule r) { return r == PeriodRule::Element ? "el
 World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& sim, const DomainSettings& domain,
              std::vector<ManipulatorSettings> manipulators)
     : model_(model ? std::move(model) : throw std::invalid_argument("World: no model")),
-      stageRest_(*model_),
+      stageRest_(std::make_unique<const ElementStageRest>(*model_)),
+      scratch_(std::make_unique<StepScratch>()),
       sim_(sim),
       domain_(domain) {
   if (sim_.threads < 1) sim_.threads = 1;
@@ -58,19 +68,21 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   state_.positions = model_->restPositions;
   state_.velocities.assign(V, Vec3::Zero());
   state_.rotations.assign(E, Quat::Identity());
-  scratch_.frames.resize(E);
+  scratch_->frames.resize(E);
   // The arrays the explicit step walks every step: 2 MiB pages for large bodies.
   const RestModel& m = *model_;
   adviseHugePages(state_.positions), adviseHugePages(state_.velocities), adviseHugePages(m.restPositions);
-  adviseHugePages(state_.rotations), adviseHugePages(scratch_.frames), adviseHugePages(m.invMass);
+  adviseHugePages(state_.rotations), adviseHugePages(scratch_->frames), adviseHugePages(m.invMass);
   adviseHugePages(m.elemVerts), adviseHugePages(m.restOffsets), adviseHugePages(m.elemStart), adviseHugePages(m.stiffness);
-  adviseHugePages(stageRest_.vertexElements), adviseHugePages(stageRest_.vertexStart);
-  adviseHugePages(stageRest_.sumRestOffsets), adviseHugePages(stageRest_.restCentroids);
+  adviseHugePages(stageRest_->vertexElements), adviseHugePages(stageRest_->vertexStart);
+  adviseHugePages(stageRest_->sumRestOffsets), adviseHugePages(stageRest_->restCentroids);
 
   for (ManipulatorSettings& s : manipulators) addManipulator(std::move(s));
 }
 
 World::~World() = default;
+World::World(World&&) noexcept = default;
+World& World::operator=(World&&) noexcept = default;
 
 size_t World::addManipulator(ManipulatorSettings s, const Vec3& position) {
   if (!(s.radius > 0) || !std::isfinite(s.radius)) throw InputError("manipulator radius must be > 0 [m]");
@@ -96,8 +108,8 @@ void World::setManipulatorPose(size_t i, const Vec3& position, const Vec3& veloc
 
 // Stage 1: the elements [begin, end): rotations fitted (eq. 1) and their frames (element_stage.h).
 void World::stageElementFrames(size_t begin, size_t end) {
-  computeElementFrames(*model_, stageRest_, begin, end, state_.positions.data(), state_.rotations.data(),
-                       scratch_.frames.data(), sim_.rotationIterations);
+  computeElementFrames(*model_, *stageRest_, begin, end, state_.positions.data(), state_.rotations.data(),
+                       scratch_->frames.data(), sim_.rotationIterations);
 }
 
 // Where contacts can happen this step (the broad phase of the vertex stage): each manipulator's
@@ -157,7 +169,7 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
   for (size_t b = begin; b < end; b += kBlock) {
     const size_t be = std::min(end, b + kBlock);
     d4 lo = splat(std::numeric_limits<Real>::infinity()), hi = -lo;
-    gatherVertexForces(m, stageRest_, scratch_.frames.data(), positions, b, be, [&](size_t i, d4 force) {
+    gatherVertexForces(m, *stageRest_, scratch_->frames.data(), positions, b, be, [&](size_t i, d4 force) {
       const d4 a = force * invMass[i] + g;
       const d4 x0 = loadVec3(positions[i]);
       d4 x = x0, v = loadVec3(velocities[i]);
@@ -208,11 +220,11 @@ Real World::resolveVertexContacts(const Vec3& previous, Vec3& x, Vec3& v) const 
   return depth;
 }
 
-// Contacts of every vertex from scratch_.previousPositions (the implicit step).
+// Contacts of every vertex from scratch_->previousPositions (the implicit step).
 void World::stageContacts(size_t begin, size_t end) {
   for (size_t i = begin; i < end; ++i)
-    scratch_.contactDepth[i] =
-        resolveVertexContacts(scratch_.previousPositions[i], state_.positions[i], state_.velocities[i]);
+    scratch_->contactDepth[i] =
+        resolveVertexContacts(scratch_->previousPositions[i], state_.positions[i], state_.velocities[i]);
 }
 
 void World::moveManipulators(Real tNext) {
@@ -273,7 +285,7 @@ void World::prepareTeam(int members) {
   team_ = std::make_unique<ThreadTeam>(members);
   elementQueue_ = std::make_unique<ChunkQueue>(), vertexQueue_ = std::make_unique<ChunkQueue>();
   elementSplit_ = chunkSplit(model_->elemStart, kElementCost, members, kElementChunk);
-  vertexSplit_ = chunkSplit(stageRest_.vertexStart, kVertexCost, members, kVertexChunk);
+  vertexSplit_ = chunkSplit(stageRest_->vertexStart, kVertexCost, members, kVertexChunk);
   memberContactDepth_.assign(size_t(members), 0.0);
   teamMembers_ = members;
 }
@@ -289,7 +301,7 @@ void World::step() {
   const ContactBounds* cb = contacts ? &bounds : nullptr;
   if (members == 1) {
     stageElementFrames(0, E);
-    scratch_.maxContactDepth = stageVertices(0, V, cb);
+    scratch_->maxContactDepth = stageVertices(0, V, cb);
   } else if (useOpenMp()) {
     Real depth = 0;
 #pragma omp parallel num_threads(members) reduction(max : depth)
@@ -302,10 +314,10 @@ void World::step() {
       stageElementFrames(splitPoint(model_->elemStart, kElementCost, t, T, kRotationLanes),
                          splitPoint(model_->elemStart, kElementCost, t + 1, T, kRotationLanes));
 #pragma omp barrier
-      depth = stageVertices(splitPoint(stageRest_.vertexStart, kVertexCost, t, T, 1),
-                            splitPoint(stageRest_.vertexStart, kVertexCost, t + 1, T, 1), cb);
+      depth = stageVertices(splitPoint(stageRest_->vertexStart, kVertexCost, t, T, 1),
+                            splitPoint(stageRest_->vertexStart, kVertexCost, t + 1, T, 1), cb);
     }
-    scratch_.maxContactDepth = depth;
+    scratch_->maxContactDepth = depth;
   } else {
     // One job per step: element chunks, a barrier, vertex chunks (thread_team.h).
     prepareTeam(members);
@@ -319,7 +331,7 @@ void World::step() {
         depth = std::max(depth, stageVertices(c * kVertexChunk, std::min(V, (c + 1) * kVertexChunk), cb));
       memberContactDepth_[size_t(t)] = depth;
     });
-    scratch_.maxContactDepth = *std::max_element(memberContactDepth_.begin(), memberContactDepth_.end());
+    scratch_->maxContactDepth = *std::max_element(memberContactDepth_.begin(), memberContactDepth_.end());
   }
   for (Manipulator& m : manipulators_) m.previousPosition = m.position;
   state_.time += dt_;
@@ -360,8 +372,8 @@ void World::stepImplicit() {
   Vec3 g = sim_.gravity;
   if (model_->dim == 2) g.z() = 0;
   const bool contacts = !manipulators_.empty() || domain_.enabled;
-  if (contacts) scratch_.previousPositions = state_.positions;
-  scratch_.contactDepth.assign(model_->numVertices(), 0.0);
+  if (contacts) scratch_->previousPositions = state_.positions;
+  scratch_->contactDepth.assign(model_->numVertices(), 0.0);
   const Real tNext = state_.time + dt_;
   const std::vector<Vec3> x0 = state_.positions, v0 = state_.velocities;
   const std::vector<Quat> q0 = state_.rotations;
@@ -378,7 +390,7 @@ void World::stepImplicit() {
     std::vector<uint32_t> held;
     std::vector<Vec3> heldAt;
     for (uint32_t i = 0; i < model_->numVertices(); ++i)
-      if (scratch_.contactDepth[i] > 0) held.push_back(i), heldAt.push_back(state_.positions[i]);
+      if (scratch_->contactDepth[i] > 0) held.push_back(i), heldAt.push_back(state_.positions[i]);
     if (!held.empty()) {
       state_.positions = x0, state_.velocities = v0, state_.rotations = q0;
       projective_->step(state_.positions, state_.velocities, state_.rotations, g, sim_.damping,
@@ -386,9 +398,9 @@ void World::stepImplicit() {
       stageContacts(0, model_->numVertices());
     }
   }
-  scratch_.maxContactDepth = scratch_.contactDepth.empty()
+  scratch_->maxContactDepth = scratch_->contactDepth.empty()
                                  ? 0
-                                 : *std::max_element(scratch_.contactDepth.begin(), scratch_.contactDepth.end());
+                                 : *std::max_element(scratch_->contactDepth.begin(), scratch_->contactDepth.end());
   for (Manipulator& m : manipulators_) m.previousPosition = m.position;
   state_.time = tNext;
   if (!pinSet_.empty()) applyPins(state_.time);
@@ -472,7 +484,7 @@ Metrics World::metrics(std::vector<Real>* elementStress) const {
       for (int a = 0; a < m.dim; ++a) pen = std::max({pen, domain_.min[a] - x[a], x[a] - domain_.max[a]});
     r.maxPenetration = std::max(r.maxPenetration, pen);
   }
-  r.maxContactDepth = scratch_.maxContactDepth;
+  r.maxContactDepth = scratch_->maxContactDepth;
   return r;
 }
 
@@ -489,9 +501,9 @@ uint64_t World::stateHash() const {
 
 size_t World::memoryBytes() const {
   auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
-  size_t b = sizeof(*this) + model_->memoryBytes() + stageRest_.memoryBytes();
+  size_t b = sizeof(*this) + model_->memoryBytes() + stageRest_->memoryBytes();
   b += bytes(state_.positions) + bytes(state_.velocities) + bytes(state_.rotations);
-  b += bytes(scratch_.frames) + bytes(scratch_.previousPositions) + bytes(scratch_.contactDepth);
+  b += bytes(scratch_->frames) + bytes(scratch_->previousPositions) + bytes(scratch_->contactDepth);
   b += (elementSplit_.capacity() + vertexSplit_.capacity()) * sizeof(size_t);
   for (const Manipulator& m : manipulators_) b += sizeof(m) + bytes(m.settings.path.keys);
   return b;

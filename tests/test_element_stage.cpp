@@ -5,6 +5,7 @@
 
 #include <random>
 
+#include "element_stage.h"
 #include "gradel/element.h"
 #include "gradel/rotation_fit.h"
 #include "test_support.h"

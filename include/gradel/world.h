@@ -9,7 +9,6 @@
 #include <vector>
 
 #include "gradel/contacts.h"
-#include "gradel/element_stage.h"
 #include "gradel/integrator.h"
 #include "gradel/model.h"
 #include "gradel/pins.h"
@@ -19,6 +18,7 @@ namespace gradel {
 
 class ThreadTeam;
 class ChunkQueue;
+struct ElementStageRest;
 
 /// Runtime state: what changes every step.
 struct State {
@@ -26,14 +26,6 @@ struct State {
   std::vector<Vec3> positions;   ///< [m] per vertex.
   std::vector<Vec3> velocities;  ///< [m/s] per vertex.
   std::vector<Quat> rotations;   ///< Best-fit rotation per element (warm start of eq. 1).
-};
-
-/// Per-step scratch (never read across steps except for output).
-struct StepScratch {
-  std::vector<ElementFrame> frames;     ///< Per element: k M and (k e, k), written by the element stage.
-  std::vector<Vec3> previousPositions;  ///< [m] positions at the start of an implicit step (swept contacts).
-  std::vector<Real> contactDepth;   ///< [m] per vertex, implicit step only: depth before correction.
-  Real maxContactDepth = 0;         ///< [m] deepest vertex found (and corrected) in the last step.
 };
 
 /// Figures written per frame to metrics.csv.
@@ -55,6 +47,8 @@ class World {
   World(std::shared_ptr<const RestModel> model, const SimulationSettings& sim, const DomainSettings& domain,
         std::vector<ManipulatorSettings> manipulators);
   ~World();
+  World(World&&) noexcept;
+  World& operator=(World&&) noexcept;
 
   /// Advances one time step dt().
   void step();
@@ -105,6 +99,7 @@ class World {
 
  private:
   struct ContactBounds;
+  struct StepScratch;
   void stageElementFrames(size_t begin, size_t end);
   Real stageVertices(size_t begin, size_t end, const ContactBounds* contacts);
   ContactBounds contactBounds() const;
@@ -117,12 +112,12 @@ class World {
   std::vector<Vec3> pinTargets(Real t) const;
 
   std::shared_ptr<const RestModel> model_;
-  ElementStageRest stageRest_;  ///< Derived rest data of the explicit stages (element_stage.h).
+  std::unique_ptr<const ElementStageRest> stageRest_;  ///< Derived rest data of the explicit stages (element_stage.h).
   SimulationSettings sim_;
   DomainSettings domain_;
   std::vector<Manipulator> manipulators_;
   State state_;
-  StepScratch scratch_;
+  std::unique_ptr<StepScratch> scratch_;  ///< Per-step scratch (world.cpp).
   Real dt_ = 0;
   std::vector<PinSettings> pins_;
   PinSet pinSet_;

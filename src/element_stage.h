@@ -20,7 +20,7 @@
 #include <vector>
 
 #include "gradel/model.h"
-#include "gradel/simd.h"
+#include "simd.h"
 
 namespace gradel {
 
