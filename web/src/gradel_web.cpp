@@ -47,7 +47,6 @@ class Demo {
       install(std::move(b));
       const VoxelVolume& v = built_.volume;
       bodyExtent_ = v.voxelSize() * std::max(v.nx(), v.ny());
-      reframe();
       return "";
     } catch (const std::exception& e) {
       return e.what();
@@ -167,10 +166,12 @@ class Demo {
     if (mode_ == Mode::Drag && drag_ && !camera_.flat) return moveDepth(steps * 10 * pixelSize(height));
     camera_.zoom(steps);
   }
-  void reframe() {
+  /// Frames the scene, its centre moved `panX` CSS pixels right (beside the page's panel).
+  void reframe(double panX, int height) {
     Vec3 lo, hi;
     sceneBounds(*built_.world, &lo, &hi);
     camera_ = frameBox(lo, hi, scene_.dim == 2);
+    camera_.pan(panX, 0, std::max(height, 1));
   }
   bool dragging() const { return drag_.has_value(); }
 
