@@ -174,6 +174,18 @@ class Demo {
     camera_.pan(panX, 0, std::max(height, 1));
   }
   bool dragging() const { return drag_.has_value(); }
+  int manipulators() const { return int(built_.world->manipulators().size()); }
+  /// Centre of manipulator i [m], and where it is on a width x height canvas (CSS pixels, y down).
+  val manipulatorPosition(int i) const {
+    const Vec3 p = built_.world->manipulators().at(size_t(i)).position;
+    const float f[3] = {float(p.x()), float(p.y()), float(p.z())};
+    return floatArray(f, 3);
+  }
+  val manipulatorPixel(int i, int width, int height) const {
+    const Vec3 q = camera_.project(built_.world->manipulators().at(size_t(i)).position, width, height);
+    const float f[2] = {float(q.x()), float(q.y())};
+    return floatArray(f, 2);
+  }
 
   // ---- live figures ----
   double time() const { return built_.world->time(); }
@@ -360,6 +372,9 @@ EMSCRIPTEN_BINDINGS(gradel) {
       .function("wheel", &Demo::wheel)
       .function("reframe", &Demo::reframe)
       .function("dragging", &Demo::dragging)
+      .function("manipulators", &Demo::manipulators)
+      .function("manipulatorPosition", &Demo::manipulatorPosition)
+      .function("manipulatorPixel", &Demo::manipulatorPixel)
       .function("time", &Demo::time)
       .function("dt", &Demo::dt)
       .function("elements", &Demo::elements)
