@@ -155,14 +155,16 @@ void main() {
         status('');
       }).catch((e) => status(String(e)));
     }
-    // The panel covers the left of the canvas on a wide window: frame the scene right of it.
+    // Where the panel covers the left of the canvas (narrow windows), frame the scene right of it.
     const reframe = () => {
-      const panel = $('panel').getBoundingClientRect(), [w, h] = size();
-      demo.reframe(w > 2 * panel.width ? panel.right / 2 : 0, h);
+      const overlap = Math.max(0, $('panel').getBoundingClientRect().right - canvas.getBoundingClientRect().left);
+      const [w, h] = size();
+      demo.reframe(w > 2 * overlap ? overlap / 2 : 0, h);
     };
     const bodyChoice = () => ({ shape: $('shape').value, size: Number($('size').value), layout: $('layout').value });
     function applyBody() {
       const b = bodyChoice();
+      $('size-out').textContent = b.size;
       const err = demo.setBody(b.shape, b.size, b.layout);
       status(err);
       resetRates();
