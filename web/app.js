@@ -26,6 +26,9 @@
     out.hidden = false;
     out.textContent = M.benchHeader() + '\n';
     status('benchmark running...');
+    // Warm-up, not printed: V8 first runs wasm in its baseline compiler and tiers hot functions
+    // up to the optimising one on background threads, which takes seconds on a busy machine.
+    M.bench('sphere', sizes[0], 'gradational', 3, 0.5);
     let i = 0;
     const next = () => {
       if (i === sizes.length) {
