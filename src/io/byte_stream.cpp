@@ -1,6 +1,8 @@
 #include "gradel/io/byte_stream.h"
 
+#ifndef GRADEL_NO_ZLIB  // the WebAssembly build (web/) has no zlib: gzip input is an InputError there
 #include <zlib.h>
+#endif
 
 #include <algorithm>
 #include <cerrno>
@@ -79,6 +81,7 @@ class MemoryStream final : public ByteStream {
   size_t size_;
 };
 
+#ifndef GRADEL_NO_ZLIB
 class GzipStream final : public ByteStream {
  public:
   GzipStream(std::unique_ptr<ByteStream> owned, ByteStream& inner)
@@ -139,6 +142,7 @@ class GzipStream final : public ByteStream {
   bool ended_ = false;       // the compressed stream is complete
   bool innerEnded_ = false;  // the compressed input is exhausted
 };
+#endif
 
 }  // namespace
 
@@ -163,11 +167,18 @@ std::unique_ptr<ByteStream> memoryStream(const void* data, size_t size, std::str
   return std::make_unique<MemoryStream>(data, size, std::move(name));
 }
 
+#ifndef GRADEL_NO_ZLIB
 std::unique_ptr<ByteStream> gzipStream(std::unique_ptr<ByteStream> inner) {
   ByteStream& ref = *inner;
   return std::make_unique<GzipStream>(std::move(inner), ref);
 }
 
 std::unique_ptr<ByteStream> gzipStream(ByteStream& inner) { return std::make_unique<GzipStream>(nullptr, inner); }
+#else
+std::unique_ptr<ByteStream> gzipStream(std::unique_ptr<ByteStream> inner) { return gzipStream(*inner); }
+std::unique_ptr<ByteStream> gzipStream(ByteStream& inner) {
+  throw InputError(inner.name() + ": gzip-compressed input is not supported in this build (no zlib)");
+}
+#endif
 
 }  // namespace gradel::io
