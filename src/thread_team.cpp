@@ -1,12 +1,16 @@
 #include "thread_team.h"
 
+#if defined(__linux__) && !defined(__EMSCRIPTEN__)
 #include <linux/futex.h>
 #include <sys/syscall.h>
 #include <unistd.h>
+#define GRADEL_HAVE_FUTEX 1
+#endif
 
 #include <chrono>
 #include <climits>
 #include <cstdlib>
+#include <thread>
 
 namespace gradel {
 
@@ -40,15 +44,21 @@ void waitWhileEqual(const std::atomic<uint32_t>& word, uint32_t old) {
     if (word.load(std::memory_order_acquire) != old) return;
     if ((i & 63) == 0 && std::chrono::steady_clock::now() > limit) break;
   }
+#ifdef GRADEL_HAVE_FUTEX
   gSleepers.fetch_add(1, std::memory_order_seq_cst);
   while (word.load(std::memory_order_seq_cst) == old)
     syscall(SYS_futex, reinterpret_cast<const uint32_t*>(&word), FUTEX_WAIT_PRIVATE, old, nullptr, nullptr, 0);
   gSleepers.fetch_sub(1, std::memory_order_seq_cst);
+#else
+  while (word.load(std::memory_order_seq_cst) == old) std::this_thread::yield();  // no futex: yield instead
+#endif
 }
 
-void wakeAll(std::atomic<uint32_t>& word) {
+void wakeAll([[maybe_unused]] std::atomic<uint32_t>& word) {
+#ifdef GRADEL_HAVE_FUTEX
   if (gSleepers.load(std::memory_order_seq_cst) > 0)
     syscall(SYS_futex, reinterpret_cast<uint32_t*>(&word), FUTEX_WAKE_PRIVATE, INT_MAX, nullptr, nullptr, 0);
+#endif
 }
 
 }  // namespace
