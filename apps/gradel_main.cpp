@@ -264,6 +264,19 @@ int runScene(const RunOptions& o) {
                      json(framesD).dump() + " frames (expected at most 1000000 frames)");
   const size_t frames = size_t(std::max(1.0, framesD));
 
+  // SIGINT, SIGTERM and SIGHUP all stop the run the same way: nothing written, exit 128 + signal.
+  // Installed before the output folder exists and restored after it is gone.
+  gSignal = 0;
+  struct RestoreHandlers {
+    const int kSignals[3] = {SIGINT, SIGTERM, SIGHUP};
+    void (*previous[3])(int);
+    RestoreHandlers() {
+      for (int i = 0; i < 3; ++i) previous[i] = std::signal(kSignals[i], onStopSignal);
+    }
+    ~RestoreHandlers() {
+      for (int i = 0; i < 3; ++i) std::signal(kSignals[i], previous[i]);
+    }
+  } handlers;
   gradel::OutputDirectory dir(o.out.empty() ? fs::path("out") / scene.name : fs::path(o.out), "run.pvd");
   {
     std::error_code ec;
@@ -290,18 +303,6 @@ int runScene(const RunOptions& o) {
     pvd.push_back({world.time(), name});
   };
 
-  // SIGINT, SIGTERM and SIGHUP all stop the run the same way: nothing written, exit 128 + signal.
-  gSignal = 0;
-  struct RestoreHandlers {
-    const int kSignals[3] = {SIGINT, SIGTERM, SIGHUP};
-    void (*previous[3])(int);
-    RestoreHandlers() {
-      for (int i = 0; i < 3; ++i) previous[i] = std::signal(kSignals[i], onStopSignal);
-    }
-    ~RestoreHandlers() {
-      for (int i = 0; i < 3; ++i) std::signal(kSignals[i], previous[i]);
-    }
-  } handlers;
 
   // Advance in chunks of a few steps so that divergence, Ctrl-C and the progress bar are
   // noticed within a frame; the sequence of steps is the same as one advanceTo per frame.
@@ -320,7 +321,9 @@ int runScene(const RunOptions& o) {
         std::snprintf(msg, sizeof msg, "simulation diverged at t=%.6g s (dt = %.3g s): non-finite numbers; ", world.time(), dt);
         throw Diverged(msg + cause);
       }
-      if (const int sig = gSignal) throw Interrupted(sig, std::string("interrupted by ") + (sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "SIGHUP") + "; nothing written");
+      if (const int sig = gSignal)
+        throw Interrupted(sig, std::string("interrupted by ") + (sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "SIGHUP") +
+                                   "; nothing written");
       progress.update(world.time() / duration);
     }
     writeFrame(f);
