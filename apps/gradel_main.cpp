@@ -326,7 +326,10 @@ int runScene(const RunOptions& o) {
                                    "; nothing written");
       progress.update(world.time() / duration);
     }
-    writeFrame(f);
+    // A frame whose time no step reached (the last one, when duration is not a whole number
+    // of steps past the previous frame) would repeat the previous frame: frames land on
+    // distinct steps.
+    if (world.time() > pvd.back().time) writeFrame(pvd.size());
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
   csv.close();

@@ -258,8 +258,9 @@ TEST_F(CliTest, run_tooManySteps_refusedUnlessMaxStepsAllows) {
 
 TEST_F(CliTest, run_frameIntervalBelowDt_oneFramePerStepWithWarning) {
   // 25 steps of 1 ms; frames asked every 1 us used to give 10,001 frames, most of them copies.
+  // (0.3 ms past the 25th step: the last frame would have repeated the 25th.)
   write("dense.json", R"({"body": {"shape": "sphere", "size": 4},
-      "simulation": {"dt": 0.001, "duration": 0.025, "frame_interval": 1e-6}})");
+      "simulation": {"dt": 0.001, "duration": 0.0253, "frame_interval": 1e-6}})");
   const Result r = run("run dense.json --out res");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("frame_interval 1e-06 s is shorter than dt = 0.001 s; writing one frame per step"), std::string::npos)
