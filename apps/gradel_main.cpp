@@ -1,10 +1,12 @@
 // gradel: command-line front end.
 //   gradel layout --shape sphere --size 12 [--dim 2|3] [--layout ...] [--json]
-//   gradel run SCENE.json [--out DIR] [--duration S] [--threads N]
+//   gradel run SCENE.json [--out DIR] [--duration S] [--threads N] [--max-steps N]
 //   gradel render SCENE.json [--out DIR] [--frames N] [--size WxH] ...   (render_command.h)
 //   gradel --version
 // Exit codes: 0 ok, 1 internal error, 2 bad input (one line on stderr, nothing written),
-// 3 simulation diverged (nothing written), 4 no OpenGL for `render`, 130 interrupted (nothing written).
+// 3 simulation diverged (nothing written), 4 no OpenGL for `render`, 5 writing the result failed
+// (disk full, read-only; nothing written), 128 + signal when interrupted by SIGINT (130),
+// SIGTERM (143) or SIGHUP (129) (nothing written).
 #include <unistd.h>
 
 #include <algorithm>
@@ -23,10 +25,13 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "gradel/divergence.h"
 #include "gradel/layout.h"
 #include "gradel/output.h"
+#include "gradel/run_budget.h"
 #include "gradel/scene.h"
 #include "gradel/shapes.h"
+#include "gradel/size_limits.h"
 #ifdef GRADEL_WITH_RENDER
 #include "gradel/render/render_command.h"
 #endif
@@ -45,13 +50,15 @@ namespace fs = std::filesystem;
 constexpr int kExitInternal = 1;
 constexpr int kExitInput = 2;
 constexpr int kExitDiverged = 3;
-constexpr int kExitInterrupted = 130;  // 128 + SIGINT, as shells report it
+constexpr int kExitIo = 5;
 
 struct Diverged : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
+/// Exit code 128 + signal, as shells report it.
 struct Interrupted : std::runtime_error {
-  using std::runtime_error::runtime_error;
+  Interrupted(int signal, const std::string& what) : std::runtime_error(what), signal(signal) {}
+  int signal;
 };
 
 // Messages go out as exactly one line.
@@ -75,13 +82,20 @@ double ratio(size_t a, size_t b) { return b == 0 ? 0.0 : double(a) / double(b); 
 
 int runLayout(const LayoutOptions& o) {
   const gradel::LayoutKind kind = gradel::parseLayoutKind(o.layout);
+  if (o.size < 1 || o.size > gradel::kMaxGridEdge)
+    throw InputError("--size: " + std::to_string(o.size) + " is out of range (expected 1 to " +
+                     std::to_string(gradel::kMaxGridEdge) + " voxels, and at most 1024 in 3D)");
   const gradel::ShapeSpec spec = gradel::presetShape(o.shape, o.size, o.dim);
+  // Sizes are checked before anything big is allocated (size_limits.h).
+  const gradel::SizeLimits limits;
+  gradel::checkVolumeSize(spec.dims, spec.dim, limits, "--size");
   const gradel::VoxelVolume volume = gradel::rasterize(spec);
+  gradel::checkLayoutSize(volume, kind, limits, "--size");
   const gradel::Layout layout = gradel::buildLayout(volume, kind);
   const gradel::LayoutStats s = gradel::layoutStats(layout, volume);
-  // The voxel layout (one element per voxel) is the baseline the paper's savings refer to.
-  const gradel::LayoutStats base =
-      kind == gradel::LayoutKind::Voxel ? s : gradel::layoutStats(gradel::buildLayout(volume, gradel::LayoutKind::Voxel), volume);
+  // The voxel layout (one element per voxel) is the baseline the paper's savings refer to;
+  // counted, not built.
+  const gradel::LayoutStats base = kind == gradel::LayoutKind::Voxel ? s : gradel::voxelLayoutStats(volume);
 
   if (o.json) {
     json j;
@@ -132,10 +146,12 @@ struct RunOptions {
   std::string out;
   std::optional<double> duration;
   std::optional<int> threads;
+  std::optional<double> maxSteps;
 };
 
-std::atomic<bool> gInterrupted{false};
-extern "C" void onSigint(int) { gInterrupted = true; }
+// The signal that asked the run to stop (SIGINT, SIGTERM, SIGHUP), 0 while none did.
+volatile std::sig_atomic_t gSignal = 0;
+extern "C" void onStopSignal(int sig) { gSignal = sig; }
 
 // A one-line progress bar on stderr, only on a terminal, redrawn at most 10 times a second.
 class Progress {
@@ -177,6 +193,24 @@ bool finiteState(const gradel::State& s) {
   return true;
 }
 
+// What to change when a run diverges, for the message.
+std::string likelyCause(const gradel::Scene& scene, double dt) {
+  char buf[256];
+  const gradel::SimulationSettings& s = scene.simulation;
+  if (s.integrator == gradel::IntegratorKind::ForwardEuler)
+    return "the likely cause is the forward_euler integrator, which gains energy at any dt (use \"symplectic\" or "
+           "\"implicit\", or a much smaller dt)";
+  if (s.dt > 0) {
+    std::snprintf(buf, sizeof buf, "the likely cause is simulation.dt = %.3g s, too large for this body: try a smaller dt or \"auto\"", dt);
+  } else {
+    std::snprintf(buf, sizeof buf,
+                  "the likely cause is simulation.dt_fraction = %.3g (dt = %.3g s), too large: try a smaller dt_fraction "
+                  "(stable up to 0.3; the default is 0.1)",
+                  s.dtFraction, dt);
+  }
+  return buf;
+}
+
 std::string hex64(uint64_t h) {
   char buf[20];
   std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
@@ -195,13 +229,10 @@ int runScene(const RunOptions& o) {
     if (*o.threads < 1 || *o.threads > 1024) throw InputError("--threads: must be in [1, 1024]");
     scene.simulation.threads = *o.threads;
   }
-  const Real duration = scene.output.duration, interval = scene.output.frameInterval;
-  // Frames after t = 0; the last one lands exactly on `duration`.
-  const double framesD = std::ceil(duration / interval - 1e-9);
-  if (framesD > 1e6)
-    throw InputError(o.scene + ": simulation.frame_interval: " + json(interval).dump() + " s gives " +
-                     json(framesD).dump() + " frames (expected at most 1000000 frames)");
-  const size_t frames = size_t(std::max(1.0, framesD));
+  if (o.maxSteps && !(*o.maxSteps >= 1 && *o.maxSteps <= 1e18))
+    throw InputError("--max-steps: must be a number of steps in [1, 1e18]");
+  const Real duration = scene.output.duration;
+  Real interval = scene.output.frameInterval;
 
   gradel::BuiltScene built;
   try {
@@ -211,17 +242,58 @@ int runScene(const RunOptions& o) {
   }
   gradel::World& world = *built.world;
   const gradel::RestModel& model = world.model();
+  const Real dt = world.dt();
 
+  // How long will it take? Refused beyond the budget unless --max-steps allows it (run_budget.h).
+  try {
+    gradel::checkRunBudget(gradel::estimateRun(duration, dt, model.numVertices(), scene.simulation.integrator), dt,
+                           duration, o.maxSteps);
+  } catch (const InputError& e) {
+    throw InputError(o.scene + ": " + e.what());
+  }
+  // Frames land on distinct steps: at most one per step.
+  if (interval < dt) {
+    std::fprintf(stderr, "gradel: %s: simulation.frame_interval %.3g s is shorter than dt = %.3g s; writing one frame per step\n",
+                 o.scene.c_str(), interval, dt);
+    interval = dt;
+  }
+  // Frames after t = 0; the last one lands exactly on `duration`.
+  const double framesD = std::ceil(duration / interval - 1e-9);
+  if (framesD > 1e6)
+    throw InputError(o.scene + ": simulation.frame_interval: " + json(interval).dump() + " s gives " +
+                     json(framesD).dump() + " frames (expected at most 1000000 frames)");
+  const size_t frames = size_t(std::max(1.0, framesD));
+
+  // SIGINT, SIGTERM and SIGHUP all stop the run the same way: nothing written, exit 128 + signal.
+  // Installed before the output folder exists and restored after it is gone.
+  gSignal = 0;
+  struct RestoreHandlers {
+    const int kSignals[3] = {SIGINT, SIGTERM, SIGHUP};
+    void (*previous[3])(int);
+    RestoreHandlers() {
+      for (int i = 0; i < 3; ++i) previous[i] = std::signal(kSignals[i], onStopSignal);
+    }
+    ~RestoreHandlers() {
+      for (int i = 0; i < 3; ++i) std::signal(kSignals[i], previous[i]);
+    }
+  } handlers;
   gradel::OutputDirectory dir(o.out.empty() ? fs::path("out") / scene.name : fs::path(o.out), "run.pvd");
-  fs::copy_file(o.scene, dir.file("scene.json"));
+  {
+    std::error_code ec;
+    fs::copy_file(o.scene, dir.file("scene.json"), ec);
+    if (ec) throw gradel::IoError("cannot write " + dir.file("scene.json").string() + ": " + ec.message());
+  }
   gradel::MetricsCsv csv(dir.file("metrics.csv"));
   std::vector<gradel::PvdFrame> pvd;
   Real maxPenetration = 0, maxStress = 0;
   gradel::Metrics last;
 
+  gradel::DivergenceGuard guard(gradel::energyBudget(world, duration));
+  const std::string cause = likelyCause(scene, dt);
   auto writeFrame = [&](size_t index) {
     std::vector<gradel::Real> elementStress;
     const gradel::Metrics m = world.metrics(&elementStress);  // one pass over the elements per frame
+    if (auto diverged = guard.check(m, cause)) throw Diverged(*diverged);
     csv.append(m);
     maxPenetration = std::max(maxPenetration, m.maxPenetration);
     maxStress = std::max(maxStress, m.maxStress);
@@ -231,14 +303,7 @@ int runScene(const RunOptions& o) {
     pvd.push_back({world.time(), name});
   };
 
-  gInterrupted = false;
-  auto previousHandler = std::signal(SIGINT, onSigint);
-  struct RestoreHandler {
-    decltype(previousHandler) h;
-    ~RestoreHandler() { std::signal(SIGINT, h); }
-  } restore{previousHandler};
 
-  const Real dt = world.dt();
   // Advance in chunks of a few steps so that divergence, Ctrl-C and the progress bar are
   // noticed within a frame; the sequence of steps is the same as one advanceTo per frame.
   constexpr Real kChunkSteps = 32;
@@ -253,13 +318,18 @@ int runScene(const RunOptions& o) {
       if (world.time() == before) world.step();  // never spin without progress
       if (!finiteState(world.state())) {
         char msg[160];
-        std::snprintf(msg, sizeof msg, "simulation diverged at t=%.6g s (dt = %.3g s), try a smaller dt", world.time(), dt);
-        throw Diverged(msg);
+        std::snprintf(msg, sizeof msg, "simulation diverged at t=%.6g s (dt = %.3g s): non-finite numbers; ", world.time(), dt);
+        throw Diverged(msg + cause);
       }
-      if (gInterrupted) throw Interrupted("interrupted; nothing written");
+      if (const int sig = gSignal)
+        throw Interrupted(sig, std::string("interrupted by ") + (sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "SIGHUP") +
+                                   "; nothing written");
       progress.update(world.time() / duration);
     }
-    writeFrame(f);
+    // A frame whose time no step reached (the last one, when duration is not a whole number
+    // of steps past the previous frame) would repeat the previous frame: frames land on
+    // distinct steps.
+    if (world.time() > pvd.back().time) writeFrame(pvd.size());
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
   csv.close();
@@ -307,6 +377,8 @@ int main(int argc, char** argv) {
   run->add_option("--out", ro.out, "Result directory (default: out/<scene name>)");
   run->add_option("--duration", ro.duration, "Simulated time [s] (overrides simulation.duration)");
   run->add_option("--threads", ro.threads, "Worker threads (overrides simulation.threads)");
+  run->add_option("--max-steps", ro.maxSteps,
+                  "Allow up to N time steps (default: refuse runs over 1e7 steps or 1e11 vertex-steps)");
 
 #ifdef GRADEL_WITH_RENDER
   gradel::render::RenderCommandOptions rendo;
@@ -332,7 +404,13 @@ int main(int argc, char** argv) {
     return kExitDiverged;
   } catch (const Interrupted& e) {
     std::cerr << "gradel: " << oneLine(e.what()) << "\n";
-    return kExitInterrupted;
+    return 128 + e.signal;
+  } catch (const gradel::IoError& e) {
+    std::cerr << "gradel: " << oneLine(e.what()) << " (nothing written)\n";
+    return kExitIo;
+  } catch (const fs::filesystem_error& e) {
+    std::cerr << "gradel: " << oneLine(e.what()) << " (nothing written)\n";
+    return kExitIo;
   } catch (const std::exception& e) {
     std::cerr << "gradel: internal error: " << oneLine(e.what()) << "\n";
     return kExitInternal;

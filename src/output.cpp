@@ -1,7 +1,8 @@
 #include "gradel/output.h"
 
 #include <stdlib.h>  // mkdtemp (POSIX)
-#include <unistd.h>  // rmdir
+#include <signal.h>  // kill (POSIX)
+#include <unistd.h>  // rmdir, getpid
 
 #include <algorithm>
 #include <bit>
@@ -87,13 +88,17 @@ void appendDataArray(std::string& out, const char* name, int components, const s
   out += "        </DataArray>\n";
 }
 
+[[noreturn]] void throwWriteError(const fs::path& file, int err) {
+  throw IoError("cannot write " + file.string() + ": " + std::strerror(err ? err : EIO));
+}
+
 void writeWholeFile(const fs::path& file, const std::string& text) {
   std::FILE* f = std::fopen(file.c_str(), "wb");
-  if (!f) throw std::runtime_error("cannot write " + file.string() + ": " + std::strerror(errno));
-  const bool wrote = std::fwrite(text.data(), 1, text.size(), f) == text.size();
+  if (!f) throwWriteError(file, errno);
+  errno = 0;
+  const bool wrote = std::fwrite(text.data(), 1, text.size(), f) == text.size() && std::fflush(f) == 0;
   const int err = errno;
-  if (std::fclose(f) != 0 || !wrote)
-    throw std::runtime_error("cannot write " + file.string() + ": " + std::strerror(wrote ? errno : err));
+  if (std::fclose(f) != 0 || !wrote) throwWriteError(file, wrote ? errno : err);
 }
 
 std::string xmlEscape(const std::string& s) {
@@ -239,7 +244,7 @@ std::string MetricsCsv::row(const Metrics& m) {
 
 MetricsCsv::MetricsCsv(const fs::path& file) : path_(file) {
   file_ = std::fopen(file.c_str(), "wb");
-  if (!file_) throw std::runtime_error("cannot write " + file.string() + ": " + std::strerror(errno));
+  if (!file_) throwWriteError(file, errno);
   std::fputs(header(), file_);
   std::fputc('\n', file_);
 }
@@ -251,16 +256,19 @@ MetricsCsv::~MetricsCsv() {
 void MetricsCsv::append(const Metrics& m) {
   if (!file_) throw std::logic_error("MetricsCsv::append after close");
   const std::string line = row(m) + '\n';
-  std::fwrite(line.data(), 1, line.size(), file_);
+  if (std::fwrite(line.data(), 1, line.size(), file_) != line.size() && !err_) err_ = errno ? errno : EIO;
 }
 
 void MetricsCsv::close() {
   if (!file_) return;
-  // ferror covers every earlier fwrite; fclose reports the final flush.
-  const bool failed = std::ferror(file_) != 0;
+  // ferror covers every earlier fwrite (err_ keeps the first one's reason); fclose reports the
+  // final flush.
+  errno = 0;
+  const bool failed = std::ferror(file_) != 0 || err_ != 0;
   const bool closeFailed = std::fclose(file_) != 0;
+  const int err = err_ ? err_ : errno;
   file_ = nullptr;
-  if (failed || closeFailed) throw std::runtime_error("cannot write " + path_.string() + ": " + std::strerror(errno));
+  if (failed || closeFailed) throwWriteError(path_, err);
 }
 
 // ---- output directory ---------------------------------------------------------------
@@ -272,7 +280,37 @@ fs::path makeUniqueDir(const std::string& base) {
   if (!::mkdtemp(tmpl.data())) return {};
   return tmpl;
 }
+
+// "<leaf>.tmp-": the temporary directories of `target` are "<leaf>.tmp-<pid>-XXXXXX".
+std::string tempPrefix(const fs::path& target) { return target.filename().string() + ".tmp-"; }
 }  // namespace
+
+size_t removeStaleTemporaries(const fs::path& target) {
+  const fs::path parent = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  const std::string prefix = tempPrefix(target);
+  std::error_code ec;
+  std::vector<fs::path> stale;
+  for (fs::directory_iterator it(parent, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.compare(0, prefix.size(), prefix) != 0) continue;
+    // The owner's pid, then '-' and mkdtemp's six characters; anything else is not ours.
+    const char* p = name.c_str() + prefix.size();
+    long pid = 0;
+    const auto r = std::from_chars(p, name.c_str() + name.size(), pid);
+    if (r.ec != std::errc() || r.ptr == p || pid <= 0 || *r.ptr != '-' || std::strlen(r.ptr) != 7) continue;
+    if (pid == long(::getpid())) continue;
+    if (::kill(pid_t(pid), 0) == 0 || errno != ESRCH) continue;  // alive (or not ours to ask about)
+    std::error_code st;
+    if (fs::is_directory(fs::symlink_status(it->path(), st))) stale.push_back(it->path());
+  }
+  size_t removed = 0;
+  for (const fs::path& p : stale) {
+    std::error_code rm;
+    fs::remove_all(p, rm);
+    removed += rm ? 0 : 1;
+  }
+  return removed;
+}
 
 OutputDirectory::OutputDirectory(fs::path target, const std::string& marker) {
   if (marker.empty()) throw std::invalid_argument("OutputDirectory: marker must name a file of a previous result");
@@ -300,13 +338,16 @@ OutputDirectory::OutputDirectory(fs::path target, const std::string& marker) {
   fs::create_directories(parent, ec);
   if (ec) {
     abort();
-    throw InputError(parent.string() + ": cannot create: " + ec.message());
+    if (ec == std::errc::not_a_directory || ec == std::errc::file_exists)
+      throw InputError(parent.string() + ": cannot create: " + ec.message());
+    throw IoError(parent.string() + ": cannot create: " + ec.message());
   }
-  temp_ = makeUniqueDir((parent / (leaf + ".tmp-")).string());
+  removeStaleTemporaries(target_);
+  temp_ = makeUniqueDir((parent / (tempPrefix(target_) + std::to_string(::getpid()) + "-")).string());
   if (temp_.empty()) {
     const int err = errno;
     abort();
-    throw InputError(target_.string() + ": cannot create a directory beside it: " + std::strerror(err));
+    throw IoError(target_.string() + ": cannot create a directory beside it: " + std::strerror(err));
   }
 }
 
@@ -329,12 +370,12 @@ void OutputDirectory::commit() {
     // Reserve a unique name, then free it for rename() (which also moves a symlink).
     old = makeUniqueDir(target_.string() + ".old-");
     if (old.empty() || ::rmdir(old.c_str()) != 0 || std::rename(target_.c_str(), old.c_str()) != 0)
-      throw std::runtime_error("cannot move the previous " + target_.string() + " aside: " + std::strerror(errno));
+      throw IoError("cannot move the previous " + target_.string() + " aside: " + std::strerror(errno));
   }
   if (std::rename(temp_.c_str(), target_.c_str()) != 0) {
     const int err = errno;
     if (!old.empty()) std::rename(old.c_str(), target_.c_str());  // put the previous result back
-    throw std::runtime_error("cannot rename " + temp_.string() + " to " + target_.string() + ": " + std::strerror(err));
+    throw IoError("cannot rename " + temp_.string() + " to " + target_.string() + ": " + std::strerror(err));
   }
   committed_ = finished_ = true;
   if (!old.empty()) fs::remove_all(old, ec);

@@ -2,7 +2,7 @@
 
 namespace gradel {
 
-BuiltScene buildScene(const Scene& scene) {
+BuiltScene buildScene(const Scene& scene, const SizeLimits& limits) {
   BuiltScene b;
   TriangleMesh latticeMesh;  // a mesh source's mesh, in lattice units
   if (scene.body.source) {
@@ -13,8 +13,10 @@ BuiltScene buildScene(const Scene& scene) {
   } else {
     ShapeSpec shape = scene.body.shape;
     shape.dim = scene.dim;
+    checkVolumeSize(shape.dims, shape.dim, limits, scene.body.sizeKey);
     b.volume = rasterize(shape);
   }
+  checkLayoutSize(b.volume, scene.body.layout, limits, scene.body.sizeKey);
   b.layout = buildLayout(b.volume, scene.body.layout);
   Vec3 origin = scene.body.position;
   if (scene.dim == 2) origin.z() = 0;

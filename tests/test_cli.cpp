@@ -6,6 +6,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <csignal>
+#include <cstdio>
+#include <set>
+
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -39,8 +43,8 @@ class CliTest : public ::testing::Test {
   void TearDown() override { fs::remove_all(dir_); }
 
   // Runs `gradel ARGS` in dir_, capturing stdout, stderr and the exit code.
-  Result run(const std::string& args) {
-    const std::string cmd = "cd '" + dir_.string() + "' && '" + std::string(GRADEL_CLI_PATH) + "' " + args + " > stdout.txt 2> stderr.txt";
+  Result run(const std::string& args, const std::string& env = "") {
+    const std::string cmd = "cd '" + dir_.string() + "' && " + env + " '" + std::string(GRADEL_CLI_PATH) + "' " + args + " > stdout.txt 2> stderr.txt";
     const int status = std::system(cmd.c_str());
     Result r;
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
@@ -205,6 +209,177 @@ TEST_F(CliTest, run_divergence_exit3NothingWritten) {
   EXPECT_FALSE(fs::exists(dir_ / "res"));
   for (const auto& e : fs::directory_iterator(dir_))
     EXPECT_EQ(e.path().filename().string().find("res"), std::string::npos) << "left behind: " << e.path();
+}
+
+
+// ---- issue 15: limits, frames, I/O errors, signals, divergence --------------------------------
+
+TEST_F(CliTest, layout_size_limitsNameTheKeyAndEstimate) {
+  Result r = run("layout --shape sphere --size 1588");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(r.err.rfind("gradel: --size: a grid of 1588 x 1588 x 1588 = 4004529472 voxels is over the limit", 0), 0u) << r.err;
+  r = run("layout --shape sphere --size 4097");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("--size"), std::string::npos) << r.err;
+  // The memory estimate, before the layout is built (a low limit stands in for a small machine).
+  r = run("layout --shape box --size 96 --layout voxel", "GRADEL_MEMORY_LIMIT_MB=50");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(r.err.rfind("gradel: --size: the voxel layout of this body has 884736 elements", 0), 0u) << r.err;
+  EXPECT_NE(r.err.find("over the memory limit of 52.4 MB"), std::string::npos) << r.err;
+  // The voxel baseline of a gradational layout is counted, not built: it fits the same limit.
+  r = run("layout --shape box --size 96 --json", "GRADEL_MEMORY_LIMIT_MB=50");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_EQ(j.at("voxel_layout").at("elements").get<int>(), 96 * 96 * 96);
+  EXPECT_EQ(j.at("voxel_layout").at("unique_vertices").get<int>(), 97 * 97 * 97);
+  EXPECT_EQ(j.at("voxel_layout").at("pairs").get<int>(), 8 * 96 * 96 * 96);
+}
+
+TEST_F(CliTest, run_tooManySteps_refusedUnlessMaxStepsAllows) {
+  // 0.01 s at dt = 1e-12 s: 1e10 steps, which would run for days.
+  write("slow.json", R"({"body": {"shape": "sphere", "size": 4},
+      "simulation": {"dt": 1e-12, "duration": 0.01, "frame_interval": 0.005}})");
+  Result r = run("run slow.json --out res");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("slow.json: simulation: 0.01 s at dt = 1e-12 s is 1e+10 steps"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("8.1e+11 vertex-steps, about 6.7 h of wall time"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--max-steps 10000000000"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "res"));
+  // --max-steps sets the limit either way: 400 steps refused at 100, run at 400.
+  write("short.json", R"({"body": {"shape": "sphere", "size": 4},
+      "simulation": {"dt": 1e-5, "duration": 0.004, "frame_interval": 0.002}})");
+  r = run("run short.json --out res --max-steps 100");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("is 400 steps"), std::string::npos) << r.err;
+  r = run("run short.json --out res --max-steps 400");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(json::parse(r.out).at("steps").get<int>(), 400);
+}
+
+TEST_F(CliTest, run_frameIntervalBelowDt_oneFramePerStepWithWarning) {
+  // 25 steps of 1 ms; frames asked every 1 us used to give 10,001 frames, most of them copies.
+  // (0.3 ms past the 25th step: the last frame would have repeated the 25th.)
+  write("dense.json", R"({"body": {"shape": "sphere", "size": 4},
+      "simulation": {"dt": 0.001, "duration": 0.0253, "frame_interval": 1e-6}})");
+  const Result r = run("run dense.json --out res");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("frame_interval 1e-06 s is shorter than dt = 0.001 s; writing one frame per step"), std::string::npos)
+      << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_EQ(j.at("steps").get<int>(), 25);
+  EXPECT_EQ(j.at("frames").get<int>(), 26);
+  // Every frame at its own time.
+  const std::string pvd = readFile(dir_ / "res" / "run.pvd");
+  std::set<std::string> times;
+  for (size_t p = pvd.find("timestep=\""); p != std::string::npos; p = pvd.find("timestep=\"", p + 1))
+    times.insert(pvd.substr(p + 10, pvd.find('"', p + 10) - p - 10));
+  EXPECT_EQ(times.size(), 26u);
+}
+
+TEST_F(CliTest, run_unwritableOutput_exit5NothingWritten) {
+  write("tiny.json", kTinyScene);
+  // sysfs refuses new folders even to root (who bypasses chmod): a read-only location.
+  const Result r = run("run tiny.json --out /sys/gradel-cli-test/res");
+  EXPECT_EQ(r.code, 5) << r.err;
+  EXPECT_EQ(r.err.rfind("gradel: /sys/gradel-cli-test: cannot create: ", 0), 0u) << r.err;
+  EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << r.err;
+  EXPECT_FALSE(fs::exists("/sys/gradel-cli-test"));
+}
+
+// A long run started in the background; `signal` stops it once its temporary folder exists.
+struct Stopped {
+  int status = 0;
+  bool sawTemp = false;
+};
+Stopped runAndSignal(const fs::path& dir, const std::string& scene, int signal) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    if (::chdir(dir.c_str()) != 0) ::_exit(126);
+    if (!std::freopen("stdout.txt", "w", stdout) || !std::freopen("stderr.txt", "w", stderr)) ::_exit(126);
+    ::execl(GRADEL_CLI_PATH, "gradel", "run", scene.c_str(), "--out", "res", static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  Stopped s;
+  const std::string prefix = "res.tmp-" + std::to_string(pid) + "-";
+  for (int i = 0; i < 200 && !s.sawTemp; ++i) {
+    ::usleep(50000);
+    for (const auto& e : fs::directory_iterator(dir))
+      if (e.path().filename().string().rfind(prefix, 0) == 0 && fs::exists(e.path() / "frame_00000.vtu")) s.sawTemp = true;
+  }
+  ::usleep(200000);  // well into the step loop
+  ::kill(pid, signal);
+  ::waitpid(pid, &s.status, 0);
+  return s;
+}
+
+// Nothing of `res` (result or temporary folder) in `dir`.
+void expectNoResult(const fs::path& dir) {
+  for (const auto& e : fs::directory_iterator(dir))
+    EXPECT_EQ(e.path().filename().string().find("res"), std::string::npos) << "left behind: " << e.path();
+}
+
+// Minutes of simulated time for a small ball: stopped long before it ends.
+const char* kLongScene = R"({"body": {"shape": "sphere", "size": 4},
+  "simulation": {"duration": 600, "frame_interval": 0.01, "damping": 1},
+  "domain": {"min": [-0.1, 0.0, -0.1], "max": [0.1, 0.2, 0.1]}})";
+
+TEST_F(CliTest, run_sigtermAndSighup_likeSigint_exit128PlusSignalNothingWritten) {
+  write("long.json", kLongScene);
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    SCOPED_TRACE(sig);
+    const Stopped s = runAndSignal(dir_, "long.json", sig);
+    EXPECT_TRUE(s.sawTemp);
+    ASSERT_TRUE(WIFEXITED(s.status)) << "killed by signal " << WTERMSIG(s.status);
+    EXPECT_EQ(WEXITSTATUS(s.status), 128 + sig);
+    EXPECT_NE(readFile(dir_ / "stderr.txt").find("nothing written"), std::string::npos) << readFile(dir_ / "stderr.txt");
+    fs::remove(dir_ / "stdout.txt");
+    fs::remove(dir_ / "stderr.txt");
+    expectNoResult(dir_);
+  }
+}
+
+TEST_F(CliTest, run_afterSigkill_nextRunRemovesTheLeftover) {
+  write("long.json", kLongScene);
+  const Stopped s = runAndSignal(dir_, "long.json", SIGKILL);
+  ASSERT_TRUE(s.sawTemp);
+  EXPECT_TRUE(WIFSIGNALED(s.status));
+  size_t leftovers = 0;
+  for (const auto& e : fs::directory_iterator(dir_)) leftovers += e.path().filename().string().rfind("res.tmp-", 0) == 0;
+  EXPECT_EQ(leftovers, 1u);  // SIGKILL cannot be caught: the folder stays ...
+  write("tiny.json", kTinyScene);
+  const Result r = run("run tiny.json --out res");
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const auto& e : fs::directory_iterator(dir_))  // ... until the next run of that result
+    EXPECT_NE(e.path().filename().string().rfind("res.tmp-", 0), 0u) << "left behind: " << e.path();
+  EXPECT_TRUE(fs::exists(dir_ / "res" / "run.pvd"));
+}
+
+// A blown-up body keeps finite numbers inside walls: the energy guard stops it (issue 15: drop at
+// dt_fraction 0.5 reached 1.4e5 J from a 2.7 J drop and exited 0).
+TEST_F(CliTest, run_energyBlowUpInsideWalls_exit3NamingTheCause) {
+  const std::string drop = readFile(fs::path(GRADEL_SOURCE_DIR) / "scenes" / "drop.json");
+  json scene = json::parse(drop);
+  scene["simulation"]["dt"] = 0.00117;  // dt_fraction 0.5's step (the reader refuses the fraction itself)
+  write("big-dt.json", scene.dump());
+  Result r = run("run big-dt.json --out res --duration 0.5");
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_EQ(r.err.rfind("gradel: simulation diverged at t = ", 0), 0u) << r.err;
+  EXPECT_NE(r.err.find("kinetic + elastic energy"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("simulation.dt = 0.00117 s"), std::string::npos) << r.err;
+  expectNoResult(dir_);
+
+  scene = json::parse(drop);
+  scene["simulation"]["integrator"] = "forward_euler";
+  write("euler.json", scene.dump());
+  r = run("run euler.json --out res --duration 0.5");
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_NE(r.err.find("forward_euler"), std::string::npos) << r.err;
+  expectNoResult(dir_);
+
+  // The scene as shipped runs to the end.
+  write("drop.json", drop);
+  r = run("run drop.json --out res --duration 0.5");
+  EXPECT_EQ(r.code, 0) << r.err;
 }
 
 }  // namespace

@@ -667,5 +667,39 @@ TEST(Layout, LevelCountGrowsWithSize) {
     EXPECT_EQ(buildLayout(sphere(n, 3), LayoutKind::Uniform).numLevels(), 1);
 }
 
+
+// Counting a layout without building it (issue 15: `gradel layout --size 512` built the voxel
+// baseline, 13 GB): countLayout gives the built layout's elements and vertices exactly and its
+// pairs within the estimate's 3^dim per element; voxelLayoutStats equals layoutStats of the
+// built voxel layout. Random volumes (holes, thin parts) and presets, 2D and 3D.
+TEST(Layout, CountsWithoutBuilding_matchTheBuiltLayout) {
+  std::vector<VoxelVolume> volumes = {sphere(12, 3), sphere(13, 2), filledBox(3, 9, 6, 5), filledBox(2, 7, 5, 1)};
+  for (uint32_t seed = 1; seed <= 6; ++seed)
+    volumes.push_back(randomVolume(seed % 2 ? 3 : 2, 11, 9, seed % 2 ? 7 : 1, 0.3 + 0.1 * seed, seed));
+  for (const VoxelVolume& v : volumes) {
+    if (v.countFilled() == 0) continue;
+    for (LayoutKind kind : {LayoutKind::Gradational, LayoutKind::Uniform, LayoutKind::Voxel}) {
+      SCOPED_TRACE(std::string(layoutKindName(kind)) + " " + std::to_string(v.nx()) + "x" + std::to_string(v.ny()) + "x" +
+                   std::to_string(v.nz()));
+      const Layout L = buildLayout(v, kind);
+      const LayoutCounts c = countLayout(v, kind);
+      EXPECT_EQ(c.elements, L.numElements());
+      EXPECT_EQ(c.vertices, L.numVertices());
+      EXPECT_GE(c.pairsEstimate, L.numPairs());
+      if (kind == LayoutKind::Voxel) {
+        EXPECT_EQ(c.pairsEstimate, L.numPairs());
+        const LayoutStats built = layoutStats(L, v), counted = voxelLayoutStats(v);
+        EXPECT_EQ(counted.voxels, built.voxels);
+        EXPECT_EQ(counted.elements, built.elements);
+        EXPECT_EQ(counted.elementsPerLevel, built.elementsPerLevel);
+        EXPECT_EQ(counted.uniqueVertices, built.uniqueVertices);
+        EXPECT_EQ(counted.pairs, built.pairs);
+        EXPECT_EQ(counted.hangingVertices, built.hangingVertices);
+        EXPECT_EQ(counted.hangingPairs, built.hangingPairs);
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace gradel

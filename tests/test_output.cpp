@@ -3,7 +3,10 @@
 // atomically or leaves everything as it was.
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
 #include <unistd.h>
+
+#include <cerrno>
 
 #include <cstring>
 #include <filesystem>
@@ -181,9 +184,82 @@ TEST_F(OutputTest, writeVtu_sizeMismatch_throws) {
   EXPECT_THROW(writeVtu(root_ / "x.vtu", m, s, {}), std::invalid_argument);
 }
 
-TEST_F(OutputTest, writeVtu_unwritablePath_throwsRuntimeError) {
+TEST_F(OutputTest, writeVtu_unwritablePath_throwsIoError) {
   const RestModel m = twoElements2d();
-  EXPECT_THROW(writeVtu(root_ / "no-such-dir" / "x.vtu", m, stateOf(m), {}), std::runtime_error);
+  EXPECT_THROW(writeVtu(root_ / "no-such-dir" / "x.vtu", m, stateOf(m), {}), IoError);
+}
+
+// The message of the IoError `f` throws, or "" when it throws nothing (other types fail the test).
+template <class F>
+std::string ioErrorOf(F&& f) {
+  try {
+    f();
+  } catch (const IoError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// /dev/full answers every write with ENOSPC: a full disk, without filling one.
+TEST_F(OutputTest, diskFull_isIoErrorNamingPathAndReason) {
+  const RestModel m = twoElements2d();
+  const std::string nospace = std::strerror(ENOSPC);
+  std::string msg = ioErrorOf([&] { writeVtu("/dev/full", m, stateOf(m), {}); });
+  EXPECT_NE(msg.find("/dev/full"), std::string::npos) << msg;
+  EXPECT_NE(msg.find(nospace), std::string::npos) << msg;
+  msg = ioErrorOf([&] { writePvd("/dev/full", {{0.0, frameFileName(0)}}); });
+  EXPECT_NE(msg.find(nospace), std::string::npos) << msg;
+  msg = ioErrorOf([&] {
+    MetricsCsv csv("/dev/full");
+    for (int i = 0; i < 1000; ++i) csv.append(Metrics{});  // more than stdio's buffer
+    csv.close();
+  });
+  EXPECT_NE(msg.find("/dev/full"), std::string::npos) << msg;
+  EXPECT_NE(msg.find(nospace), std::string::npos) << msg;
+}
+
+// A folder the system will not let us create (sysfs refuses even root, who bypasses chmod).
+TEST_F(OutputTest, outputDirectory_unwritableLocation_isIoErrorAndLeavesNothing) {
+  const std::string msg = ioErrorOf([] { OutputDirectory("/sys/gradel-output-test/result", "run.pvd"); });
+  EXPECT_NE(msg.find("/sys/gradel-output-test"), std::string::npos) << msg;
+  EXPECT_FALSE(fs::exists("/sys/gradel-output-test"));
+  // A file where a folder is expected is the user's path mistake, not the system's.
+  writeFile(root_ / "file", "x");
+  EXPECT_THROW(OutputDirectory(root_ / "file" / "sub" / "result", "run.pvd"), InputError);
+}
+
+// A pid that no process has: a child that has exited and been reaped.
+pid_t deadPid() {
+  const pid_t pid = ::fork();
+  if (pid == 0) ::_exit(0);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return pid;
+}
+
+TEST_F(OutputTest, staleTemporaries_ofDeadRunsAreRemovedOthersKept) {
+  const fs::path target = root_ / "result";
+  const fs::path dead = root_ / ("result.tmp-" + std::to_string(deadPid()) + "-Ab12Cd");
+  const fs::path alive = root_ / ("result.tmp-" + std::to_string(::getppid()) + "-Ab12Cd");  // our parent lives
+  const fs::path oldStyle = root_ / "result.tmp-Ab12Cd";
+  const fs::path other = root_ / ("other.tmp-" + std::to_string(deadPid()) + "-Ab12Cd");
+  for (const fs::path& p : {dead, alive, oldStyle, other}) {
+    fs::create_directories(p);
+    writeFile(p / "frame_00000.vtu", "x");
+  }
+  {
+    OutputDirectory dir(target, "run.pvd");  // a new run of the same target cleans up first
+    EXPECT_FALSE(fs::exists(dead));
+    EXPECT_TRUE(fs::exists(alive));
+    EXPECT_TRUE(fs::exists(oldStyle));
+    EXPECT_TRUE(fs::exists(other));
+    // Its own temporary folder carries its pid, so that a later run can tell.
+    EXPECT_EQ(dir.path().filename().string().rfind("result.tmp-" + std::to_string(::getpid()) + "-", 0), 0u)
+        << dir.path();
+  }
+  EXPECT_EQ(removeStaleTemporaries(target), 0u);
+  EXPECT_EQ(removeStaleTemporaries(root_ / "other"), 1u);
+  EXPECT_FALSE(fs::exists(other));
 }
 
 TEST_F(OutputTest, writePvd_listsFramesWithTimes) {

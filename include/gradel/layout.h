@@ -81,6 +81,21 @@ struct LayoutStats {
   size_t hangingPairs = 0;              ///< Pairs with pairIsOwn == 0.
 };
 
+/// Counts of a layout without building it (no element-vertex lists): exact elements and unique
+/// vertices, and an estimate of the pairs (3^dim per element, exact for the voxel layout). Costs
+/// the placement and a 1.5-bit-per-lattice-point vertex set; for the voxel layout no placement.
+/// Throws InputError on an empty volume.
+struct LayoutCounts {
+  uint64_t elements = 0;
+  uint64_t vertices = 0;
+  uint64_t pairsEstimate = 0;
+};
+LayoutCounts countLayout(const VoxelVolume& volume, LayoutKind kind);
+
+/// layoutStats of the voxel layout (one element per filled voxel, the paper's baseline), counted
+/// without building it: elements = voxels, pairs = 2^dim per voxel, no hanging vertices.
+LayoutStats voxelLayoutStats(const VoxelVolume& volume);
+
 /// Builds the layout. Throws InputError on an empty volume.
 Layout buildLayout(const VoxelVolume& volume, LayoutKind kind);
 LayoutStats layoutStats(const Layout& layout, const VoxelVolume& volume);

@@ -32,7 +32,7 @@ inline constexpr uint8_t kVtkConvexPointSet = 41;  ///< 3D elements.
 ///                lies on its outline, layout.h).
 ///   point data   "velocity" [m/s] (3 components), "stress" [-] (vertexStress, may be empty)
 ///   cell data    "level", "element_id", and "stress" [-] when elementStress is given
-/// Throws std::invalid_argument on size mismatches, std::runtime_error on I/O errors.
+/// Throws std::invalid_argument on size mismatches, IoError (path and reason) on I/O errors.
 void writeVtu(const std::filesystem::path& file, const RestModel& model, const State& state,
               const std::vector<Real>& vertexStress, const std::vector<Real>& elementStress = {},
               VtkEncoding encoding = VtkEncoding::Base64);
@@ -61,26 +61,33 @@ class MetricsCsv {
   /// One data line (no newline).
   static std::string row(const Metrics& m);
 
-  /// Creates the file and writes the header. Throws std::runtime_error on I/O errors.
+  /// Creates the file and writes the header. Throws IoError on I/O errors.
   explicit MetricsCsv(const std::filesystem::path& file);
   ~MetricsCsv();
   MetricsCsv(const MetricsCsv&) = delete;
   MetricsCsv& operator=(const MetricsCsv&) = delete;
 
   void append(const Metrics& m);
-  /// Flushes and closes; throws std::runtime_error if any write failed (disk full, ...).
+  /// Flushes and closes; throws IoError if any write failed (disk full, ...).
   void close();
 
  private:
   std::filesystem::path path_;
   std::FILE* file_ = nullptr;
+  int err_ = 0;  ///< errno of the first failed append.
 };
 
 // ---- the output directory -----------------------------------------------------
 
+/// Removes the temporary directories `<target>.tmp-<pid>-XXXXXX` beside `target` whose owning
+/// process is gone (a run killed by SIGKILL or a power cut); directories of live processes and
+/// names of any other form are left alone. Returns how many were removed. Never throws.
+size_t removeStaleTemporaries(const std::filesystem::path& target);
+
 /// Writes a result directory so that a failed or interrupted run never leaves a half-written
 /// result and never destroys the previous one:
-///   * everything is written into a sibling `<target>.tmp-XXXXXX` (path());
+///   * everything is written into a sibling `<target>.tmp-<pid>-XXXXXX` (path()), after the
+///     leftovers of dead runs are removed (removeStaleTemporaries);
 ///   * commit() moves an existing `<target>` aside, renames the temporary directory to
 ///     `<target>`, then deletes the old one (rolled back if the rename fails);
 ///   * destruction without commit() deletes the temporary directory and any parent
@@ -89,9 +96,9 @@ class OutputDirectory {
  public:
   /// Creates the temporary directory. If `<target>` exists it must be a directory, and if it
   /// is not empty it must contain a file named `marker` (a previous result, e.g. "run.pvd"), so
-  /// that a mistyped --out can never replace an unrelated directory. Violations are InputError;
-  /// failing to create the directory is InputError too (it comes from the user's choice of
-  /// path). `marker` must not be empty.
+  /// that a mistyped --out can never replace an unrelated directory. Violations, and a file where
+  /// a parent directory should be, are InputError; failing to create the directories (read-only
+  /// file system, no permission, disk full) is IoError. `marker` must not be empty.
   OutputDirectory(std::filesystem::path target, const std::string& marker);
   ~OutputDirectory();
   OutputDirectory(const OutputDirectory&) = delete;
@@ -102,8 +109,8 @@ class OutputDirectory {
   const std::filesystem::path& target() const { return target_; }
   std::filesystem::path file(const std::string& name) const { return temp_ / name; }
 
-  /// Publishes the result as `<target>`. Throws std::runtime_error on failure, in which case the
-  /// previous `<target>` is restored.
+  /// Publishes the result as `<target>`. Throws IoError on failure, in which case the previous
+  /// `<target>` is restored.
   void commit();
   /// Deletes the temporary directory now (also done by the destructor). Never throws.
   void abort() noexcept;

@@ -14,6 +14,7 @@
 #include "gradel/material.h"
 #include "gradel/pins.h"
 #include "gradel/shapes.h"
+#include "gradel/size_limits.h"
 #include "gradel/world.h"
 
 namespace gradel {
@@ -25,6 +26,7 @@ struct BodySettings {
   MaterialSettings material;
   Vec3 position{0, 0, 0};  ///< [m] world position of the volume's lattice origin (voxel (0,0,0)'s lower corner).
   Vec3 velocity{0, 0, 0};  ///< [m/s] initial velocity of every vertex.
+  std::string sizeKey = "body.size";  ///< The scene key that sets the grid (size-limit messages).
 };
 
 struct OutputSettings {
@@ -63,7 +65,8 @@ struct BuiltScene {
 };
 
 /// Rasterises the shape (or reads body.source), builds the layout, rest model and world, and
-/// embeds a source mesh. Throws InputError.
-BuiltScene buildScene(const Scene& scene);
+/// embeds a source mesh. Before the volume and before the layout, the sizes are checked against
+/// `limits` (size_limits.h). Throws InputError.
+BuiltScene buildScene(const Scene& scene, const SizeLimits& limits = {});
 
 }  // namespace gradel

@@ -25,4 +25,12 @@ class InputError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// Writing results failed in the operating system (disk full, read-only file system, no
+/// permission): the message names the path and the system's reason. The CLI turns it into
+/// exit code 5.
+class IoError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 }  // namespace gradel
