@@ -1,7 +1,9 @@
 #include "gradel/output.h"
 
 #include <stdlib.h>  // mkdtemp (POSIX)
-#include <signal.h>  // kill (POSIX)
+#include <fcntl.h>     // open
+#include <signal.h>    // kill (POSIX)
+#include <sys/file.h>  // flock
 #include <unistd.h>  // rmdir, getpid
 
 #include <algorithm>
@@ -283,6 +285,18 @@ fs::path makeUniqueDir(const std::string& base) {
 
 // "<leaf>.tmp-": the temporary directories of `target` are "<leaf>.tmp-<pid>-XXXXXX".
 std::string tempPrefix(const fs::path& target) { return target.filename().string() + ".tmp-"; }
+
+// A run holds an flock on "<temp>/.lock" while it writes: a pid from another pid namespace
+// (a container sharing the folder) may look dead here, its lock does not.
+constexpr const char* kLockName = ".lock";
+
+bool lockedByALiveRun(const fs::path& dir) {
+  const int fd = ::open((dir / kLockName).c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return false;
+  const bool locked = ::flock(fd, LOCK_EX | LOCK_NB) != 0 && errno == EWOULDBLOCK;
+  ::close(fd);
+  return locked;
+}
 }  // namespace
 
 size_t removeStaleTemporaries(const fs::path& target) {
@@ -301,7 +315,7 @@ size_t removeStaleTemporaries(const fs::path& target) {
     if (pid == long(::getpid())) continue;
     if (::kill(pid_t(pid), 0) == 0 || errno != ESRCH) continue;  // alive (or not ours to ask about)
     std::error_code st;
-    if (fs::is_directory(fs::symlink_status(it->path(), st))) stale.push_back(it->path());
+    if (fs::is_directory(fs::symlink_status(it->path(), st)) && !lockedByALiveRun(it->path())) stale.push_back(it->path());
   }
   size_t removed = 0;
   for (const fs::path& p : stale) {
@@ -349,14 +363,28 @@ OutputDirectory::OutputDirectory(fs::path target, const std::string& marker) {
     abort();
     throw IoError(target_.string() + ": cannot create a directory beside it: " + std::strerror(err));
   }
+  lockFd_ = ::open((temp_ / kLockName).c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0600);
+  if (lockFd_ < 0 || ::flock(lockFd_, LOCK_EX | LOCK_NB) != 0) {
+    const int err = errno;
+    abort();
+    throw IoError((temp_ / kLockName).string() + ": cannot create: " + std::strerror(err));
+  }
 }
 
 OutputDirectory::~OutputDirectory() {
   if (!finished_) abort();
 }
 
+void OutputDirectory::unlock() noexcept {
+  if (lockFd_ < 0) return;
+  ::unlink((temp_ / kLockName).c_str());
+  ::close(lockFd_);  // releases the flock
+  lockFd_ = -1;
+}
+
 void OutputDirectory::abort() noexcept {
   std::error_code ec;
+  unlock();
   if (!temp_.empty()) fs::remove_all(temp_, ec);
   for (const fs::path& p : createdParents_) fs::remove(p, ec);  // only removes empty directories
   finished_ = true;
@@ -364,6 +392,7 @@ void OutputDirectory::abort() noexcept {
 
 void OutputDirectory::commit() {
   if (finished_) throw std::logic_error("OutputDirectory::commit: already committed or aborted");
+  unlock();  // the result holds no lock file
   std::error_code ec;
   fs::path old;
   if (fs::exists(fs::symlink_status(target_, ec))) {

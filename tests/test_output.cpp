@@ -3,6 +3,8 @@
 // atomically or leaves everything as it was.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -260,6 +262,19 @@ TEST_F(OutputTest, staleTemporaries_ofDeadRunsAreRemovedOthersKept) {
   EXPECT_EQ(removeStaleTemporaries(target), 0u);
   EXPECT_EQ(removeStaleTemporaries(root_ / "other"), 1u);
   EXPECT_FALSE(fs::exists(other));
+
+  // A pid that looks dead here but whose run holds the lock (another pid namespace) is kept.
+  const fs::path foreign = root_ / ("result.tmp-" + std::to_string(deadPid()) + "-Lk12Cd");
+  fs::create_directories(foreign);
+  writeFile(foreign / ".lock", "");
+  const int fd = ::open((foreign / ".lock").c_str(), O_RDWR);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::flock(fd, LOCK_EX), 0);
+  EXPECT_EQ(removeStaleTemporaries(target), 0u);
+  EXPECT_TRUE(fs::exists(foreign));
+  ::close(fd);
+  EXPECT_EQ(removeStaleTemporaries(target), 1u);
+  EXPECT_FALSE(fs::exists(foreign));
 }
 
 TEST_F(OutputTest, writePvd_listsFramesWithTimes) {

@@ -80,8 +80,10 @@ class MetricsCsv {
 // ---- the output directory -----------------------------------------------------
 
 /// Removes the temporary directories `<target>.tmp-<pid>-XXXXXX` beside `target` whose owning
-/// process is gone (a run killed by SIGKILL or a power cut); directories of live processes and
-/// names of any other form are left alone. Returns how many were removed. Never throws.
+/// process is gone (a run killed by SIGKILL or a power cut): no process has that pid here and
+/// nobody holds the flock on its `.lock` file (a run in another pid namespace, e.g. a container
+/// sharing the folder, does). Names of any other form are left alone. Returns how many were
+/// removed. Never throws.
 size_t removeStaleTemporaries(const std::filesystem::path& target);
 
 /// Writes a result directory so that a failed or interrupted run never leaves a half-written
@@ -122,6 +124,8 @@ class OutputDirectory {
   std::vector<std::filesystem::path> createdParents_;  ///< Deepest first.
   bool committed_ = false;
   bool finished_ = false;
+  int lockFd_ = -1;  ///< Holds the flock on path()/.lock until commit or abort.
+  void unlock() noexcept;
 };
 
 }  // namespace gradel
