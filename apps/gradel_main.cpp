@@ -28,7 +28,7 @@
 #include "gradel/scene.h"
 #include "gradel/shapes.h"
 #ifdef GRADEL_WITH_RENDER
-#include "gradel/render/render_command.h"
+#include "render_cli.h"
 #endif
 
 #ifndef GRADEL_VERSION
