@@ -1,21 +1,33 @@
-// gradel-bench: the speed of the paper's Table 1 setting (sec. 3.4) for spheres and cubes of
-// several sizes, each layout, at several thread counts. Prints CSV on stdout (one row per
-// configuration, medians of --reps repetitions) and progress on stderr.
+// gradel-bench: the speed of the explicit step, CSV on stdout (one row per configuration, medians
+// of --reps repetitions), progress on stderr. Three kinds of rows (column `set`):
+//  - real: what users run (scene_presets.h, realBenchScene): SI units, a sphere of fixed size
+//    (finer n = smaller voxels), gravity, walls, a manipulator pressing it, a pin, and metrics +
+//    stress once per 1/60 s output frame, over --moduli (Young's modulus, Pa);
+//  - paper: the paper's Table 1 setting (sec. 3.4: k = 10000, one voxel's mass per vertex, no
+//    gravity, walls or output), the comparison with the paper;
+//  - scene: a scene file (--scene FILE), run as `gradel run` would, frames computed, not written.
 //
-//   gradel-bench [--shapes sphere,box] [--sizes 12,32,64,128,256] [--layouts gradational,uniform,voxel]
-//                [--threads 1,2] [--reps 5] [--min-time 0.2] [--max-pairs 40000000] [--find-realtime]
+//   gradel-bench [--sets real,paper] [--shapes sphere,box] [--sizes 16,32,64,128,256]
+//                [--layouts gradational,uniform] [--moduli 1e4,1e5,1e6] [--threads 1,2]
+//                [--scene FILE] [--load] [--reps 5] [--min-time 0.2] [--find-realtime]
 //
-// Columns: ns_per_vertex_step = wall time per step / unique vertices; ns_per_pair_step the same
-// per element-vertex pair; real_time_factor = simulated seconds per wall second with dt = 1/10 of
-// the smallest element's period (the paper's setting: k = 10000, one voxel's mass per vertex);
-// bytes_per_vertex = every array of the model, state and scratch / unique vertices;
-// state_hash = hash of positions and velocities after exactly 20 steps (identical at any thread
-// count, and unchanged by pure speed work).
+// Columns: ns_per_vertex_step = wall time per step (frame work included) / unique vertices;
+// ns_per_pair_step the same per element-vertex pair; real_time_factor = simulated seconds per
+// wall second; bytes_per_vertex = every array of the model, state and scratch / unique
+// vertices; load = 1 when --load ran one busy process beside the benchmark; state_hash = hash
+// of positions and velocities after exactly 20 (paper) or 200 (real, scene) steps: identical at
+// any thread count.
 #include <CLI/CLI.hpp>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include "gradel/scene_presets.h"
@@ -26,8 +38,9 @@ using Clock = std::chrono::steady_clock;
 namespace {
 
 struct Row {
-  std::string shape, layout;
-  int n = 0, threads = 0;
+  std::string set, shape, layout;
+  double youngs = 0;  // [Pa], 0 for the paper setting (k instead)
+  int n = 0, threads = 0, load = 0;
   size_t elements = 0, vertices = 0, pairs = 0;
   double nsPerVertex = 0, nsPerPair = 0, stepsPerSecond = 0, dt = 0, rtf = 0, bytesPerVertex = 0;
   uint64_t hash = 0;
@@ -42,24 +55,47 @@ std::vector<T> splitList(const std::string& s, T (*conv)(const std::string&)) {
   return out;
 }
 
-Row measure(const std::string& shape, int n, LayoutKind layout, int threads, int reps, double minTime) {
-  BuiltScene b = buildScene(paperBenchScene(shape, n, layout, threads));
-  b.layout = Layout();  // build inputs are not part of the running simulation's memory
-  b.volume = VoxelVolume();
-  World& w = *b.world;
-  preparePaperBench(w);
-  for (int i = 0; i < 20; ++i) w.step();
-  Row r;
-  r.shape = shape, r.layout = layoutKindName(layout), r.n = n, r.threads = threads;
+// A busy process beside the benchmark (--load): what a user's other programs do to it.
+struct BusyProcess {
+  pid_t pid = -1;
+  void start() {
+    pid = fork();
+    if (pid == 0) {
+      volatile unsigned long x = 0;
+      for (;;) x = x + 1;
+    }
+  }
+  ~BusyProcess() {
+    if (pid > 0) kill(pid, SIGKILL), waitpid(pid, nullptr, 0);
+  }
+};
+
+// Times `reps` repetitions of steps on a built world, frame work (metrics + stress, as
+// `gradel run` does per written frame) every frameInterval simulated seconds (0: none), after
+// `hashSteps` steps that fix the state hash.
+void timeSteps(World& w, Row& r, int hashSteps, double frameInterval, int reps, double minTime) {
+  for (int i = 0; i < hashSteps; ++i) w.step();
   r.hash = w.stateHash();
   r.elements = w.model().numElements(), r.vertices = w.model().numVertices(), r.pairs = w.model().numPairs();
   r.dt = w.dt();
   r.bytesPerVertex = double(w.memoryBytes()) / double(r.vertices);
+  double nextFrame = frameInterval > 0 ? (std::floor(w.time() / frameInterval) + 1) * frameInterval : INFINITY;
+  std::vector<Real> stress;
+  Real sink = 0;
+  auto run = [&](int steps) {
+    for (int i = 0; i < steps; ++i) {
+      w.step();
+      if (w.time() >= nextFrame - 0.5 * w.dt()) {
+        sink += w.metrics(&stress).kineticEnergy;
+        nextFrame += frameInterval;
+      }
+    }
+  };
   // Steps per repetition: enough for minTime seconds, from a calibration run.
   int steps = 1;
   for (;;) {
     const auto t0 = Clock::now();
-    for (int i = 0; i < steps; ++i) w.step();
+    run(steps);
     const double s = std::chrono::duration<double>(Clock::now() - t0).count();
     if (s >= 0.25 * minTime || steps >= (1 << 20)) {
       steps = std::max(1, int(steps * minTime / std::max(s, 1e-9)));
@@ -70,27 +106,53 @@ Row measure(const std::string& shape, int n, LayoutKind layout, int threads, int
   std::vector<double> perStep;
   for (int k = 0; k < reps; ++k) {
     const auto t0 = Clock::now();
-    for (int i = 0; i < steps; ++i) w.step();
+    run(steps);
     perStep.push_back(std::chrono::duration<double>(Clock::now() - t0).count() / steps);
   }
+  if (!std::isfinite(sink)) std::fprintf(stderr, "warning: non-finite energy in %s\n", r.shape.c_str());
   std::sort(perStep.begin(), perStep.end());
   const double t = perStep[perStep.size() / 2];
   r.nsPerVertex = t * 1e9 / double(r.vertices);
   r.nsPerPair = t * 1e9 / double(r.pairs);
   r.stepsPerSecond = 1.0 / t;
   r.rtf = r.dt * r.stepsPerSecond;
+}
+
+Row measure(const std::string& shape, int n, LayoutKind layout, int threads, int reps, double minTime) {
+  BuiltScene b = buildScene(paperBenchScene(shape, n, layout, threads));
+  b.layout = Layout();  // build inputs are not part of the running simulation's memory
+  b.volume = VoxelVolume();
+  preparePaperBench(*b.world);
+  Row r;
+  r.set = "paper", r.shape = shape, r.layout = layoutKindName(layout), r.n = n, r.threads = threads;
+  timeSteps(*b.world, r, 20, 0, reps, minTime);
+  return r;
+}
+
+Row measureScene(const Scene& scene, const std::string& set, int threads, int reps, double minTime) {
+  Scene sc = scene;
+  sc.simulation.threads = threads;
+  BuiltScene b = buildScene(sc);
+  b.layout = Layout();
+  b.volume = VoxelVolume();
+  Row r;
+  r.set = set, r.shape = sc.name, r.layout = layoutKindName(sc.body.layout), r.threads = threads;
+  r.n = sc.body.source ? 0 : sc.body.shape.dims[0];
+  r.youngs = sc.body.material.scaling == Scaling::Consistent ? sc.body.material.youngsModulus : 0;
+  timeSteps(*b.world, r, 200, sc.output.frameInterval, reps, minTime);
   return r;
 }
 
 void printHeader() {
-  std::printf("shape,n,layout,threads,elements,unique_vertices,pairs,ns_per_vertex_step,ns_per_pair_step,"
-              "steps_per_second,dt_s,real_time_factor,bytes_per_vertex,state_hash\n");
+  std::printf("set,shape,n,layout,youngs_modulus_pa,threads,load,elements,unique_vertices,pairs,ns_per_vertex_step,"
+              "ns_per_pair_step,steps_per_second,dt_s,real_time_factor,bytes_per_vertex,state_hash\n");
 }
 
 void printRow(const Row& r) {
-  std::printf("%s,%d,%s,%d,%zu,%zu,%zu,%.3f,%.3f,%.1f,%.6g,%.4g,%.1f,%016llx\n", r.shape.c_str(), r.n, r.layout.c_str(),
-              r.threads, r.elements, r.vertices, r.pairs, r.nsPerVertex, r.nsPerPair, r.stepsPerSecond, r.dt, r.rtf,
-              r.bytesPerVertex, static_cast<unsigned long long>(r.hash));
+  std::printf("%s,%s,%d,%s,%.3g,%d,%d,%zu,%zu,%zu,%.3f,%.3f,%.1f,%.6g,%.4g,%.1f,%016llx\n", r.set.c_str(),
+              r.shape.c_str(), r.n, r.layout.c_str(), r.youngs, r.threads, r.load, r.elements, r.vertices, r.pairs,
+              r.nsPerVertex, r.nsPerPair, r.stepsPerSecond, r.dt, r.rtf, r.bytesPerVertex,
+              static_cast<unsigned long long>(r.hash));
   std::fflush(stdout);
 }
 
@@ -127,39 +189,75 @@ void findRealtime(int threads, int reps, double minTime) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"gradel-bench: speed of the paper's Table 1 setting, CSV on stdout"};
-  std::string shapes = "sphere,box", sizes = "12,32,64,128,256", layouts = "gradational,uniform,voxel", threads = "1,2";
+  CLI::App app{"gradel-bench: speed of real scenes and of the paper's Table 1 setting, CSV on stdout"};
+  std::string sets = "real,paper", shapes = "sphere,box", sizes = "16,32,64,128,256", layouts = "gradational,uniform",
+              moduli = "1e4,1e5,1e6", threads = "1,2", sceneFile;
   int reps = 5;
   double minTime = 0.2, maxPairs = 4.0e7;
-  bool findRt = false;
-  app.add_option("--shapes", shapes, "Comma-separated: sphere, box");
+  bool findRt = false, load = false;
+  app.add_option("--sets", sets, "Comma-separated: real (SI scenes with gravity, walls, contact, pins, metrics), paper");
+  app.add_option("--shapes", shapes, "paper set: comma-separated shapes (sphere, box); the real set is a sphere");
   app.add_option("--sizes", sizes, "Comma-separated grid sizes n (voxels)");
   app.add_option("--layouts", layouts, "Comma-separated: gradational, uniform, voxel");
+  app.add_option("--moduli", moduli, "real set: comma-separated Young's moduli [Pa]");
   app.add_option("--threads", threads, "Comma-separated thread counts");
+  app.add_option("--scene", sceneFile, "Also time this scene file (frames computed at its frame_interval, not written)");
+  app.add_flag("--load", load, "Run one busy process beside the benchmark (a machine with other work on it)");
   app.add_option("--reps", reps, "Repetitions (the median is reported)")->check(CLI::Range(1, 1000));
   app.add_option("--min-time", minTime, "Seconds per repetition")->check(CLI::Range(0.001, 100.0));
   app.add_option("--max-pairs", maxPairs, "Skip configurations with more element-vertex pairs (memory)");
-  app.add_flag("--find-realtime", findRt, "Also search the largest real-time gradational sphere at the largest thread count");
+  app.add_flag("--find-realtime", findRt, "Also search the largest real-time gradational sphere (paper setting) at the largest thread count");
   CLI11_PARSE(app, argc, argv);
   try {
-    const auto shapeList = splitList<std::string>(shapes, [](const std::string& s) { return s; });
+    auto str = [](const std::string& s) { return s; };
+    const auto setList = splitList<std::string>(sets, str);
+    const auto shapeList = splitList<std::string>(shapes, str);
     const auto sizeList = splitList<int>(sizes, [](const std::string& s) { return std::stoi(s); });
     const auto layoutList = splitList<LayoutKind>(layouts, [](const std::string& s) { return parseLayoutKind(s); });
+    const auto moduliList = splitList<double>(moduli, [](const std::string& s) { return std::stod(s); });
     const auto threadList = splitList<int>(threads, [](const std::string& s) { return std::stoi(s); });
+    for (const std::string& set : setList)
+      if (set != "real" && set != "paper") throw std::runtime_error("--sets: unknown set '" + set + "' (real, paper)");
+    std::optional<Scene> scene;
+    if (!sceneFile.empty()) scene = loadScene(sceneFile);
+    BusyProcess busy;
+    if (load) busy.start();
+    auto emit = [&](Row r) {
+      r.load = load ? 1 : 0;
+      printRow(r);
+    };
+    auto tooBig = [&](const std::string& shape, int n, LayoutKind layout) {
+      // Pair count estimate from the voxel count, to skip what would not fit in memory.
+      const double voxels = double(n) * n * n * (shape == "sphere" ? 0.5236 : 1.0);
+      const double pairs = layout == LayoutKind::Voxel ? 8 * voxels : layout == LayoutKind::Uniform ? voxels : 0;
+      if (pairs <= maxPairs) return false;
+      std::printf("# skipped %s %d %s: ~%.0f pairs > --max-pairs\n", shape.c_str(), n, layoutKindName(layout), pairs);
+      return true;
+    };
     printHeader();
-    for (const std::string& shape : shapeList)
+    if (scene)
+      for (int t : threadList) {
+        std::fprintf(stderr, "scene %s threads %d\n", sceneFile.c_str(), t);
+        emit(measureScene(*scene, "scene", t, reps, minTime));
+      }
+    for (const std::string& set : setList)
       for (int n : sizeList)
         for (LayoutKind layout : layoutList) {
-          // Pair count estimate from the voxel count, to skip what would not fit in memory.
-          const double voxels = double(n) * n * n * (shape == "sphere" ? 0.5236 : 1.0);
-          const double pairs = layout == LayoutKind::Voxel ? 8 * voxels : layout == LayoutKind::Uniform ? voxels : 0;
-          if (pairs > maxPairs) {
-            std::printf("# skipped %s %d %s: ~%.0f pairs > --max-pairs\n", shape.c_str(), n, layoutKindName(layout), pairs);
+          if (set == "real") {
+            if (tooBig("sphere", n, layout)) continue;
+            for (double E : moduliList)
+              for (int t : threadList) {
+                std::fprintf(stderr, "real sphere %d %s E %.3g threads %d\n", n, layoutKindName(layout), E, t);
+                emit(measureScene(realBenchScene(n, E, layout), "real", t, reps, minTime));
+              }
             continue;
           }
-          for (int t : threadList) {
-            std::fprintf(stderr, "%s %d %s threads %d\n", shape.c_str(), n, layoutKindName(layout), t);
-            printRow(measure(shape, n, layout, t, reps, minTime));
+          for (const std::string& shape : shapeList) {
+            if (tooBig(shape, n, layout)) continue;
+            for (int t : threadList) {
+              std::fprintf(stderr, "paper %s %d %s threads %d\n", shape.c_str(), n, layoutKindName(layout), t);
+              emit(measure(shape, n, layout, t, reps, minTime));
+            }
           }
         }
     if (findRt) findRealtime(*std::max_element(threadList.begin(), threadList.end()), reps, minTime);

@@ -1,16 +1,46 @@
 #!/usr/bin/env bash
-# Runs the full benchmark (issue 4) and writes bench/results/<date>-<host>.csv together with the
+# Runs the benchmark and writes bench/results/<date>-<host>-{real,paper,threads}.csv with the
 # machine description. Usage: bench/run.sh [build-dir]   (default build/, from scripts/setup)
+#  real:    SI scenes (gravity, walls, a pressing manipulator, a pin, metrics per 1/60 s frame),
+#           n = 16..256, E = 1e4, 1e5, 1e6 Pa, 1 and 2 threads, gradational and uniform;
+#  paper:   the paper's Table 1 setting, for the comparison with the paper and with `real`;
+#  threads: the threading mechanisms compared (README, "Threads"), quiet and with one busy process.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build}
-out=bench/results/$(date -u +%Y-%m-%d)-$(hostname -s).csv
-{
+stem=bench/results/$(date -u +%Y-%m-%d)-$(hostname -s)
+describe() {
   echo "# gradel-bench $(git rev-parse --short HEAD 2>/dev/null || echo unknown), $(date -u +%FT%TZ)"
   echo "# cpu: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(nproc) cores; L3 $(lscpu | awk -F: '/L3/{print $2}' | xargs)"
   echo "# compiler: $(c++ --version | head -1); load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
-  "$build/gradel-bench" --shapes sphere,box --sizes 12,32,64,128,256 --layouts gradational,uniform,voxel \
-    --threads 1,2 --reps 5 --min-time 0.3 --max-pairs 40000000 --find-realtime
-} > "$out.tmp"
-mv "$out.tmp" "$out"
-echo "wrote $out" >&2
+}
+bench() { "$build/gradel-bench" --reps 5 --min-time 0.3 "$@"; }
+{
+  describe
+  bench --sets real --sizes 16,32,64,128 --layouts gradational --moduli 1e4,1e5,1e6 --threads 1,2
+  bench --sets real --sizes 256 --layouts gradational --moduli 1e5 --threads 1,2 | grep -v '^set,'
+  bench --sets real --sizes 64,128 --layouts uniform --moduli 1e5 --threads 1,2 | grep -v '^set,'
+} > "$stem-real.csv.tmp" && mv "$stem-real.csv.tmp" "$stem-real.csv"
+{
+  describe
+  bench --sets paper --shapes sphere --sizes 16,32,64,128,256 --layouts gradational --threads 1,2
+  bench --sets paper --shapes sphere --sizes 64,128 --layouts uniform --threads 1,2 | grep -v '^set,'
+} > "$stem-paper.csv.tmp" && mv "$stem-paper.csv.tmp" "$stem-paper.csv"
+# The threading mechanisms: the team (default), OpenMP with libgomp's default (spinning) wait and
+# with OMP_WAIT_POLICY=passive; each on a quiet machine and beside one busy process (--load).
+{
+  describe
+  echo "# mechanism,then the gradel-bench columns"
+  for load in "" --load; do
+    for mech in team openmp-default openmp-passive; do
+      case $mech in
+        team) env=() ;;
+        openmp-default) env=(GRADEL_THREADING=openmp) ;;
+        openmp-passive) env=(GRADEL_THREADING=openmp OMP_WAIT_POLICY=passive) ;;
+      esac
+      env "${env[@]}" "$build/gradel-bench" --reps 7 --min-time 0.3 --sets real --sizes 64,128 --layouts gradational \
+        --moduli 1e5 --threads 1,2 $load | grep -v '^set,' | sed "s/^/$mech,/"
+    done
+  done
+} > "$stem-threads.csv.tmp" && mv "$stem-threads.csv.tmp" "$stem-threads.csv"
+echo "wrote $stem-{real,paper,threads}.csv" >&2

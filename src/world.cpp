@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <limits>
 #ifdef _OPENMP
 #include <omp.h>
 #endif
@@ -10,6 +12,7 @@
 #include "gradel/huge_pages.h"
 #include "gradel/rotation_fit.h"
 #include "gradel/simd.h"
+#include "thread_team.h"
 
 namespace gradel {
 
@@ -63,10 +66,11 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   adviseHugePages(m.elemVerts), adviseHugePages(m.restOffsets), adviseHugePages(m.elemStart), adviseHugePages(m.stiffness);
   adviseHugePages(stageRest_.vertexElements), adviseHugePages(stageRest_.vertexStart);
   adviseHugePages(stageRest_.sumRestOffsets), adviseHugePages(stageRest_.restCentroids);
-  scratch_.contactDepth.assign(V, 0.0);
 
   for (ManipulatorSettings& s : manipulators) addManipulator(std::move(s));
 }
+
+World::~World() = default;
 
 size_t World::addManipulator(ManipulatorSettings s, const Vec3& position) {
   if (!(s.radius > 0) || !std::isfinite(s.radius)) throw InputError("manipulator radius must be > 0 [m]");
@@ -96,11 +100,48 @@ void World::stageElementFrames(size_t begin, size_t end) {
                        scratch_.frames.data(), sim_.rotationIterations);
 }
 
+// Where contacts can happen this step (the broad phase of the vertex stage): each manipulator's
+// swept bounds (its centre's box over the step, grown by the radius of a sphere around the
+// shape) and the walls. A vertex whose whole step stays inside the walls and outside every swept
+// bound cannot touch anything: resolveVertexContacts would leave it unchanged, so it is skipped
+// (the results are bit for bit those of resolving every vertex).
+struct World::ContactBounds {
+  std::vector<simd::d4> lo, hi;           ///< Per manipulator: swept bounds grown by its radius.
+  simd::d4 wallLo, wallHi;                ///< Inside the walls (infinite without walls).
+};
+
+World::ContactBounds World::contactBounds() const {
+  using namespace simd;
+  ContactBounds b;
+  constexpr Real inf = std::numeric_limits<Real>::infinity();
+  for (const Manipulator& m : manipulators_) {
+    const ManipulatorSettings& s = m.settings;
+    const Real reach = s.shape == ManipulatorShape::Cylinder ? std::hypot(s.radius, s.halfLength) : s.radius;
+    const d4 p0 = loadVec3(m.previousPosition), p1 = loadVec3(m.position);
+    // 2D: the manipulator's own z does not matter (contacts are in the plane), so neither does
+    // the bound's z.
+    // Lane 3 carries no coordinate: never a reason to skip.
+    d4 grow = {reach, reach, model_->dim == 2 ? inf : reach, inf};
+    b.lo.push_back(min(p0, p1) - grow), b.hi.push_back(max(p0, p1) + grow);
+  }
+  if (domain_.enabled) {
+    b.wallLo = loadVec3(domain_.min), b.wallHi = loadVec3(domain_.max);
+    if (model_->dim == 2) b.wallLo[2] = -inf, b.wallHi[2] = inf;  // resolveDomain ignores z in 2D
+  } else {
+    b.wallLo = splat(-inf), b.wallHi = splat(inf);
+  }
+  b.wallLo[3] = -inf, b.wallHi[3] = inf;
+  return b;
+}
+
 // Stage 2, per vertex [begin, end): gather the elastic force from the element frames, integrate
 // (eqs. 2-3), then resolve contacts. A vertex reads only its own position here, so the three
-// parts fuse into one pass over the vertices.
-void World::stageVertices(size_t begin, size_t end, bool contacts) {
+// parts fuse into one pass over the vertices, in blocks of kBlock vertices: a block whose
+// vertices' steps (start and end positions) lie inside the walls and outside every
+// manipulator's swept bounds skips the contact tests. Returns the deepest contact [m].
+Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
   using namespace simd;
+  constexpr size_t kBlock = 16;
   const RestModel& m = *model_;
   const Real dt = dt_;
   const Real damp = 1.0 / (1.0 + sim_.damping * dt);
@@ -111,25 +152,39 @@ void World::stageVertices(size_t begin, size_t end, bool contacts) {
   Vec3* positions = state_.positions.data();
   Vec3* velocities = state_.velocities.data();
   const Real* invMass = m.invMass.data();
-  Real* contactDepth = scratch_.contactDepth.data();
-  gatherVertexForces(m, stageRest_, scratch_.frames.data(), positions, begin, end, [&](size_t i, d4 force) {
-    const d4 a = force * invMass[i] + g;
-    const d4 x0 = loadVec3(positions[i]);
-    d4 x = x0, v = loadVec3(velocities[i]);
-    if (forward) {
-      x = x + dt * v;  // eq. 3 with V(T): the paper's literal order
-      v = (v + dt * a) * damp;
-    } else {
-      v = (v + dt * a) * damp;
-      x = x + dt * v;  // symplectic: P(T+dT) = P(T) + V(T+dT) dT
-    }
-    storeVec3(positions[i], x), storeVec3(velocities[i], v);
-    if (contacts) {
+  Real depth = 0;
+  d4 start[kBlock];
+  for (size_t b = begin; b < end; b += kBlock) {
+    const size_t be = std::min(end, b + kBlock);
+    d4 lo = splat(std::numeric_limits<Real>::infinity()), hi = -lo;
+    gatherVertexForces(m, stageRest_, scratch_.frames.data(), positions, b, be, [&](size_t i, d4 force) {
+      const d4 a = force * invMass[i] + g;
+      const d4 x0 = loadVec3(positions[i]);
+      d4 x = x0, v = loadVec3(velocities[i]);
+      if (forward) {
+        x = x + dt * v;  // eq. 3 with V(T): the paper's literal order
+        v = (v + dt * a) * damp;
+      } else {
+        v = (v + dt * a) * damp;
+        x = x + dt * v;  // symplectic: P(T+dT) = P(T) + V(T+dT) dT
+      }
+      storeVec3(positions[i], x), storeVec3(velocities[i], v);
+      start[i - b] = x0;
+      lo = min(lo, min(x0, x)), hi = max(hi, max(x0, x));
+    });
+    if (!cb) continue;
+    // Broad phase (a NaN position cannot be changed by a contact, so it may be skipped).
+    bool touch = !none(lo < cb->wallLo) || !none(hi > cb->wallHi);
+    for (size_t k = 0; !touch && k < cb->lo.size(); ++k)
+      touch = none(hi < cb->lo[k]) && none(lo > cb->hi[k]);
+    if (!touch) continue;
+    for (size_t i = b; i < be; ++i) {
       Vec3 previous;
-      storeVec3(previous, x0);
-      contactDepth[i] = resolveVertexContacts(previous, positions[i], velocities[i]);
+      storeVec3(previous, start[i - b]);
+      depth = std::max(depth, resolveVertexContacts(previous, positions[i], velocities[i]));
     }
-  });
+  }
+  return depth;
 }
 
 // Contacts of one vertex, swept from `previous` (independent per vertex). The first pass bounces
@@ -187,37 +242,84 @@ inline size_t splitPoint(const std::vector<uint32_t>& prefix, uint64_t itemCost,
   }
   return std::min(n, (lo + unit / 2) / unit * unit);
 }
-inline std::pair<size_t, size_t> share(const std::vector<uint32_t>& prefix, uint64_t itemCost, int t, int threads,
-                                       size_t unit) {
-  return {splitPoint(prefix, itemCost, t, threads, unit), splitPoint(prefix, itemCost, t + 1, threads, unit)};
+// Each member's first share of the chunks of `chunk` items, as chunk indices (members + 1).
+std::vector<size_t> chunkSplit(const std::vector<uint32_t>& prefix, uint64_t itemCost, int members, size_t chunk) {
+  std::vector<size_t> split(size_t(members) + 1);
+  for (int t = 0; t <= members; ++t) split[size_t(t)] = (splitPoint(prefix, itemCost, t, members, chunk) + chunk - 1) / chunk;
+  return split;
 }
 // Measured costs in pairs (instruction counts, callgrind): an element's moments, rotation fit
 // and frame cost about as much as 24 of its pairs; a vertex's integration about 3 of its pairs.
 constexpr uint64_t kElementCost = 24, kVertexCost = 3;
+// Chunks handed out by the team: ~20-40 us of work each (kElementChunk a multiple of the
+// rotation fit's lanes, kVertexChunk of stageVertices' blocks).
+constexpr size_t kElementChunk = 256, kVertexChunk = 512;
+// Small bodies are not worth waking threads for.
+constexpr size_t kMinVerticesPerThread = 1024;
+
+// GRADEL_THREADING=openmp runs the step in an OpenMP region with a static split instead of the
+// team (kept to measure the two against each other; README, "Threads").
+bool useOpenMp() {
+  static const bool v = [] {
+    const char* s = std::getenv("GRADEL_THREADING");
+    return s && std::string(s) == "openmp";
+  }();
+  return v;
+}
 }  // namespace
+
+void World::prepareTeam(int members) {
+  if (teamMembers_ == members && team_) return;
+  team_ = std::make_unique<ThreadTeam>(members);
+  elementQueue_ = std::make_unique<ChunkQueue>(), vertexQueue_ = std::make_unique<ChunkQueue>();
+  elementSplit_ = chunkSplit(model_->elemStart, kElementCost, members, kElementChunk);
+  vertexSplit_ = chunkSplit(stageRest_.vertexStart, kVertexCost, members, kVertexChunk);
+  memberContactDepth_.assign(size_t(members), 0.0);
+  teamMembers_ = members;
+}
 
 void World::step() {
   if (sim_.integrator == IntegratorKind::Implicit) return stepImplicit();
-  const size_t V = model_->numVertices();
-  const bool contacts = !manipulators_.empty() || domain_.enabled;
-  // Small bodies are not worth waking threads for.
-  const int threads = V < 2048 ? 1 : sim_.threads;
+  const size_t V = model_->numVertices(), E = model_->numElements();
+  const int members = int(std::max<size_t>(1, std::min<size_t>(size_t(sim_.threads), V / kMinVerticesPerThread)));
   moveManipulators(state_.time + dt_);  // the elements do not see them; the contacts see t + dt
-  // One parallel region per step, one barrier between the element and the vertex stage.
-#pragma omp parallel num_threads(threads) if (threads > 1)
-  {
-#ifdef _OPENMP
-    const int t = omp_get_thread_num(), T = omp_get_num_threads();
-#else
-    const int t = 0, T = 1;
-#endif
+  const bool contacts = !manipulators_.empty() || domain_.enabled;
+  ContactBounds bounds;
+  if (contacts) bounds = contactBounds();
+  const ContactBounds* cb = contacts ? &bounds : nullptr;
+  if (members == 1) {
+    stageElementFrames(0, E);
+    scratch_.maxContactDepth = stageVertices(0, V, cb);
+  } else if (useOpenMp()) {
+    Real depth = 0;
+#pragma omp parallel num_threads(members) reduction(max : depth)
     {
-      const auto [b, e] = share(model_->elemStart, kElementCost, t, T, kRotationLanes);
-      stageElementFrames(b, e);
-    }
+#ifdef _OPENMP
+      const int t = omp_get_thread_num(), T = omp_get_num_threads();
+#else
+      const int t = 0, T = 1;
+#endif
+      stageElementFrames(splitPoint(model_->elemStart, kElementCost, t, T, kRotationLanes),
+                         splitPoint(model_->elemStart, kElementCost, t + 1, T, kRotationLanes));
 #pragma omp barrier
-    const auto [b, e] = share(stageRest_.vertexStart, kVertexCost, t, T, 1);
-    stageVertices(b, e, contacts);
+      depth = stageVertices(splitPoint(stageRest_.vertexStart, kVertexCost, t, T, 1),
+                            splitPoint(stageRest_.vertexStart, kVertexCost, t + 1, T, 1), cb);
+    }
+    scratch_.maxContactDepth = depth;
+  } else {
+    // One job per step: element chunks, a barrier, vertex chunks (thread_team.h).
+    prepareTeam(members);
+    elementQueue_->reset(elementSplit_), vertexQueue_->reset(vertexSplit_);
+    team_->run([&](int t) {
+      size_t c;
+      while (elementQueue_->claim(t, &c)) stageElementFrames(c * kElementChunk, std::min(E, (c + 1) * kElementChunk));
+      team_->barrier();
+      Real depth = 0;
+      while (vertexQueue_->claim(t, &c))
+        depth = std::max(depth, stageVertices(c * kVertexChunk, std::min(V, (c + 1) * kVertexChunk), cb));
+      memberContactDepth_[size_t(t)] = depth;
+    });
+    scratch_.maxContactDepth = *std::max_element(memberContactDepth_.begin(), memberContactDepth_.end());
   }
   for (Manipulator& m : manipulators_) m.previousPosition = m.position;
   state_.time += dt_;
@@ -259,6 +361,7 @@ void World::stepImplicit() {
   if (model_->dim == 2) g.z() = 0;
   const bool contacts = !manipulators_.empty() || domain_.enabled;
   if (contacts) scratch_.previousPositions = state_.positions;
+  scratch_.contactDepth.assign(model_->numVertices(), 0.0);
   const Real tNext = state_.time + dt_;
   const std::vector<Vec3> x0 = state_.positions, v0 = state_.velocities;
   const std::vector<Quat> q0 = state_.rotations;
@@ -283,6 +386,9 @@ void World::stepImplicit() {
       stageContacts(0, model_->numVertices());
     }
   }
+  scratch_.maxContactDepth = scratch_.contactDepth.empty()
+                                 ? 0
+                                 : *std::max_element(scratch_.contactDepth.begin(), scratch_.contactDepth.end());
   for (Manipulator& m : manipulators_) m.previousPosition = m.position;
   state_.time = tNext;
   if (!pinSet_.empty()) applyPins(state_.time);
@@ -320,9 +426,10 @@ std::vector<Real> World::vertexStress(const std::vector<Real>& elementStress) co
   return sum;
 }
 
-Metrics World::metrics() const {
+Metrics World::metrics(std::vector<Real>* elementStress) const {
   const RestModel& m = *model_;
   Metrics r;
+  if (elementStress) elementStress->assign(m.numElements(), 0.0);
   r.time = state_.time;
   Vec3 g = sim_.gravity;
   if (m.dim == 2) g.z() = 0;
@@ -339,7 +446,9 @@ Metrics World::metrics() const {
                                            m.stiffness[e], q, f.data(), 20);
     for (uint32_t i = 0; i < n; ++i) forces[m.elemVerts[b + i]] += f[i];
     r.elasticEnergy += er.energy;
-    r.maxStress = std::max(r.maxStress, std::sqrt(er.sumSqDisp / n) / m.size[e]);
+    const Real stress = std::sqrt(er.sumSqDisp / n) / m.size[e];
+    if (elementStress) (*elementStress)[e] = stress;
+    r.maxStress = std::max(r.maxStress, stress);
     r.minElementDet = std::min(r.minElementDet,
                                elementDeterminant(m.dim, state_.positions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n)));
   }
@@ -362,8 +471,8 @@ Metrics World::metrics() const {
     if (domain_.enabled)
       for (int a = 0; a < m.dim; ++a) pen = std::max({pen, domain_.min[a] - x[a], x[a] - domain_.max[a]});
     r.maxPenetration = std::max(r.maxPenetration, pen);
-    r.maxContactDepth = std::max(r.maxContactDepth, scratch_.contactDepth[i]);
   }
+  r.maxContactDepth = scratch_.maxContactDepth;
   return r;
 }
 
@@ -383,6 +492,7 @@ size_t World::memoryBytes() const {
   size_t b = sizeof(*this) + model_->memoryBytes() + stageRest_.memoryBytes();
   b += bytes(state_.positions) + bytes(state_.velocities) + bytes(state_.rotations);
   b += bytes(scratch_.frames) + bytes(scratch_.previousPositions) + bytes(scratch_.contactDepth);
+  b += (elementSplit_.capacity() + vertexSplit_.capacity()) * sizeof(size_t);
   for (const Manipulator& m : manipulators_) b += sizeof(m) + bytes(m.settings.path.keys);
   return b;
 }

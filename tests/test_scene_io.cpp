@@ -121,7 +121,7 @@ TEST(SceneIo, parseScene_minimalFile_usesStructDefaults) {
   EXPECT_DOUBLE_EQ(s.body.material.youngsModulus, MaterialSettings{}.youngsModulus);
   EXPECT_EQ(s.simulation.dt, 0);  // auto
   EXPECT_EQ(s.simulation.gravity, sim.gravity);
-  EXPECT_EQ(s.simulation.threads, 1);
+  EXPECT_EQ(s.simulation.threads, hardwareThreads());  // one per core
   EXPECT_DOUBLE_EQ(s.output.duration, d.output.duration);
   EXPECT_DOUBLE_EQ(s.output.frameInterval, d.output.frameInterval);
   EXPECT_FALSE(s.domain.enabled);

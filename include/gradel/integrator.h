@@ -1,7 +1,9 @@
 // Time-stepping settings (paper sec. 2.3, eqs. 2-3).
 #pragma once
 
+#include <algorithm>
 #include <string>
+#include <thread>
 
 #include "gradel/types.h"
 
@@ -27,6 +29,12 @@ enum class PeriodRule { Vertex, Element };
 PeriodRule parsePeriodRule(const std::string& name);  ///< "vertex" | "element"
 const char* periodRuleName(PeriodRule r);
 
+/// One worker thread per hardware thread (at least 1, at most 1024): the default, since results
+/// are identical at any count and the step's thread team never waits by spinning for long.
+inline int hardwareThreads() {
+  return int(std::clamp(std::thread::hardware_concurrency(), 1u, 1024u));
+}
+
 struct SimulationSettings {
   IntegratorKind integrator = IntegratorKind::SymplecticEuler;
   Real dt = 0;               ///< [s] time step; 0 = auto: dtFraction of the smallest element's period.
@@ -34,7 +42,7 @@ struct SimulationSettings {
   PeriodRule dtPeriod = PeriodRule::Vertex;  ///< Which smallest period dt = auto refers to.
   Real damping = 0.0;        ///< [1/s] velocity damping rate c: v <- v / (1 + c dt) every step (never adds energy).
   Vec3 gravity{0, -9.81, 0};  ///< [m/s^2]
-  int threads = 1;           ///< Worker threads (results are identical at any count).
+  int threads = hardwareThreads();  ///< Worker threads (results are identical at any count).
   int rotationIterations = 4;  ///< Max warm-started rotation refinements per element per step.
   int implicitIterations = 10;  ///< Implicit only: local/global passes per step (projective.h).
 };

@@ -15,4 +15,14 @@ Scene paperBenchScene(const std::string& shape, int size, LayoutKind layout, int
 /// Applies the starting deformation of paperBenchScene to a freshly built world.
 void preparePaperBench(World& world);
 
+/// What a user runs (issue 10's "real scene"): SI units (`consistent` scaling, Young's modulus
+/// `youngsModulus` [Pa], 1000 kg/m^3), a sphere of fixed physical diameter (0.32 m, so the voxel
+/// is 0.32 / size m and finer grids mean smaller voxels, as in the viewer) resting on the floor
+/// of a box domain (walls, restitution 0.3, friction 0.3), gravity, damping 1/s, dt = 1/10 of the
+/// smallest vertex period (the default rule), a sphere manipulator (radius 0.06 m) pressing down
+/// on the top of the body by 1.6 cm over the first 0.05 s and then holding, and a pin holding a
+/// small patch of the body's side (x < 1.5 voxels from the left, the body's rest position).
+/// The benchmark adds metrics and stress once per output frame (frameInterval, 1/60 s).
+Scene realBenchScene(int size, Real youngsModulus, LayoutKind layout, int threads = 1);
+
 }  // namespace gradel

@@ -52,6 +52,21 @@ inline d4 sqrt(d4 a) {
   return a;
 #endif
 }
+/// Lane-wise min / max (with a NaN lane the result's lane is b's).
+inline d4 min(d4 a, d4 b) {
+#if defined(__AVX__)
+  return (d4)_mm256_min_pd((__m256d)a, (__m256d)b);
+#else
+  return select(a < b, a, b);
+#endif
+}
+inline d4 max(d4 a, d4 b) {
+#if defined(__AVX__)
+  return (d4)_mm256_max_pd((__m256d)a, (__m256d)b);
+#else
+  return select(a > b, a, b);
+#endif
+}
 inline bool none(m4 m) { return !(m[0] | m[1] | m[2] | m[3]); }
 
 }  // namespace gradel::simd

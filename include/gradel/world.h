@@ -17,6 +17,9 @@
 
 namespace gradel {
 
+class ThreadTeam;
+class ChunkQueue;
+
 /// Runtime state: what changes every step.
 struct State {
   Real time = 0;                 ///< [s]
@@ -29,7 +32,8 @@ struct State {
 struct StepScratch {
   std::vector<ElementFrame> frames;     ///< Per element: k M and (k e, k), written by the element stage.
   std::vector<Vec3> previousPositions;  ///< [m] positions at the start of an implicit step (swept contacts).
-  std::vector<Real> contactDepth;   ///< [m] per vertex: depth before correction in the last step.
+  std::vector<Real> contactDepth;   ///< [m] per vertex, implicit step only: depth before correction.
+  Real maxContactDepth = 0;         ///< [m] deepest vertex found (and corrected) in the last step.
 };
 
 /// Figures written per frame to metrics.csv.
@@ -50,6 +54,7 @@ class World {
  public:
   World(std::shared_ptr<const RestModel> model, const SimulationSettings& sim, const DomainSettings& domain,
         std::vector<ManipulatorSettings> manipulators);
+  ~World();
 
   /// Advances one time step dt().
   void step();
@@ -89,15 +94,21 @@ class World {
   /// The same from an elementStress() result already at hand.
   std::vector<Real> vertexStress(const std::vector<Real>& elementStress) const;
 
-  Metrics metrics() const;
+  Metrics metrics() const { return metrics(nullptr); }
+  /// The same, and, when elementStress is given, elementStress() from the same pass over the
+  /// elements (what a written frame needs: one reference-kernel pass per frame, not two).
+  Metrics metrics(std::vector<Real>* elementStress) const;
   /// FNV-1a hash of the positions and velocities (bitwise): equal states give equal hashes.
   uint64_t stateHash() const;
   /// Bytes held by the world: rest model, state, scratch and manipulators (capacities).
   size_t memoryBytes() const;
 
  private:
+  struct ContactBounds;
   void stageElementFrames(size_t begin, size_t end);
-  void stageVertices(size_t begin, size_t end, bool contacts);
+  Real stageVertices(size_t begin, size_t end, const ContactBounds* contacts);
+  ContactBounds contactBounds() const;
+  void prepareTeam(int members);
   void stageContacts(size_t begin, size_t end);
   Real resolveVertexContacts(const Vec3& previous, Vec3& x, Vec3& v) const;
   void moveManipulators(Real tNext);
@@ -116,6 +127,13 @@ class World {
   std::vector<PinSettings> pins_;
   PinSet pinSet_;
   std::unique_ptr<ProjectiveSolver> projective_;  ///< Implicit only: built at the first step (dt, pins fixed).
+  // Threads of the explicit step (thread_team.h): the team, its chunk queues and each member's
+  // first share of the element and vertex chunks (weighted by work), made for `teamMembers_`.
+  std::unique_ptr<ThreadTeam> team_;
+  std::unique_ptr<ChunkQueue> elementQueue_, vertexQueue_;
+  std::vector<size_t> elementSplit_, vertexSplit_;
+  std::vector<Real> memberContactDepth_;
+  int teamMembers_ = 0;
 };
 
 }  // namespace gradel

@@ -1,0 +1,83 @@
+// A persistent team of worker threads for the explicit step (private to the engine).
+//
+// Why not OpenMP: measured on the 2-core machine (README, "Threads"), libgomp's default waiting
+// spins for a long time at every barrier, so with one other busy program on the machine two
+// threads ran 3x slower than one; its passive policy can only be chosen by an environment
+// variable read when the program loads. This team
+//  - waits by spinning briefly (kSpinMicros) and then sleeping on a futex, so a waiting member
+//    gives its core back to whoever needs it (another program, or the member it waits for);
+//  - hands out work in chunks: each member starts on its own contiguous share (the same share
+//    every step, so its part of the arrays stays in its core's cache) and, when done, takes the
+//    chunks left in the other members' shares. A member that the OS has descheduled therefore
+//    delays a step by at most the chunk it holds, not by its whole share.
+// Which member computes which chunk never changes a result: every chunk writes only its own
+// items, computed the same way by any member.
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <thread>
+#include <vector>
+
+namespace gradel {
+
+/// Chunks of [0, items) of `chunk` items each, shared by `members`: member t owns the contiguous
+/// chunk range [split[t], split[t + 1]) and claims from it first.
+class ChunkQueue {
+ public:
+  /// `split` has members + 1 ascending chunk indices, split.front() = 0, split.back() = chunks.
+  void reset(const std::vector<size_t>& split);
+  /// Claims the next chunk for member t (own share first, then the others' in turn); false when
+  /// none is left.
+  bool claim(int t, size_t* chunkIndex);
+
+ private:
+  struct alignas(64) Share {
+    std::atomic<size_t> next{0};
+    size_t end = 0;
+  };
+  std::vector<Share> shares_;
+};
+
+class ThreadTeam {
+ public:
+  /// A team of `members` (>= 1): the calling thread is member 0, members - 1 workers are started.
+  explicit ThreadTeam(int members);
+  ~ThreadTeam();
+  ThreadTeam(const ThreadTeam&) = delete;
+  ThreadTeam& operator=(const ThreadTeam&) = delete;
+
+  int members() const { return members_; }
+
+  /// Runs job(t) on every member t in [0, members()) and returns when all have finished. Called
+  /// from the thread that made the team, never from inside a job.
+  template <class Job>
+  void run(Job&& job) {
+    if (members_ == 1) return job(0);
+    auto call = [](void* j, int t) { (*static_cast<std::remove_reference_t<Job>*>(j))(t); };
+    dispatch(call, &job);
+  }
+
+  /// Inside a job: waits until every member has arrived.
+  void barrier();
+
+ private:
+  using Call = void (*)(void*, int);
+  void dispatch(Call call, void* job);
+  void workerLoop(int t);
+
+  int members_;
+  std::vector<std::thread> workers_;
+  // The job being run; `jobGeneration` counts dispatches (and is the word workers sleep on).
+  Call call_ = nullptr;
+  void* job_ = nullptr;
+  bool stop_ = false;
+  alignas(64) std::atomic<uint32_t> jobGeneration_{0};
+  alignas(64) std::atomic<uint32_t> barrierCount_{0};
+  alignas(64) std::atomic<uint32_t> barrierGeneration_{0};
+  alignas(64) std::atomic<uint32_t> doneCount_{0};
+  alignas(64) std::atomic<uint32_t> doneGeneration_{0};
+};
+
+}  // namespace gradel
