@@ -43,7 +43,7 @@ if(NOT GRADEL_SANITIZE AND EXISTS ${GRADEL_PYTHON_EXECUTABLE})
                COMMAND ${GRADEL_PYTHON_EXECUTABLE} -m pytest -q -p no:cacheprovider ${CMAKE_CURRENT_SOURCE_DIR}/python/tests
                WORKING_DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR})
       add_test(NAME python_example
-               COMMAND ${GRADEL_PYTHON_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/python/example.py --duration 0.2
+               COMMAND ${GRADEL_PYTHON_EXECUTABLE} ${CMAKE_CURRENT_SOURCE_DIR}/examples/python_example.py --duration 0.2
                WORKING_DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR})
       set_tests_properties(python_pytest python_example PROPERTIES ENVIRONMENT "${_env}" TIMEOUT 300)
       # pip install . into a fresh venv (Debian's numpy / pytest / distributed seen through

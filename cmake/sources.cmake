@@ -20,6 +20,7 @@ set(GRADEL_CORE_SOURCES
   src/rotation_fit.cpp
   src/shapes.cpp
   src/surface.cpp
+  src/thread_team.cpp
   src/volume.cpp
   src/world.cpp
   # Scene files (JSON, nlohmann_json as a private build dependency) and scene builders.
@@ -59,6 +60,7 @@ set(GRADEL_CLI_RENDER_SOURCES apps/render_cli.cpp)
 
 # gradel_tests (GRADEL_BUILD_TESTS): GoogleTest + rapidcheck, one file per engine part.
 set(GRADEL_TEST_SOURCES
+  tests/test_broad_phase.cpp
   tests/test_cantilever.cpp
   tests/test_cli.cpp
   tests/test_contacts.cpp

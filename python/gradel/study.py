@@ -319,11 +319,14 @@ class _Bar:
         self.stream.flush()
 
 
+# The summary figures in `gradel run`'s order; the final metrics follow in name order.
+_SUMMARY = ["steps", "dt", "simulated_seconds", "frames", "wall_seconds", "real_time_factor", "elements", "vertices",
+            "final_kinetic_energy", "max_penetration", "max_stress", "state_hash"]
+
+
 def _columns(study: Study, rows: List[Dict[str, Any]]) -> List[str]:
-    first = ["run_id", "error", "cached"] + study.keys
-    rest: List[str] = []
-    for r in rows:
-        rest.extend(k for k in r if k not in first and k not in rest and k != "overrides")
+    first = ["run_id", "error", "cached"] + study.keys + _SUMMARY
+    rest = sorted({k for r in rows for k in r if k not in first and k != "overrides"})
     return first + rest
 
 
