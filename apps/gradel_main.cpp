@@ -33,7 +33,7 @@
 #include "gradel/shapes.h"
 #include "gradel/size_limits.h"
 #ifdef GRADEL_WITH_RENDER
-#include "gradel/render/render_command.h"
+#include "render_cli.h"
 #endif
 
 #ifndef GRADEL_VERSION

@@ -1,4 +1,4 @@
-# gradel-bench: the speed benchmark (issue 4), printing CSV.
+# GRADEL_BUILD_BENCH: gradel-bench, the speed benchmark (issue 4), printing CSV (bench/run.sh).
 add_executable(gradel-bench ${CMAKE_CURRENT_SOURCE_DIR}/bench/gradel_bench.cpp)
 target_link_libraries(gradel-bench PRIVATE gradel::core CLI11::CLI11)
 target_compile_options(gradel-bench PRIVATE -Wall -Wextra)

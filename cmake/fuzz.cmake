@@ -1,13 +1,13 @@
-# libFuzzer targets for every reader (fuzz/) and for scene files (fuzz_scene), built with clang
-# whatever compiler builds the rest, and bounded fuzz runs registered as ctest tests (fuzz_<format>,
-# GRADEL_FUZZ_SECONDS each, from the committed seed corpus fuzz/corpus/<format>/). Skipped, with a message, when clang or its
+# GRADEL_BUILD_FUZZ: libFuzzer targets for every reader (fuzz/) and for scene files (fuzz_scene),
+# built with clang whatever compiler builds the rest, and bounded fuzz runs registered as ctest tests
+# (fuzz_<format>, GRADEL_FUZZ_SECONDS each, from the committed seed corpus fuzz/corpus/<format>/).
+# Skipped, with a message, when clang or its
 # libFuzzer runtime (Debian: clang, libclang-rt-14-dev) is missing, and in the sanitizer build
 # (the fuzz targets carry their own ASan + UBSan).
-option(GRADEL_FUZZ "Build the libFuzzer targets and run them briefly in ctest" ON)
 set(GRADEL_FUZZ_SECONDS 20 CACHE STRING "Seconds each fuzz_<format> ctest test fuzzes")
 set(GRADEL_FUZZ_FORMATS binvox vox nrrd nifti raw obj stl ply scene)
 
-if(GRADEL_FUZZ AND NOT GRADEL_SANITIZE)
+if(NOT GRADEL_SANITIZE)
   find_program(GRADEL_CLANGXX NAMES clang++ clang++-14)
   set(GRADEL_LIBFUZZER_FOUND FALSE)
   if(GRADEL_CLANGXX)
@@ -38,7 +38,6 @@ if(GRADEL_FUZZ AND NOT GRADEL_SANITIZE)
       BUILD_ALWAYS ON  # the readers' sources live outside the sub-build; let ninja decide
       BUILD_BYPRODUCTS ${GRADEL_FUZZ_BIN}/fuzz_binvox)
     if(GRADEL_BUILD_TESTS)
-      enable_testing()
       foreach(format ${GRADEL_FUZZ_FORMATS})
         # A fresh work corpus first (new inputs are written there), the committed seeds second
         # (read only). Crash reproducers land in the build folder.

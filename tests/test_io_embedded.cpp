@@ -158,6 +158,9 @@ size_t countLines(const std::string& text, const std::string& prefix) {
 }
 
 TEST(SourceMesh, cli_renderExportWritesTheUsersMesh) {
+#ifndef GRADEL_WITH_RENDER
+  GTEST_SKIP() << "`gradel render` is not built (GRADEL_BUILD_RENDER=OFF)";
+#endif
   const fs::path dir = fs::temp_directory_path() / ("gradel-embedded-cli-" + std::to_string(::getpid()));
   fs::remove_all(dir);
   const TriangleMesh file = readSampleObj();

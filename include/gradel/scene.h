@@ -1,5 +1,5 @@
 // A scene: everything needed to build a World, as read from a JSON file (docs/scenes.md).
-// Scene builders live here and serve the CLI, tests, benchmarks and (later) the viewer.
+// Scene builders live here and serve the CLI, tests, benchmarks, the viewer and Python.
 #pragma once
 
 #include <memory>

@@ -59,8 +59,8 @@ class VoxelVolume {
   std::vector<uint8_t> data_;
 };
 
-/// Where a volume comes from. Procedural shapes now; file readers (binvox, NRRD, ...) later
-/// implement the same interface. `describe()` names the source in error messages.
+/// Where a volume comes from: procedural shapes (shapes.h), the file readers (io/volume_file.h)
+/// and in-memory arrays (io/volume_data_source.h) implement it. `describe()` names the source in error messages.
 class VolumeSource {
  public:
   virtual ~VolumeSource() = default;

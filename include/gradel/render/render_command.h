@@ -1,13 +1,12 @@
 // `gradel render SCENE.json --out DIR [--frames N] [--size WxH] ...`: simulates a scene and draws
 // the viewer's pictures offscreen (EGL surfaceless) into DIR/frame_NNNNN.png, then DIR/render.mp4
 // when ffmpeg is on the PATH; optionally exports the display surface of every frame as OBJ or
-// PLY (DIR/surface_NNNNN.obj) for Blender. DIR/render.json summarises the run.
+// PLY (DIR/surface_NNNNN.obj) for Blender. DIR/render.json summarises the run. The command-line
+// options that fill RenderCommandOptions are the CLI's (apps/render_cli.h).
 #pragma once
 
 #include <optional>
 #include <string>
-
-#include <CLI/CLI.hpp>
 
 namespace gradel::render {
 
@@ -29,9 +28,6 @@ struct RenderCommandOptions {
   bool noPictures = false;          ///< Export only (no OpenGL needed).
   bool noVideo = false;
 };
-
-/// Adds the `render` subcommand to the CLI, filling `o`.
-CLI::App* addRenderCommand(CLI::App& app, RenderCommandOptions& o);
 
 /// Runs it. Returns the exit code: 0 ok, 4 no OpenGL (message on stderr); throws InputError for
 /// bad input (exit code 2 in the CLI).

@@ -3,7 +3,7 @@
 floor, a sphere manipulator driven from this script pushes it, and the state is read as numpy
 arrays every frame.
 
-    PYTHONPATH=build/python /usr/bin/python3 python/example.py [--duration 1.0]
+    PYTHONPATH=build/python /usr/bin/python3 examples/python_example.py [--duration 1.0]
 
 (build/ is what scripts/setup builds; run from the repository root.)
 """

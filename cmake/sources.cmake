@@ -1,0 +1,89 @@
+# Which source file builds which target: the one list per target, shared by the top-level
+# CMakeLists.txt and the standalone fuzz build (fuzz/CMakeLists.txt). Paths are relative to the
+# repository root. A new source file joins exactly one of these lists.
+
+# gradel_core: the engine. Needs Eigen and OpenMP (and zlib + the NIfTI header layouts for the
+# readers below); no windowing, no OpenGL, no command-line parser.
+set(GRADEL_CORE_SOURCES
+  src/contacts.cpp
+  src/divergence.cpp
+  src/element.cpp
+  src/element_stage.cpp
+  src/embedding.cpp
+  src/huge_pages.cpp
+  src/isosurface.cpp
+  src/layout.cpp
+  src/mesh.cpp
+  src/model.cpp
+  src/output.cpp
+  src/pins.cpp
+  src/projective.cpp
+  src/rotation_fit.cpp
+  src/run_budget.cpp
+  src/shapes.cpp
+  src/size_limits.cpp
+  src/surface.cpp
+  src/thread_team.cpp
+  src/volume.cpp
+  src/world.cpp
+  # Scene files (JSON, nlohmann_json as a private build dependency) and scene builders.
+  src/scene_build.cpp
+  src/scene_io.cpp
+  src/scene_presets.cpp
+  # The cantilever / stretch experiments behind gradel-validate and the tests.
+  src/validation.cpp)
+
+# The volume and mesh readers (docs/io.md), part of gradel_core: zlib for gzip-encoded NRRD and
+# .nii.gz, the NIfTI-1/2 header layouts from libnifti2-dev (headers only). Also fuzzed (fuzz/).
+set(GRADEL_IO_SOURCES
+  src/io/binvox.cpp
+  src/io/byte_stream.cpp
+  src/io/grey_levels.cpp
+  src/io/mesh_file.cpp
+  src/io/nifti.cpp
+  src/io/nrrd.cpp
+  src/io/raw_volume.cpp
+  src/io/read_limits.cpp
+  src/io/volume_file.cpp
+  src/io/vox.cpp
+  src/io/voxelize.cpp)
+
+# gradel_render (GRADEL_BUILD_RENDER): OpenGL 3.3 drawing, EGL offscreen context, PNG files (stb).
+set(GRADEL_RENDER_SOURCES
+  src/image.cpp
+  src/render/camera.cpp
+  src/render/draw_list.cpp
+  src/render/offscreen.cpp
+  src/render/render_command.cpp
+  src/render/renderer.cpp)
+
+# The `gradel` command-line program; apps/render_cli.cpp adds `gradel render` (GRADEL_BUILD_RENDER).
+set(GRADEL_CLI_SOURCES apps/gradel_main.cpp)
+set(GRADEL_CLI_RENDER_SOURCES apps/render_cli.cpp)
+
+# gradel_tests (GRADEL_BUILD_TESTS): GoogleTest + rapidcheck, one file per engine part.
+set(GRADEL_TEST_SOURCES
+  tests/test_broad_phase.cpp
+  tests/test_cantilever.cpp
+  tests/test_cli.cpp
+  tests/test_contacts.cpp
+  tests/test_divergence.cpp
+  tests/test_dynamics.cpp
+  tests/test_element.cpp
+  tests/test_element_stage.cpp
+  tests/test_embedding.cpp
+  tests/test_golden.cpp
+  tests/test_implicit.cpp
+  tests/test_io_embedded.cpp
+  tests/test_io_grey_readers.cpp
+  tests/test_io_meshes.cpp
+  tests/test_io_samples.cpp
+  tests/test_io_voxel_readers.cpp
+  tests/test_layout.cpp
+  tests/test_model.cpp
+  tests/test_output.cpp
+  tests/test_pins.cpp
+  tests/test_rotation_fit.cpp
+  tests/test_scene_io.cpp
+  tests/test_scenes.cpp
+  tests/test_surface.cpp)

@@ -1,0 +1,143 @@
+# Type stubs of the compiled module gradel.gradel (python/gradel_module.cpp), re-exported by the
+# package `gradel`. Units are SI (m, s, kg, Pa). Checked against the module by
+# python/tests/test_stubs.py (mypy's stubtest).
+from typing import Optional, Sequence, Tuple, TypedDict
+
+import numpy as np
+import numpy.typing as npt
+
+class InputError(ValueError):
+    """Bad input (a file, a key, a value); the message names it."""
+
+class _Metrics(TypedDict):
+    time: float
+    kinetic_energy: float
+    elastic_energy: float
+    gravity_energy: float
+    linear_momentum: list[float]
+    angular_momentum: list[float]
+    max_stress: float
+    max_penetration: float
+    min_element_det: float
+
+def load_volume(
+    path: str,
+    *,
+    format: Optional[str] = None,
+    threshold: Optional[float] = None,
+    range: Optional[Tuple[float, float]] = None,
+    resolution: int = 64,
+    dims: Optional[Tuple[int, int, int]] = None,
+    type: Optional[str] = None,
+    endian: str = "little",
+    header_bytes: int = 0,
+    model: int = 0,
+) -> npt.NDArray[np.bool_]:
+    """Reads a volume or mesh file (binvox, vox, nrrd, nifti, raw, obj, stl, ply) into a
+    read-only boolean array [i, j, k] without copying it."""
+
+class Body:
+    """A binary voxel volume to simulate."""
+
+    @staticmethod
+    def from_array(voxels: npt.ArrayLike, *, voxel_size: float = 0.01) -> Body: ...
+    @staticmethod
+    def from_file(
+        path: str,
+        *,
+        format: Optional[str] = None,
+        threshold: Optional[float] = None,
+        range: Optional[Tuple[float, float]] = None,
+        resolution: int = 64,
+        dims: Optional[Tuple[int, int, int]] = None,
+        type: Optional[str] = None,
+        endian: str = "little",
+        header_bytes: int = 0,
+        model: int = 0,
+        voxel_size: float = 0.01,
+        dim: int = 3,
+    ) -> Body: ...
+    @staticmethod
+    def from_shape(shape: str, size: int, *, dim: int = 3, voxel_size: float = 0.01) -> Body: ...
+    @property
+    def voxels(self) -> npt.NDArray[np.bool_]: ...
+    @property
+    def dim(self) -> int: ...
+    @property
+    def voxel_size(self) -> float: ...
+    @property
+    def filled(self) -> int: ...
+
+class Simulation:
+    """A body built into a gradational layout and simulated (World)."""
+
+    def __init__(
+        self,
+        body: Body,
+        *,
+        layout: str = "gradational",
+        scaling: str = "consistent",
+        youngs_modulus: float = ...,
+        density: float = ...,
+        k: float = ...,
+        integrator: str = "symplectic",
+        dt: Optional[float] = None,
+        dt_fraction: float = ...,
+        damping: float = ...,
+        gravity: Sequence[float] = [0.0, -9.81, 0.0],
+        threads: int = 1,
+        position: Sequence[float] = [0.0, 0.0, 0.0],
+        velocity: Sequence[float] = [0.0, 0.0, 0.0],
+        domain_min: Optional[Sequence[float]] = None,
+        domain_max: Optional[Sequence[float]] = None,
+        restitution: float = ...,
+        friction: float = ...,
+    ) -> None: ...
+    @staticmethod
+    def from_scene(path: str) -> Simulation: ...
+    def add_manipulator(
+        self,
+        type: str = "sphere",
+        *,
+        radius: float = 0.02,
+        position: Sequence[float] = [0.0, 0.0, 0.0],
+        half_length: float = 0.05,
+        axis: Sequence[float] = [0.0, 0.0, 1.0],
+        restitution: float = 1.0,
+        friction: float = 0.0,
+    ) -> int: ...
+    def move_manipulator(self, index: int, position: Sequence[float], velocity: Sequence[float] = [0.0, 0.0, 0.0]) -> None: ...
+    @property
+    def manipulator_positions(self) -> npt.NDArray[np.float64]: ...
+    def step(self, n: int = 1) -> None: ...
+    def advance_to(self, t: float) -> None: ...
+    @property
+    def time(self) -> float: ...
+    @property
+    def dt(self) -> float: ...
+    @property
+    def num_vertices(self) -> int: ...
+    @property
+    def num_elements(self) -> int: ...
+    @property
+    def positions(self) -> npt.NDArray[np.float64]:
+        """(N, 3) float64 view of the vertex positions [m] (no copy, writable)."""
+    @property
+    def velocities(self) -> npt.NDArray[np.float64]:
+        """(N, 3) float64 view of the vertex velocities [m/s] (no copy, writable)."""
+    @property
+    def rest_positions(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def masses(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def stress(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def element_stress(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def state_hash(self) -> int: ...
+    @property
+    def voxels(self) -> npt.NDArray[np.bool_]: ...
+    def metrics(self) -> _Metrics: ...
+    def surface(
+        self, kind: str = "smooth"
+    ) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.uint32], npt.NDArray[np.float64]]: ...
