@@ -188,23 +188,47 @@ Vec3 frictionSlipCorrection(const Vec3& relativeStep, const Vec3& n, Real depth,
   return len <= allowed ? tangential : Vec3(tangential * (allowed / len));
 }
 
-void reflectVelocity(Vec3& v, const Vec3& surfaceVelocity, const Vec3& n, Real restitution, Real friction) {
+// The normal speed [m/s] at which a vertex really reached the surface, for the bounce. The
+// vertex started the step at distance s0 >= 0 outside with normal velocity u0 (relative to the
+// surface, negative = approaching) and ended it with u1 < 0; in between the forces accelerated it
+// at a = (u1 - u0) / dt. Under that constant acceleration it crossed with u_c^2 = u0^2 - 2 a s0.
+// Bouncing with e |u_c|, not e |u1|, is what keeps a contact from adding energy: for a vertex
+// pressed against a motionless surface by its elastic force (u0 = 0, s0 = 0) u1 = a dt is speed
+// gained *inside* the obstacle, and reflecting it would return, every step, kinetic energy that
+// the position projection has already paid for in elastic energy. With this rule the energy
+// after the contact, U(0) + 1/2 m e^2 u_c^2, never exceeds U(s0) + 1/2 m u0^2 (derivation in
+// contacts.h). Without a history (start == nullptr) the crossing speed is |u1|.
+Real crossingSpeed(Real u1, Real s0, const Vec3& surfaceVelocity, const Vec3& n, const StepStart* start) {
+  if (!start) return -u1;
+  if (!(s0 >= 0)) return 0;  // it started inside: no crossing, nothing to bounce
+  const Real u0 = (start->velocity - surfaceVelocity).dot(n);
+  const Real a = (u1 - u0) / start->dt;
+  const Real c2 = u0 * u0 - 2 * a * s0;
+  return std::min(-u1, c2 > 0 ? std::sqrt(c2) : Real(0));
+}
+
+// v relative to the surface: the normal part, if approaching, replaced by e times the crossing
+// speed (outwards); the tangential part reduced by Coulomb friction.
+void reflectVelocity(Vec3& v, const Vec3& surfaceVelocity, const Vec3& n, Real restitution, Real friction, Real s0,
+                     const StepStart* start) {
   Vec3 rel = v - surfaceVelocity;
   const Real vn = rel.dot(n);
   if (vn < 0) {
+    const Real out = restitution > 0 ? restitution * crossingSpeed(vn, s0, surfaceVelocity, n, start) : Real(0);
     Vec3 vt = rel - vn * n;
     const Real vtLen = vt.norm();
-    // Coulomb: the tangential impulse is at most friction times the normal impulse (1 + e)|vn|.
-    const Real drop = friction * (1 + restitution) * (-vn);
+    // Coulomb: the tangential impulse is at most friction times the normal impulse |vn| + out.
+    const Real drop = friction * (out - vn);
     vt = vtLen > drop ? Vec3(vt * (1 - drop / vtLen)) : Vec3::Zero();
-    rel = vt - restitution * vn * n;
+    rel = vt + out * n;
   }
   v = surfaceVelocity + rel;
 }
 
 }  // namespace
 
-ContactResult resolveManipulator(const Manipulator& m, const Vec3& xPrev, Vec3& x, Vec3& v, int dim, bool bounce) {
+ContactResult resolveManipulator(const Manipulator& m, const Vec3& xPrev, Vec3& x, Vec3& v, int dim, bool bounce,
+                                 const StepStart* start) {
   ContactResult res;
   const Vec3 p0 = xPrev - m.previousPosition;  // start of the step, in the moving frame
   Vec3 p1 = x - m.position;                    // end of the step, in the moving frame
@@ -249,11 +273,12 @@ ContactResult resolveManipulator(const Manipulator& m, const Vec3& xPrev, Vec3& 
   }
   if (dim == 2) target.z() = 0, n.z() = 0;
   x = m.position + target;
-  reflectVelocity(v, m.velocity, n, bounce ? m.settings.restitution : 0.0, m.settings.friction);
+  reflectVelocity(v, m.velocity, n, bounce ? m.settings.restitution : 0.0, m.settings.friction, d0, start);
   return res;
 }
 
-ContactResult resolveDomain(const DomainSettings& d, const Vec3& xPrev, Vec3& x, Vec3& v, int dim, bool bounce) {
+ContactResult resolveDomain(const DomainSettings& d, const Vec3& xPrev, Vec3& x, Vec3& v, int dim, bool bounce,
+                            const StepStart* start) {
   ContactResult res;
   if (!d.enabled) return res;
   for (int a = 0; a < dim; ++a) {
@@ -267,7 +292,8 @@ ContactResult resolveDomain(const DomainSettings& d, const Vec3& xPrev, Vec3& x,
       const Vec3 slip = frictionSlipCorrection(x - xPrev, n, depth, d.friction);
       for (int b = 0; b < dim; ++b)
         if (b != a) x[b] -= slip[b];
-      reflectVelocity(v, Vec3::Zero(), n, bounce ? d.restitution : 0.0, d.friction);
+      const Real s0 = side > 0 ? xPrev[a] - d.min[a] : d.max[a] - xPrev[a];  // distance inside at the start
+      reflectVelocity(v, Vec3::Zero(), n, bounce ? d.restitution : 0.0, d.friction, s0, start);
     }
   }
   return res;

@@ -114,8 +114,8 @@ void World::stageVertices(size_t begin, size_t end, bool contacts) {
   Real* contactDepth = scratch_.contactDepth.data();
   gatherVertexForces(m, stageRest_, scratch_.frames.data(), positions, begin, end, [&](size_t i, d4 force) {
     const d4 a = force * invMass[i] + g;
-    const d4 x0 = loadVec3(positions[i]);
-    d4 x = x0, v = loadVec3(velocities[i]);
+    const d4 x0 = loadVec3(positions[i]), v0 = loadVec3(velocities[i]);
+    d4 x = x0, v = v0;
     if (forward) {
       x = x + dt * v;  // eq. 3 with V(T): the paper's literal order
       v = (v + dt * a) * damp;
@@ -125,28 +125,30 @@ void World::stageVertices(size_t begin, size_t end, bool contacts) {
     }
     storeVec3(positions[i], x), storeVec3(velocities[i], v);
     if (contacts) {
-      Vec3 previous;
-      storeVec3(previous, x0);
-      contactDepth[i] = resolveVertexContacts(previous, positions[i], velocities[i]);
+      Vec3 previous, previousVelocity;
+      storeVec3(previous, x0), storeVec3(previousVelocity, v0);
+      contactDepth[i] = resolveVertexContacts(previous, previousVelocity, positions[i], velocities[i]);
     }
   });
 }
 
-// Contacts of one vertex, swept from `previous` (independent per vertex). The first pass bounces
-// (sec. 3.5). A vertex pinched between surfaces (a manipulator and a wall, or two manipulators) is
+// Contacts of one vertex, swept from `previous` (independent per vertex); `previousVelocity` is its
+// velocity at the start of the step (the bounce uses the speed at which it crossed a surface, not
+// the speed gained inside it: contacts.h). The first pass bounces (sec. 3.5). A vertex pinched between surfaces (a manipulator and a wall, or two manipulators) is
 // resolved again, up to three more passes, inelastically: repeated elastic reflections between
 // two surfaces would pump energy into it. The walls go last in every pass, so no vertex ever
 // leaves the box. Returns the deepest penetration found [m].
-Real World::resolveVertexContacts(const Vec3& previous, Vec3& x, Vec3& v) const {
+Real World::resolveVertexContacts(const Vec3& previous, const Vec3& previousVelocity, Vec3& x, Vec3& v) const {
   const int dim = model_->dim;
+  const StepStart start{previousVelocity, dt_};
   const size_t surfaces = manipulators_.size() + (domain_.enabled ? 1 : 0);
   Real depth = 0;
   for (int pass = 0; pass < 4; ++pass) {
     const bool bounce = pass == 0;
     Real passDepth = 0;
     for (const Manipulator& mp : manipulators_)
-      passDepth = std::max(passDepth, resolveManipulator(mp, previous, x, v, dim, bounce).depth);
-    passDepth = std::max(passDepth, resolveDomain(domain_, previous, x, v, dim, bounce).depth);
+      passDepth = std::max(passDepth, resolveManipulator(mp, previous, x, v, dim, bounce, &start).depth);
+    passDepth = std::max(passDepth, resolveDomain(domain_, previous, x, v, dim, bounce, &start).depth);
     depth = std::max(depth, passDepth);
     if (passDepth == 0 || surfaces < 2) break;
   }
@@ -157,7 +159,8 @@ Real World::resolveVertexContacts(const Vec3& previous, Vec3& x, Vec3& v) const 
 void World::stageContacts(size_t begin, size_t end) {
   for (size_t i = begin; i < end; ++i)
     scratch_.contactDepth[i] =
-        resolveVertexContacts(scratch_.previousPositions[i], state_.positions[i], state_.velocities[i]);
+        resolveVertexContacts(scratch_.previousPositions[i], scratch_.previousVelocities[i], state_.positions[i],
+                              state_.velocities[i]);
 }
 
 void World::moveManipulators(Real tNext) {
@@ -258,7 +261,7 @@ void World::stepImplicit() {
   Vec3 g = sim_.gravity;
   if (model_->dim == 2) g.z() = 0;
   const bool contacts = !manipulators_.empty() || domain_.enabled;
-  if (contacts) scratch_.previousPositions = state_.positions;
+  if (contacts) scratch_.previousPositions = state_.positions, scratch_.previousVelocities = state_.velocities;
   const Real tNext = state_.time + dt_;
   const std::vector<Vec3> x0 = state_.positions, v0 = state_.velocities;
   const std::vector<Quat> q0 = state_.rotations;
@@ -382,7 +385,8 @@ size_t World::memoryBytes() const {
   auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
   size_t b = sizeof(*this) + model_->memoryBytes() + stageRest_.memoryBytes();
   b += bytes(state_.positions) + bytes(state_.velocities) + bytes(state_.rotations);
-  b += bytes(scratch_.frames) + bytes(scratch_.previousPositions) + bytes(scratch_.contactDepth);
+  b += bytes(scratch_.frames) + bytes(scratch_.previousPositions) + bytes(scratch_.previousVelocities) +
+       bytes(scratch_.contactDepth);
   for (const Manipulator& m : manipulators_) b += sizeof(m) + bytes(m.settings.path.keys);
   return b;
 }

@@ -4,6 +4,22 @@
 // velocity, relative to the manipulator (its moving frame), is reflected: the normal part times
 // -restitution (1 = the paper's elastic bounce), the tangential part reduced by Coulomb friction.
 // The test is swept in the manipulator's frame, so a fast manipulator cannot pass through a vertex.
+//
+// A contact never adds energy (relative to the obstacle's frame). The position projection moves a
+// vertex against the force that pressed it in, storing elastic (or gravity) energy; the bounce
+// must not also return the speed the vertex gained from that force inside the obstacle, or a
+// vertex pressed against a motionless surface would be thrown back out every step and pump the
+// body up (issue 15: a sphere held inside a damped body raised its energy x32 in 0.6 s). So the
+// bounce is restitution times the normal speed at which the vertex *crossed* the surface, not the
+// speed it ends the step with. With s0 >= 0 its distance outside at the start of the step, u0 and
+// u1 its normal velocity (relative to the surface) at the start and end of the step and
+// a = (u1 - u0) / dt, constant acceleration gives the crossing speed u_c^2 = u0^2 - 2 a s0; the
+// bounce is e min(|u_c|, |u1|). In 1D, with U(s) = -m a s, the energy after the contact is
+//   U(0) + 1/2 m e^2 u_c^2 = U(s0) + 1/2 m u0^2 - (1 - e^2) 1/2 m u_c^2 <= the energy before,
+// equal for e = 1 (the paper's elastic strike is kept: a vertex hit at speed leaves at that
+// speed). A resting contact (u0 = 0, s0 = 0) is inelastic, like Box2D's restitution threshold but
+// without a scale-dependent constant. A vertex that started the step inside (an initial overlap,
+// or pushed in by another surface) did not cross: it is put out without a bounce.
 #pragma once
 
 #include <optional>
@@ -66,16 +82,25 @@ struct ContactResult {
   Real depth = 0;  ///< [m] how far the vertex was inside before it was pushed out (0 = no contact).
 };
 
+/// The vertex's velocity at the start of the step and the step [s]: what the bounce needs to find
+/// the speed at which the vertex crossed the surface (see above).
+struct StepStart {
+  Vec3 velocity{0, 0, 0};  ///< [m/s] before this step's forces acted.
+  Real dt = 0;             ///< [s] > 0.
+};
+
 /// Resolves one vertex against one manipulator, in place. xPrev is the vertex position at the
-/// start of the step (for the swept test). With bounce == false the contact is inelastic
+/// start of the step (for the swept test); `start` its velocity then (for the bounce; without it
+/// the bounce reflects the end velocity v, which adds energy under sustained contact: only for
+/// a single isolated impact, as in unit tests). With bounce == false the contact is inelastic
 /// (restitution 0): used when a vertex pinched between two surfaces is resolved again, so that
 /// repeated reflections cannot pump energy into it. Pure function of its arguments.
 ContactResult resolveManipulator(const Manipulator& m, const Vec3& xPrev, Vec3& x, Vec3& v, int dim,
-                                 bool bounce = true);
+                                 bool bounce = true, const StepStart* start = nullptr);
 
-/// Resolves one vertex against the domain walls, in place (bounce as above). xPrev as above:
-/// friction also acts on the position (see contacts.cpp, frictionSlipCorrection).
+/// Resolves one vertex against the domain walls, in place (bounce and start as above). xPrev as
+/// above: friction also acts on the position (see contacts.cpp, frictionSlipCorrection).
 ContactResult resolveDomain(const DomainSettings& d, const Vec3& xPrev, Vec3& x, Vec3& v, int dim,
-                            bool bounce = true);
+                            bool bounce = true, const StepStart* start = nullptr);
 
 }  // namespace gradel

@@ -29,6 +29,7 @@ struct State {
 struct StepScratch {
   std::vector<ElementFrame> frames;     ///< Per element: k M and (k e, k), written by the element stage.
   std::vector<Vec3> previousPositions;  ///< [m] positions at the start of an implicit step (swept contacts).
+  std::vector<Vec3> previousVelocities;  ///< [m/s] velocities then (the bounce's crossing speed, contacts.h).
   std::vector<Real> contactDepth;   ///< [m] per vertex: depth before correction in the last step.
 };
 
@@ -99,7 +100,7 @@ class World {
   void stageElementFrames(size_t begin, size_t end);
   void stageVertices(size_t begin, size_t end, bool contacts);
   void stageContacts(size_t begin, size_t end);
-  Real resolveVertexContacts(const Vec3& previous, Vec3& x, Vec3& v) const;
+  Real resolveVertexContacts(const Vec3& previous, const Vec3& previousVelocity, Vec3& x, Vec3& v) const;
   void moveManipulators(Real tNext);
   void stepImplicit();
   void applyPins(Real t);
