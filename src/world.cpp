@@ -9,6 +9,7 @@
 #include "gradel/element.h"
 #include "gradel/huge_pages.h"
 #include "gradel/rotation_fit.h"
+#include "gradel/settings_check.h"
 #include "gradel/simd.h"
 
 namespace gradel {
@@ -39,16 +40,23 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
       stageRest_(*model_),
       sim_(sim),
       domain_(domain) {
-  if (sim_.threads < 1) sim_.threads = 1;
-  if (!(sim_.dt >= 0) || !std::isfinite(sim_.dt)) throw InputError("simulation.dt must be 'auto' or a positive number of seconds");
-  if (!(sim_.dtFraction > 0 && sim_.dtFraction <= 1)) throw InputError("simulation.dt_fraction must be in (0, 1]");
-  if (!(sim_.damping >= 0) || !std::isfinite(sim_.damping)) throw InputError("simulation.damping must be >= 0");
-  if (!sim_.gravity.allFinite()) throw InputError("simulation.gravity must be finite");
+  validate(sim_);
+  validate(domain_, model_->dim);
   const Real period = sim_.dtPeriod == PeriodRule::Element ? model_->smallestPeriod : model_->smallestVertexPeriod;
   // The implicit integrator is stable at any dt: "auto" is one display frame.
-  const Real autoDt = sim_.integrator == IntegratorKind::Implicit ? 1.0 / 60.0 : sim_.dtFraction * period;
+  Real autoDt = sim_.integrator == IntegratorKind::Implicit ? 1.0 / 60.0 : sim_.dtFraction * period;
+  if (sim_.integrator == IntegratorKind::ForwardEuler && sim_.dt == 0) {
+    // Forward Euler on x'' = -w^2 x with the velocity damping v <- v / (1 + c dt) multiplies the
+    // energy of a mode by (1 + (w dt)^2) / (1 + c dt) every step: unstable at every dt without
+    // damping, stable for dt < c / w^2. With w = 2 pi / period (the fastest mode), half that bound.
+    if (!(sim_.damping > 0))
+      throw InputError("integrator: forward_euler is unstable at every dt without damping (each step multiplies a "
+                       "vibration's energy by 1 + (omega dt)^2); give damping > 0 (dt auto is then "
+                       "damping / (2 omega^2)), an explicit dt, or use symplectic");
+    const Real omega = 2 * M_PI / period;
+    autoDt = std::min(autoDt, 0.5 * sim_.damping / (omega * omega));
+  }
   dt_ = sim_.dt > 0 ? sim_.dt : autoDt;
-  if (sim_.implicitIterations < 1) throw InputError("simulation.implicit_iterations must be >= 1");
   if (!(dt_ > 0) || !std::isfinite(dt_)) throw InputError("simulation.dt: could not derive a positive time step");
 
   const size_t V = model_->numVertices(), E = model_->numElements();
@@ -69,11 +77,8 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
 }
 
 size_t World::addManipulator(ManipulatorSettings s, const Vec3& position) {
-  if (!(s.radius > 0) || !std::isfinite(s.radius)) throw InputError("manipulator radius must be > 0 [m]");
-  if (s.shape == ManipulatorShape::Cylinder) {
-    if (!(s.axis.norm() > 0) || !s.axis.allFinite()) throw InputError("manipulator axis must be non-zero");
-    s.axis.normalize();
-  }
+  validate(s);
+  if (s.shape == ManipulatorShape::Cylinder) s.axis.normalize();
   Manipulator m;
   m.settings = std::move(s);
   const bool scripted = !m.settings.path.keys.empty();
