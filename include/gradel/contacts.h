@@ -5,21 +5,26 @@
 // -restitution (1 = the paper's elastic bounce), the tangential part reduced by Coulomb friction.
 // The test is swept in the manipulator's frame, so a fast manipulator cannot pass through a vertex.
 //
-// A contact never adds energy (relative to the obstacle's frame). The position projection moves a
-// vertex against the force that pressed it in, storing elastic (or gravity) energy; the bounce
-// must not also return the speed the vertex gained from that force inside the obstacle, or a
-// vertex pressed against a motionless surface would be thrown back out every step and pump the
-// body up (issue 15: a sphere held inside a damped body raised its energy x32 in 0.6 s). So the
-// bounce is restitution times the normal speed at which the vertex *crossed* the surface, not the
-// speed it ends the step with. With s0 >= 0 its distance outside at the start of the step, u0 and
-// u1 its normal velocity (relative to the surface) at the start and end of the step and
-// a = (u1 - u0) / dt, constant acceleration gives the crossing speed u_c^2 = u0^2 - 2 a s0; the
-// bounce is e min(|u_c|, |u1|). In 1D, with U(s) = -m a s, the energy after the contact is
-//   U(0) + 1/2 m e^2 u_c^2 = U(s0) + 1/2 m u0^2 - (1 - e^2) 1/2 m u_c^2 <= the energy before,
-// equal for e = 1 (the paper's elastic strike is kept: a vertex hit at speed leaves at that
-// speed). A resting contact (u0 = 0, s0 = 0) is inelastic, like Box2D's restitution threshold but
-// without a scale-dependent constant. A vertex that started the step inside (an initial overlap,
-// or pushed in by another surface) did not cross: it is put out without a bounce.
+// A contact never adds energy (relative to the obstacle's frame; issue 15: a cylinder held through
+// a damped body raised its energy x26 in 0.6 s, a sphere pressing it into a wall x13). Two rules:
+// 1. The bounce is restitution times the normal speed at which the vertex *approached*, not the
+//    speed it ends the step with: with u0, u1 its normal velocity (relative to the surface) at the
+//    start and end of the step, s0 >= 0 its distance outside at the start and a = (u1 - u0) / dt,
+//    the crossing speed is min(|u0|, |u1|, sqrt(u0^2 - 2 a s0)). The speed gained *inside* the
+//    obstacle from the force that presses the vertex in is never returned (reflecting it every
+//    step pumped the body up). A vertex that started the step receding (u0 >= 0) and was turned
+//    back within it, or that started inside, made no flight the step can resolve: resting
+//    contact, no bounce (like Box2D's restitution threshold, without a scale-dependent constant).
+// 2. The position projection lifts the vertex by `lift` against the normal acceleration a < 0
+//    that pressed it in, storing |a| lift per unit mass of elastic (or gravity) energy; that
+//    energy is taken out of the vertex's kinetic energy relative to the surface, first from the
+//    bounce, then from the sliding. Without it a frictionless restitution-0 contact still gained
+//    energy (x5 for the cylinder). The sliding loss is 1/2 (a dt)^2 per step at most: a numerical
+//    friction of order dt that vanishes as dt -> 0.
+// A real strike keeps the paper's elastic bounce (a vertex hit at speed leaves at that speed, less
+// the O(dt) stored energy). Without the vertex's start-of-step velocity (`StepStart`, unit tests
+// of single impacts) both rules are off and the end velocity is reflected.
+
 #pragma once
 
 #include <optional>
