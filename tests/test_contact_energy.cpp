@@ -6,6 +6,7 @@
 #include <rapidcheck/gtest.h>
 
 #include <cstdlib>
+#include <sstream>
 
 #include "gradel/contacts.h"
 #include "test_support.h"
@@ -143,4 +144,92 @@ TEST(ContactEnergy, SpherePressingIntoAWallTakesEnergyOut) {
   std::printf("sphere + wall: E after first step %.4g J, max %.4g J, ratio %.4f\n", t.first, t.max, t.ratio());
   EXPECT_LE(t.ratio(), 1.0 + 1e-9);
   EXPECT_LT(t.last, t.first);
+}
+
+// ---- property: random bodies, motionless obstacles and walls pressing them -------------------
+
+namespace {
+
+// Steps per case: 1e4 by default; GRADEL_PROPERTY_STEPS lowers it (the sanitizer pass).
+long propertySteps() {
+  const char* s = std::getenv("GRADEL_PROPERTY_STEPS");
+  return s ? std::max(1L, std::atol(s)) : 10000L;
+}
+
+// Tolerance, relative to the larger of the reference and the elastic energy: the energy measured
+// for symplectic Euler (v + a dt / 2, metrics()) is not its exactly conserved quantity; on a free
+// body it stays flat to ~2e-5 over 1e5 steps. 1e-4 is above that measurement noise and far below
+// the pumping seen (x2 to x1000).
+const Real kTolerance = 1e-4;
+
+void energyNeverRises() {
+  const std::string shape = *rc::gen::element<std::string>("sphere", "box");
+  const int size = *rc::gen::inRange(6, 11);
+  const Body body = makeBody(shape, size, 3, LayoutKind::Gradational);
+  const Real h = 0.01 * size;  // body edge [m]; the body spans [0, h]^3
+  SimulationSettings sim;
+  sim.damping = *rc::gen::inRange(1, 51) * 0.1;  // (0, 5] 1/s
+  sim.gravity = *rc::gen::element(0, 1) && !std::getenv("GRADEL_PROPERTY_NO_GRAVITY") ? Vec3(0, -9.81, 0) : Vec3::Zero();
+  auto unit = [] { return *rc::gen::inRange(0, 101) * 0.01; };  // [0, 1]
+  std::vector<ManipulatorSettings> obstacles;
+  const int count = *rc::gen::inRange(1, 3);
+  for (int i = 0; i < count; ++i) {
+    const bool cylinder = *rc::gen::element(0, 1);
+    // Centres anywhere in the body's box (some deep inside), radii 10-40 % of the edge.
+    const Vec3 at(unit() * h, unit() * h, unit() * h);
+    ManipulatorSettings m = obstacle(cylinder ? ManipulatorShape::Cylinder : ManipulatorShape::Sphere,
+                                     (0.1 + 0.3 * unit()) * h, at, unit(), unit());
+    m.halfLength = (0.2 + unit()) * h;
+    m.axis = Vec3(unit() - 0.5, unit() - 0.5, unit() - 0.5 + 1e-3);
+    obstacles.push_back(m);
+  }
+  DomainSettings walls;
+  walls.enabled = *rc::gen::element(0, 1) && !std::getenv("GRADEL_PROPERTY_NO_WALLS");
+  if (walls.enabled) {  // a floor and a side wall cutting up to 20 % into the body
+    walls.min = Vec3(-1, unit() * 0.2 * h, -1);
+    walls.max = Vec3(h * (1 - 0.2 * unit()), 1, 1);
+    walls.restitution = unit();
+    walls.friction = unit();
+  }
+  World w(body.model, sim, walls, obstacles);
+  const long steps = propertySteps();
+  w.step();  // pushes the vertices out of the obstacles: the reference energy after it
+  const Real e0 = totalEnergy(w);
+  Real peak = e0;
+  for (long s = 1; s < steps; ++s) {
+    w.step();
+    if (s % 25 == 0) peak = std::max(peak, totalEnergy(w));
+  }
+  // Rounding: the energy is a sum over ~10^3 terms of size up to E, each with relative error
+  // ~1e-16, and the symplectic energy measure itself (v + a dt / 2) has an O((omega dt)^2)
+  // swing that the first steps' re-balancing can show: 1e-6 of the larger of E and the elastic
+  // energy scale is far above the first and below any pumping (which was x5 to x30).
+  const Metrics m = w.metrics();
+  RC_ASSERT(std::isfinite(peak));
+  RC_LOG() << shape << " " << size << ", damping " << sim.damping << ", " << obstacles.size() << " obstacles, walls "
+           << walls.enabled << ": E after the first step " << e0 << " J, peak " << peak << " J, now "
+           << m.kineticEnergy + m.elasticEnergy + m.gravityEnergy << " J\n";
+  RC_ASSERT(peak <= e0 + kTolerance * std::max(std::abs(e0), m.elasticEnergy) + 1e-12);
+}
+
+}  // namespace
+
+// OPEN (issue 15), hence disabled: the property still fails. Counterexamples found (3000 steps):
+// a thin cylinder (radius ~1 voxel, random axis, restitution 0, friction 0.05) at the edge of a
+// 7^3 sphere, damping 0.1/s, no gravity, no walls: 0.047 J -> 58 J; a 7^3 box with two
+// obstacles and walls: 0.90 J -> 29 J; a 6^3 sphere on a sphere under gravity: +1.2 %.
+// The issue's three reproductions (above) pass. Run it with
+//   build/gradel_tests --gtest_also_run_disabled_tests --gtest_filter='ContactEnergy.*Never*'
+// (GRADEL_PROPERTY_CASES, GRADEL_PROPERTY_STEPS, GRADEL_PROPERTY_NO_WALLS, _NO_GRAVITY narrow it).
+TEST(ContactEnergy, DISABLED_NeverRisesWithMotionlessObstaclesAndWalls) {
+  rc::detail::TestParams params = rc::detail::configuration().testParams;
+  params.maxSuccess = std::getenv("GRADEL_PROPERTY_CASES") ? std::atoi(std::getenv("GRADEL_PROPERTY_CASES")) : 12;
+  rc::detail::TestMetadata metadata;
+  metadata.id = "ContactEnergy/NeverRisesWithMotionlessObstaclesAndWalls";
+  const auto result = rc::detail::checkTestable(&energyNeverRises, metadata, params);
+  if (!result.template is<rc::detail::SuccessResult>()) {
+    std::ostringstream ss;
+    rc::detail::printResultMessage(result, ss);
+    FAIL() << ss.str();
+  }
 }
