@@ -34,6 +34,12 @@ void validate(const SimulationSettings& s) {
     fail("threads", "must be an integer in [1, " + std::to_string(kMaxThreads) + "]", s.threads);
   if (s.rotationIterations < 1) fail("rotation_iterations", "must be >= 1", s.rotationIterations);
   if (s.implicitIterations < 1) fail("implicit_iterations", "must be >= 1", s.implicitIterations);
+  // Forward Euler multiplies a vibration's energy by (1 + (omega dt)^2) / (1 + damping dt) every
+  // step: without damping no dt is stable, so "auto" has nothing to pick (World, docs/scenes.md).
+  if (s.integrator == IntegratorKind::ForwardEuler && s.dt == 0 && !(s.damping > 0))
+    throw InputError("integrator: forward_euler is unstable at every dt without damping (each step multiplies a "
+                     "vibration's energy by 1 + (omega dt)^2); give damping > 0 (dt auto is then damping / (2 omega^2)), "
+                     "an explicit dt, or use symplectic");
 }
 
 void validate(const ManipulatorSettings& s) {

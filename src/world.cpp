@@ -48,11 +48,8 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   if (sim_.integrator == IntegratorKind::ForwardEuler && sim_.dt == 0) {
     // Forward Euler on x'' = -w^2 x with the velocity damping v <- v / (1 + c dt) multiplies the
     // energy of a mode by (1 + (w dt)^2) / (1 + c dt) every step: unstable at every dt without
-    // damping, stable for dt < c / w^2. With w = 2 pi / period (the fastest mode), half that bound.
-    if (!(sim_.damping > 0))
-      throw InputError("integrator: forward_euler is unstable at every dt without damping (each step multiplies a "
-                       "vibration's energy by 1 + (omega dt)^2); give damping > 0 (dt auto is then "
-                       "damping / (2 omega^2)), an explicit dt, or use symplectic");
+    // damping, stable for dt < c / w^2. With w = 2 pi / period (the fastest mode), half that bound
+    // (validate() has refused c = 0).
     const Real omega = 2 * M_PI / period;
     autoDt = std::min(autoDt, 0.5 * sim_.damping / (omega * omega));
   }
