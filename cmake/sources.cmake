@@ -20,6 +20,7 @@ set(GRADEL_CORE_SOURCES
   src/projective.cpp
   src/rotation_fit.cpp
   src/run_budget.cpp
+  src/settings_check.cpp
   src/shapes.cpp
   src/size_limits.cpp
   src/surface.cpp
@@ -66,6 +67,7 @@ set(GRADEL_TEST_SOURCES
   tests/test_broad_phase.cpp
   tests/test_cantilever.cpp
   tests/test_cli.cpp
+  tests/test_contact_energy.cpp
   tests/test_contacts.cpp
   tests/test_divergence.cpp
   tests/test_dynamics.cpp

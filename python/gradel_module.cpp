@@ -6,13 +6,19 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <chrono>
+#include <cmath>
 #include <cstring>
+#include <limits>
 #include <map>
+#include <mutex>
 #include <optional>
+#include <sstream>
 
 #include "gradel/io/volume_data_source.h"
 #include "gradel/io/volume_file.h"
 #include "gradel/scene.h"
+#include "gradel/settings_check.h"
 #include "gradel/isosurface.h"
 #include "gradel/surface.h"
 
@@ -109,7 +115,13 @@ io::VolumeFileSpec fileSpec(const std::string& path, std::optional<std::string> 
 // ---- simulations ------------------------------------------------------------------------
 
 /// A built scene plus lazily built display surfaces.
+/// Thread safety (python/README.md): every method that reads or changes the world holds `mutex`;
+/// step / advance_to hold it for the whole call (with the GIL released), so a mutation from
+/// another thread waits for the step to end, and concurrent step calls run one after the other
+/// (no lost steps). The mutex is always taken with the GIL released (WorldLock), so a thread
+/// waiting for it never blocks a stepping thread that briefly takes the GIL to check signals.
 struct Simulation {
+  std::mutex mutex;
   Scene scene;
   BuiltScene built;
   std::map<SurfaceKind, DisplaySurface> surfaces;
@@ -132,6 +144,75 @@ Vec3 vec(const std::vector<double>& v, const char* what, int dim) {
   for (size_t i = 0; i < v.size(); ++i) out[int(i)] = v[i];
   if (!out.allFinite()) throw InputError(std::string(what) + ": not finite");
   return out;
+}
+
+/// Holds a Simulation's mutex; taken with the GIL released (see Simulation), then the GIL is back.
+struct WorldLock {
+  std::unique_lock<std::mutex> lock;
+  explicit WorldLock(Simulation& s) {
+    py::gil_scoped_release release;
+    lock = std::unique_lock<std::mutex>(s.mutex);
+  }
+};
+
+/// InputError unless every position and velocity is finite (NaN or inf written into the views).
+void requireFiniteState(const World& w) {
+  const State& st = w.state();
+  for (size_t i = 0; i < st.positions.size(); ++i) {
+    if (!st.positions[i].allFinite())
+      throw InputError("positions: vertex " + std::to_string(i) + " is not finite (NaN or inf written into positions?)");
+    if (!st.velocities[i].allFinite())
+      throw InputError("velocities: vertex " + std::to_string(i) + " is not finite (NaN or inf written into velocities?)");
+  }
+}
+
+bool finiteState(const World& w) {
+  for (size_t i = 0; i < w.state().positions.size(); ++i)
+    if (!w.state().positions[i].allFinite() || !w.state().velocities[i].allFinite()) return false;
+  return true;
+}
+
+std::string num(double x) {
+  std::ostringstream o;
+  o << x;
+  return o.str();
+}
+
+constexpr double kMaxStepsPerCall = 1e9;  ///< advance_to refuses targets that need more steps.
+
+/// Runs world steps while more() holds: the GIL released and the world locked for the whole
+/// call; every 50 ms of wall time the GIL is taken briefly to honour Ctrl-C (KeyboardInterrupt;
+/// the steps done so far are kept).
+template <class More>
+void runSteps(Simulation& s, More more) {
+  py::gil_scoped_release release;
+  std::lock_guard<std::mutex> lock(s.mutex);
+  requireFiniteState(s.world());
+  auto last = std::chrono::steady_clock::now();
+  while (more()) {
+    s.world().step();
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last > std::chrono::milliseconds(50)) {
+      last = now;
+      py::gil_scoped_acquire acquire;
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+    }
+  }
+}
+
+/// Copies an (N, 3) array into one of the world's per-vertex arrays, refusing NaN / inf.
+void assignState(Simulation& s, std::vector<Vec3>& dst, const py::array_t<double, py::array::forcecast>& a, const char* what) {
+  if (a.ndim() != 2 || size_t(a.shape(0)) != dst.size() || a.shape(1) != 3)
+    throw InputError(std::string(what) + ": expected shape (" + std::to_string(dst.size()) + ", 3)");
+  auto r = a.unchecked<2>();
+  std::vector<Vec3> v(dst.size());
+  for (size_t i = 0; i < v.size(); ++i) {
+    v[i] = Vec3(r(i, 0), r(i, 1), r(i, 2));
+    if (!v[i].allFinite()) throw InputError(std::string(what) + ": row " + std::to_string(i) + " is not finite");
+    if (s.scene.dim == 2 && v[i].z() != 0) throw InputError(std::string(what) + ": row " + std::to_string(i) + " has z != 0 in 2D");
+  }
+  WorldLock lock(s);
+  dst = std::move(v);
 }
 
 // A view of one of the world's per-vertex vector arrays (positions, velocities), kept alive by
@@ -223,6 +304,8 @@ PYBIND11_MODULE(gradel, m) {
              s.simulation.damping = damping;
              s.simulation.gravity = vec(gravity, "gravity", s.dim);
              s.simulation.threads = threads;
+             validate(s.body.material);
+             validate(s.simulation);
              if (domainMin || domainMax) {
                if (!domainMin || !domainMax) throw InputError("domain: give both domain_min and domain_max");
                s.domain.enabled = true;
@@ -231,6 +314,7 @@ PYBIND11_MODULE(gradel, m) {
                if (s.dim == 2) s.domain.min.z() = -1, s.domain.max.z() = 1;
                s.domain.restitution = restitution;
                s.domain.friction = friction;
+               validate(s.domain, s.dim);
              }
              return makeSimulation(std::move(s));
            }),
@@ -261,7 +345,10 @@ PYBIND11_MODULE(gradel, m) {
             if (!(mp.axis.norm() > 0)) throw InputError("axis: must be non-zero");
             mp.restitution = restitution;
             mp.friction = friction;
-            return s.world().addManipulator(std::move(mp), vec(position, "position", s.scene.dim));
+            validate(mp);
+            const Vec3 at = vec(position, "position", s.scene.dim);
+            WorldLock lock(s);
+            return s.world().addManipulator(std::move(mp), at);
           },
           py::arg("type") = "sphere", py::kw_only(), py::arg("radius") = 0.02, py::arg("position") = std::vector<double>{0, 0, 0},
           py::arg("half_length") = 0.05, py::arg("axis") = std::vector<double>{0, 0, 1}, py::arg("restitution") = 1.0,
@@ -269,51 +356,88 @@ PYBIND11_MODULE(gradel, m) {
       .def(
           "move_manipulator",
           [](Simulation& s, size_t i, std::vector<double> position, std::vector<double> velocity) {
+            const Vec3 p = vec(position, "position", s.scene.dim), v = vec(velocity, "velocity", s.scene.dim);
+            WorldLock lock(s);
             if (i >= s.world().manipulators().size()) throw py::index_error("no manipulator " + std::to_string(i));
-            s.world().setManipulatorPose(i, vec(position, "position", s.scene.dim), vec(velocity, "velocity", s.scene.dim));
+            s.world().setManipulatorPose(i, p, v);
           },
           py::arg("index"), py::arg("position"), py::arg("velocity") = std::vector<double>{0, 0, 0},
           "Sets a manipulator's centre [m] and velocity [m/s]; the next step sweeps it from its last pose.")
       .def_property_readonly("manipulator_positions",
                              [](Simulation& s) {
+                               WorldLock lock(s);
                                std::vector<Vec3> p;
                                for (const Manipulator& mp : s.world().manipulators()) p.push_back(mp.position);
                                return vec3Array(std::move(p));
                              })
       .def(
           "step",
-          [](Simulation& s, int n) {
-            py::gil_scoped_release release;
-            for (int i = 0; i < n; ++i) s.world().step();
+          [](Simulation& s, long n) {
+            if (n < 0) throw InputError("n: must be >= 0 (got " + std::to_string(n) + ")");
+            long done = 0;
+            runSteps(s, [&] { return done++ < n; });
           },
-          py::arg("n") = 1, "Advances n time steps of dt.")
+          py::arg("n") = 1,
+          "Advances n time steps of dt. Holds the world for the whole call (other threads' calls wait); Ctrl-C "
+          "raises KeyboardInterrupt between steps.")
       .def(
           "advance_to",
-          [](Simulation& s, Real t) {
-            py::gil_scoped_release release;
-            s.world().advanceTo(t);
+          [](Simulation& s, Real t, double maxSteps) {
+            if (!std::isfinite(t)) throw InputError("t: must be a finite time [s] (got " + num(t) + ")");
+            runSteps(s, [&, checked = false]() mutable {
+              World& w = s.world();
+              if (!checked) {  // under the lock: time and dt are those this call will step from
+                checked = true;
+                const double steps = std::ceil((t - w.time()) / w.dt() - 0.5);
+                if (steps > maxSteps) {
+                  py::gil_scoped_acquire acquire;
+                  throw InputError("t: advancing from " + num(w.time()) + " s to " + num(t) + " s takes about " +
+                                   num(steps) + " steps of dt = " + num(w.dt()) + " s, more than max_steps = " +
+                                   num(maxSteps) + " (pass max_steps= to allow it)");
+                }
+              }
+              if (!(w.time() + 0.5 * w.dt() < t)) return false;
+              if (w.time() + w.dt() == w.time()) {
+                py::gil_scoped_acquire acquire;
+                throw InputError("dt: " + num(w.dt()) + " s no longer advances time " + num(w.time()) + " s");
+              }
+              return true;
+            });
           },
-          py::arg("t"), "Advances whole steps until time >= t [s].")
+          py::arg("t"), py::kw_only(), py::arg("max_steps") = kMaxStepsPerCall,
+          "Advances whole steps until time >= t [s]. ValueError for a non-finite t or one that needs more than "
+          "max_steps steps (default 1e9); Ctrl-C raises KeyboardInterrupt between steps.")
       .def_property_readonly("time", [](Simulation& s) { return s.world().time(); })
       .def_property_readonly("dt", [](Simulation& s) { return s.world().dt(); })
       .def_property_readonly("num_vertices", [](Simulation& s) { return s.world().model().numVertices(); })
       .def_property_readonly("num_elements", [](Simulation& s) { return s.world().model().numElements(); })
-      .def_property_readonly("positions", [](py::object self) { return stateView(self, self.cast<Simulation&>().world().state().positions); },
-                             "(N, 3) float64 view of the vertex positions [m] (no copy, writable).")
-      .def_property_readonly("velocities", [](py::object self) { return stateView(self, self.cast<Simulation&>().world().state().velocities); },
-                             "(N, 3) float64 view of the vertex velocities [m/s] (no copy, writable).")
+      .def_property(
+          "positions", [](py::object self) { return stateView(self, self.cast<Simulation&>().world().state().positions); },
+          [](Simulation& s, const py::array_t<double, py::array::forcecast>& a) { assignState(s, s.world().state().positions, a, "positions"); },
+          "(N, 3) float64 view of the vertex positions [m] (no copy, writable; not locked: see the thread-safety "
+          "contract). Assigning `sim.positions = array` copies under the lock and refuses NaN / inf (ValueError); "
+          "a NaN written into the view is refused by the next step.")
+      .def_property(
+          "velocities", [](py::object self) { return stateView(self, self.cast<Simulation&>().world().state().velocities); },
+          [](Simulation& s, const py::array_t<double, py::array::forcecast>& a) { assignState(s, s.world().state().velocities, a, "velocities"); },
+          "(N, 3) float64 view of the vertex velocities [m/s] (as positions).")
       .def_property_readonly("rest_positions", [](Simulation& s) { return vec3Array(std::vector<Vec3>(s.world().model().restPositions)); })
       .def_property_readonly("masses", [](Simulation& s) { return realArray(std::vector<Real>(s.world().model().mass)); })
-      .def_property_readonly("stress", [](Simulation& s) { return realArray(s.world().vertexStress()); },
+      .def_property_readonly("stress", [](Simulation& s) { WorldLock lock(s); return realArray(s.world().vertexStress()); },
                              "Per-vertex stress [-] (mean of its elements' stress).")
-      .def_property_readonly("element_stress", [](Simulation& s) { return realArray(s.world().elementStress()); })
-      .def_property_readonly("state_hash", [](Simulation& s) { return s.world().stateHash(); })
+      .def_property_readonly("element_stress", [](Simulation& s) { WorldLock lock(s); return realArray(s.world().elementStress()); })
+      .def_property_readonly("state_hash", [](Simulation& s) { WorldLock lock(s); return s.world().stateHash(); })
       .def_property_readonly("voxels", [](Simulation& s) {
         return volumeArray(std::make_shared<const VoxelVolume>(s.built.volume));
       })
       .def("metrics",
            [](Simulation& s) {
-             const Metrics x = s.world().metrics();
+             WorldLock lock(s);
+             Metrics x = s.world().metrics();
+             if (!finiteState(s.world())) {  // NaN spreads honestly: no min/max over NaN that hides it
+               const Real nan = std::numeric_limits<Real>::quiet_NaN();
+               x.kineticEnergy = x.elasticEnergy = x.gravityEnergy = x.maxStress = x.maxPenetration = x.minElementDet = nan;
+             }
              py::dict d;
              d["time"] = x.time;
              d["kinetic_energy"] = x.kineticEnergy;
@@ -329,6 +453,7 @@ PYBIND11_MODULE(gradel, m) {
       .def(
           "surface",
           [](Simulation& s, const std::string& kind) {
+            WorldLock lock(s);
             TriangleMesh mesh;
             if (kind == "embedded") {
               // The body's mesh file carried by the elements; for a volume, its isosurface.

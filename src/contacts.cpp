@@ -188,23 +188,56 @@ Vec3 frictionSlipCorrection(const Vec3& relativeStep, const Vec3& n, Real depth,
   return len <= allowed ? tangential : Vec3(tangential * (allowed / len));
 }
 
-void reflectVelocity(Vec3& v, const Vec3& surfaceVelocity, const Vec3& n, Real restitution, Real friction) {
+// The normal speed [m/s] at which a vertex approached the surface, for the bounce (contacts.h,
+// rule 1). u1 < 0: its normal velocity at the end of the step; s0: its distance outside at the
+// start. Under the constant acceleration a = (u1 - u0) / dt it crossed at sqrt(u0^2 - 2 a s0),
+// never faster than it approached (|u0|) or ends (|u1|).
+Real crossingSpeed(Real u1, Real s0, const Vec3& surfaceVelocity, const Vec3& n, const StepStart* start) {
+  if (!start) return -u1;
+  if (!(s0 >= 0)) return 0;  // it started inside: no crossing, nothing to bounce
+  const Real u0 = (start->velocity - surfaceVelocity).dot(n);
+  const Real a = (u1 - u0) / start->dt;
+  const Real c2 = u0 * u0 - 2 * a * s0;
+  // A vertex that was moving away at the start of the step and was turned back within it made a
+  // flight shorter than a step, which the step cannot resolve: a resting contact, no bounce.
+  if (u0 >= 0) return 0;
+  return std::min({-u1, -u0, c2 > 0 ? std::sqrt(c2) : Real(0)});
+}
+
+// v relative to the surface: the normal part, if approaching, replaced by e times the crossing
+// speed (outwards); the tangential part reduced by Coulomb friction. Then the elastic energy the
+// position projection stored (per unit mass: the push `lift` [m] along n against the normal
+// acceleration that pressed the vertex in) is taken out of what is left of the kinetic energy,
+// first from the bounce, then from the sliding.
+void reflectVelocity(Vec3& v, const Vec3& surfaceVelocity, const Vec3& n, Real restitution, Real friction, Real s0,
+                     const StepStart* start, Real lift) {
   Vec3 rel = v - surfaceVelocity;
   const Real vn = rel.dot(n);
   if (vn < 0) {
+    Real out = restitution > 0 ? restitution * crossingSpeed(vn, s0, surfaceVelocity, n, start) : Real(0);
     Vec3 vt = rel - vn * n;
     const Real vtLen = vt.norm();
-    // Coulomb: the tangential impulse is at most friction times the normal impulse (1 + e)|vn|.
-    const Real drop = friction * (1 + restitution) * (-vn);
+    // Coulomb: the tangential impulse is at most friction times the normal impulse |vn| + out.
+    const Real drop = friction * (out - vn);
     vt = vtLen > drop ? Vec3(vt * (1 - drop / vtLen)) : Vec3::Zero();
-    rel = vt - restitution * vn * n;
+    if (start && lift > 0) {
+      const Real an = (vn - (start->velocity - surfaceVelocity).dot(n)) / start->dt;  // < 0: pressed in
+      Real stored = std::max(Real(0), -an) * lift;  // [J/kg]
+      const Real fromBounce = std::min(stored, Real(0.5) * out * out);
+      out = std::sqrt(std::max(Real(0), out * out - 2 * fromBounce));
+      stored -= fromBounce;
+      const Real vt2 = vt.squaredNorm();
+      if (stored > 0 && vt2 > 0) vt *= std::sqrt(std::max(Real(0), vt2 - 2 * stored) / vt2);
+    }
+    rel = vt + out * n;
   }
   v = surfaceVelocity + rel;
 }
 
 }  // namespace
 
-ContactResult resolveManipulator(const Manipulator& m, const Vec3& xPrev, Vec3& x, Vec3& v, int dim, bool bounce) {
+ContactResult resolveManipulator(const Manipulator& m, const Vec3& xPrev, Vec3& x, Vec3& v, int dim, bool bounce,
+                                 const StepStart* start) {
   ContactResult res;
   const Vec3 p0 = xPrev - m.previousPosition;  // start of the step, in the moving frame
   Vec3 p1 = x - m.position;                    // end of the step, in the moving frame
@@ -249,11 +282,13 @@ ContactResult resolveManipulator(const Manipulator& m, const Vec3& xPrev, Vec3& 
   }
   if (dim == 2) target.z() = 0, n.z() = 0;
   x = m.position + target;
-  reflectVelocity(v, m.velocity, n, bounce ? m.settings.restitution : 0.0, m.settings.friction);
+  reflectVelocity(v, m.velocity, n, bounce ? m.settings.restitution : 0.0, m.settings.friction, d0, start,
+                  (target - p1).dot(n));
   return res;
 }
 
-ContactResult resolveDomain(const DomainSettings& d, const Vec3& xPrev, Vec3& x, Vec3& v, int dim, bool bounce) {
+ContactResult resolveDomain(const DomainSettings& d, const Vec3& xPrev, Vec3& x, Vec3& v, int dim, bool bounce,
+                            const StepStart* start) {
   ContactResult res;
   if (!d.enabled) return res;
   for (int a = 0; a < dim; ++a) {
@@ -267,7 +302,8 @@ ContactResult resolveDomain(const DomainSettings& d, const Vec3& xPrev, Vec3& x,
       const Vec3 slip = frictionSlipCorrection(x - xPrev, n, depth, d.friction);
       for (int b = 0; b < dim; ++b)
         if (b != a) x[b] -= slip[b];
-      reflectVelocity(v, Vec3::Zero(), n, bounce ? d.restitution : 0.0, d.friction);
+      const Real s0 = side > 0 ? xPrev[a] - d.min[a] : d.max[a] - xPrev[a];  // distance inside at the start
+      reflectVelocity(v, Vec3::Zero(), n, bounce ? d.restitution : 0.0, d.friction, s0, start, depth);
     }
   }
   return res;

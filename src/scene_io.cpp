@@ -22,6 +22,7 @@
 
 #include "gradel/io/volume_file.h"
 #include "gradel/scene.h"
+#include "gradel/settings_check.h"
 
 namespace gradel {
 namespace {
@@ -641,11 +642,27 @@ void readBody(Fields f, Scene& scene) {
   f.finish();
 }
 
+// The core's own check of a settings type (settings_check.h: the same one World and the Python
+// module use), after the reader's per-key checks: its "field: what" is reported at that key of
+// this object, with the file and key path.
+template <class Check>
+void coreCheck(const Fields& f, Check check) {
+  try {
+    check();
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    const size_t colon = m.find(": ");
+    if (colon == std::string::npos) f.fail("", m);
+    f.fail(m.substr(0, colon), m.substr(colon + 2));
+  }
+}
+
 void readMaterial(Fields f, MaterialSettings& m) {
   m.scaling = f.enumeration("scaling", m.scaling, &parseScaling);
   m.youngsModulus = f.number("youngs_modulus", m.youngsModulus, kPositive, "Pa");
   m.density = f.number("density", m.density, kPositive, "kg/m^3");
   m.paperK = f.number("k", m.paperK, kPositive, "N");
+  coreCheck(f, [&] { validate(m); });
   f.finish();
 }
 
@@ -679,6 +696,7 @@ void readSimulation(Fields f, Scene& scene) {
   scene.output.frameInterval = f.number("frame_interval", scene.output.frameInterval, kPositive, "s");
   s.threads = f.optInteger("threads", 1, 1024).value_or(s.threads);
   s.implicitIterations = f.optInteger("implicit_iterations", 1, 1000).value_or(s.implicitIterations);
+  coreCheck(f, [&] { validate(s); });
   f.finish();
 }
 
@@ -695,6 +713,7 @@ void readDomain(Fields f, Scene& scene) {
   checkMaxAboveMin(f, d.min, d.max);
   d.restitution = f.number("restitution", d.restitution, kUnit, "");
   d.friction = f.number("friction", d.friction, kNonNegative, "");
+  coreCheck(f, [&] { validate(d, scene.dim); });
   f.finish();
 }
 
@@ -789,6 +808,7 @@ ManipulatorSettings readManipulator(Fields& f, int dim) {
   m.restitution = f.number("restitution", m.restitution, kUnit, "");
   m.friction = f.number("friction", m.friction, kNonNegative, "");
   m.path = readPath(f);
+  coreCheck(f, [&] { validate(m); });
   f.finish();
   return m;
 }

@@ -12,6 +12,7 @@
 #include "gradel/element.h"
 #include "huge_pages.h"
 #include "gradel/rotation_fit.h"
+#include "gradel/settings_check.h"
 #include "simd.h"
 #include "thread_team.h"
 
@@ -21,6 +22,7 @@ namespace gradel {
 struct World::StepScratch {
   std::vector<ElementFrame> frames;     ///< Per element: k M and (k e, k), written by the element stage.
   std::vector<Vec3> previousPositions;  ///< [m] positions at the start of an implicit step (swept contacts).
+  std::vector<Vec3> previousVelocities;  ///< [m/s] velocities then (the bounce's crossing speed, contacts.h).
   std::vector<Real> contactDepth;   ///< [m] per vertex, implicit step only: depth before correction.
   Real maxContactDepth = 0;         ///< [m] deepest vertex found (and corrected) in the last step.
 };
@@ -52,16 +54,20 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
       scratch_(std::make_unique<StepScratch>()),
       sim_(sim),
       domain_(domain) {
-  if (sim_.threads < 1) sim_.threads = 1;
-  if (!(sim_.dt >= 0) || !std::isfinite(sim_.dt)) throw InputError("simulation.dt must be 'auto' or a positive number of seconds");
-  if (!(sim_.dtFraction > 0 && sim_.dtFraction <= 1)) throw InputError("simulation.dt_fraction must be in (0, 1]");
-  if (!(sim_.damping >= 0) || !std::isfinite(sim_.damping)) throw InputError("simulation.damping must be >= 0");
-  if (!sim_.gravity.allFinite()) throw InputError("simulation.gravity must be finite");
+  validate(sim_);
+  validate(domain_, model_->dim);
   const Real period = sim_.dtPeriod == PeriodRule::Element ? model_->smallestPeriod : model_->smallestVertexPeriod;
   // The implicit integrator is stable at any dt: "auto" is one display frame.
-  const Real autoDt = sim_.integrator == IntegratorKind::Implicit ? 1.0 / 60.0 : sim_.dtFraction * period;
+  Real autoDt = sim_.integrator == IntegratorKind::Implicit ? 1.0 / 60.0 : sim_.dtFraction * period;
+  if (sim_.integrator == IntegratorKind::ForwardEuler && sim_.dt == 0) {
+    // Forward Euler on x'' = -w^2 x with the velocity damping v <- v / (1 + c dt) multiplies the
+    // energy of a mode by (1 + (w dt)^2) / (1 + c dt) every step: unstable at every dt without
+    // damping, stable for dt < c / w^2. With w = 2 pi / period (the fastest mode), half that bound
+    // (validate() has refused c = 0).
+    const Real omega = 2 * M_PI / period;
+    autoDt = std::min(autoDt, 0.5 * sim_.damping / (omega * omega));
+  }
   dt_ = sim_.dt > 0 ? sim_.dt : autoDt;
-  if (sim_.implicitIterations < 1) throw InputError("simulation.implicit_iterations must be >= 1");
   if (!(dt_ > 0) || !std::isfinite(dt_)) throw InputError("simulation.dt: could not derive a positive time step");
 
   const size_t V = model_->numVertices(), E = model_->numElements();
@@ -85,11 +91,8 @@ World::World(World&&) noexcept = default;
 World& World::operator=(World&&) noexcept = default;
 
 size_t World::addManipulator(ManipulatorSettings s, const Vec3& position) {
-  if (!(s.radius > 0) || !std::isfinite(s.radius)) throw InputError("manipulator radius must be > 0 [m]");
-  if (s.shape == ManipulatorShape::Cylinder) {
-    if (!(s.axis.norm() > 0) || !s.axis.allFinite()) throw InputError("manipulator axis must be non-zero");
-    s.axis.normalize();
-  }
+  validate(s);
+  if (s.shape == ManipulatorShape::Cylinder) s.axis.normalize();
   Manipulator m;
   m.settings = std::move(s);
   const bool scripted = !m.settings.path.keys.empty();
@@ -165,14 +168,14 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
   Vec3* velocities = state_.velocities.data();
   const Real* invMass = m.invMass.data();
   Real depth = 0;
-  d4 start[kBlock];
+  d4 start[kBlock], startVelocity[kBlock];
   for (size_t b = begin; b < end; b += kBlock) {
     const size_t be = std::min(end, b + kBlock);
     d4 lo = splat(std::numeric_limits<Real>::infinity()), hi = -lo;
     gatherVertexForces(m, *stageRest_, scratch_->frames.data(), positions, b, be, [&](size_t i, d4 force) {
       const d4 a = force * invMass[i] + g;
-      const d4 x0 = loadVec3(positions[i]);
-      d4 x = x0, v = loadVec3(velocities[i]);
+      const d4 x0 = loadVec3(positions[i]), v0 = loadVec3(velocities[i]);
+      d4 x = x0, v = v0;
       if (forward) {
         x = x + dt * v;  // eq. 3 with V(T): the paper's literal order
         v = (v + dt * a) * damp;
@@ -181,7 +184,7 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
         x = x + dt * v;  // symplectic: P(T+dT) = P(T) + V(T+dT) dT
       }
       storeVec3(positions[i], x), storeVec3(velocities[i], v);
-      start[i - b] = x0;
+      start[i - b] = x0, startVelocity[i - b] = v0;
       lo = min(lo, min(x0, x)), hi = max(hi, max(x0, x));
     });
     if (!cb) continue;
@@ -191,29 +194,32 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
       touch = none(hi < cb->lo[k]) && none(lo > cb->hi[k]);
     if (!touch) continue;
     for (size_t i = b; i < be; ++i) {
-      Vec3 previous;
-      storeVec3(previous, start[i - b]);
-      depth = std::max(depth, resolveVertexContacts(previous, positions[i], velocities[i]));
+      Vec3 previous, previousVelocity;
+      storeVec3(previous, start[i - b]), storeVec3(previousVelocity, startVelocity[i - b]);
+      depth = std::max(depth, resolveVertexContacts(previous, previousVelocity, positions[i], velocities[i]));
     }
   }
   return depth;
 }
 
-// Contacts of one vertex, swept from `previous` (independent per vertex). The first pass bounces
-// (sec. 3.5). A vertex pinched between surfaces (a manipulator and a wall, or two manipulators) is
+// Contacts of one vertex, swept from `previous` (independent per vertex); `previousVelocity` is its
+// velocity at the start of the step (the bounce uses the speed at which it crossed a surface, not
+// the speed gained inside it: contacts.h). The first pass bounces (sec. 3.5). A vertex pinched
+// between surfaces (a manipulator and a wall, or two manipulators) is
 // resolved again, up to three more passes, inelastically: repeated elastic reflections between
 // two surfaces would pump energy into it. The walls go last in every pass, so no vertex ever
 // leaves the box. Returns the deepest penetration found [m].
-Real World::resolveVertexContacts(const Vec3& previous, Vec3& x, Vec3& v) const {
+Real World::resolveVertexContacts(const Vec3& previous, const Vec3& previousVelocity, Vec3& x, Vec3& v) const {
   const int dim = model_->dim;
+  const StepStart start{previousVelocity, dt_};
   const size_t surfaces = manipulators_.size() + (domain_.enabled ? 1 : 0);
   Real depth = 0;
   for (int pass = 0; pass < 4; ++pass) {
     const bool bounce = pass == 0;
     Real passDepth = 0;
     for (const Manipulator& mp : manipulators_)
-      passDepth = std::max(passDepth, resolveManipulator(mp, previous, x, v, dim, bounce).depth);
-    passDepth = std::max(passDepth, resolveDomain(domain_, previous, x, v, dim, bounce).depth);
+      passDepth = std::max(passDepth, resolveManipulator(mp, previous, x, v, dim, bounce, &start).depth);
+    passDepth = std::max(passDepth, resolveDomain(domain_, previous, x, v, dim, bounce, &start).depth);
     depth = std::max(depth, passDepth);
     if (passDepth == 0 || surfaces < 2) break;
   }
@@ -224,7 +230,8 @@ Real World::resolveVertexContacts(const Vec3& previous, Vec3& x, Vec3& v) const 
 void World::stageContacts(size_t begin, size_t end) {
   for (size_t i = begin; i < end; ++i)
     scratch_->contactDepth[i] =
-        resolveVertexContacts(scratch_->previousPositions[i], state_.positions[i], state_.velocities[i]);
+        resolveVertexContacts(scratch_->previousPositions[i], scratch_->previousVelocities[i], state_.positions[i],
+                              state_.velocities[i]);
 }
 
 void World::moveManipulators(Real tNext) {
@@ -372,7 +379,7 @@ void World::stepImplicit() {
   Vec3 g = sim_.gravity;
   if (model_->dim == 2) g.z() = 0;
   const bool contacts = !manipulators_.empty() || domain_.enabled;
-  if (contacts) scratch_->previousPositions = state_.positions;
+  if (contacts) scratch_->previousPositions = state_.positions, scratch_->previousVelocities = state_.velocities;
   scratch_->contactDepth.assign(model_->numVertices(), 0.0);
   const Real tNext = state_.time + dt_;
   const std::vector<Vec3> x0 = state_.positions, v0 = state_.velocities;
@@ -503,7 +510,8 @@ size_t World::memoryBytes() const {
   auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
   size_t b = sizeof(*this) + model_->memoryBytes() + stageRest_->memoryBytes();
   b += bytes(state_.positions) + bytes(state_.velocities) + bytes(state_.rotations);
-  b += bytes(scratch_->frames) + bytes(scratch_->previousPositions) + bytes(scratch_->contactDepth);
+  b += bytes(scratch_->frames) + bytes(scratch_->previousPositions) + bytes(scratch_->previousVelocities) +
+       bytes(scratch_->contactDepth);
   b += (elementSplit_.capacity() + vertexSplit_.capacity()) * sizeof(size_t);
   for (const Manipulator& m : manipulators_) b += sizeof(m) + bytes(m.settings.path.keys);
   return b;

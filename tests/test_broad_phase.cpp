@@ -18,13 +18,13 @@ using test::perturb;
 
 // The narrow phase for one vertex, as World applies it (a bounce, then up to three inelastic
 // passes for a vertex pinched between surfaces; walls last).
-void resolveAll(const std::vector<Manipulator>& ms, const DomainSettings& d, int dim, const Vec3& previous, Vec3& x,
-                Vec3& v) {
+void resolveAll(const std::vector<Manipulator>& ms, const DomainSettings& d, int dim, const Vec3& previous,
+                const StepStart& start, Vec3& x, Vec3& v) {
   const size_t surfaces = ms.size() + (d.enabled ? 1 : 0);
   for (int pass = 0; pass < 4; ++pass) {
     Real depth = 0;
-    for (const Manipulator& m : ms) depth = std::max(depth, resolveManipulator(m, previous, x, v, dim, pass == 0).depth);
-    depth = std::max(depth, resolveDomain(d, previous, x, v, dim, pass == 0).depth);
+    for (const Manipulator& m : ms) depth = std::max(depth, resolveManipulator(m, previous, x, v, dim, pass == 0, &start).depth);
+    depth = std::max(depth, resolveDomain(d, previous, x, v, dim, pass == 0, &start).depth);
     if (depth == 0 || surfaces < 2) break;
   }
 }
@@ -45,7 +45,7 @@ void checkBroadPhaseExact(const Body& b, int threads, const DomainSettings& d, c
   int touched = 0;
   for (int k = 0; k < steps; ++k) {
     ref.state() = w.state();
-    const std::vector<Vec3> previous = w.state().positions;
+    const std::vector<Vec3> previous = w.state().positions, previousVelocity = w.state().velocities;
     // The manipulators over this step: from their pose now to their pose at t + dt.
     std::vector<Manipulator> poses = w.manipulators();
     for (Manipulator& m : poses) {
@@ -58,7 +58,8 @@ void checkBroadPhaseExact(const Body& b, int threads, const DomainSettings& d, c
     State& r = ref.state();
     for (size_t i = 0; i < r.positions.size(); ++i) {
       const Vec3 before = r.positions[i];
-      resolveAll(poses, d, b.model->dim, previous[i], r.positions[i], r.velocities[i]);
+      resolveAll(poses, d, b.model->dim, previous[i], StepStart{previousVelocity[i], w.dt()}, r.positions[i],
+                 r.velocities[i]);
       touched += r.positions[i] != before;
     }
     ASSERT_TRUE(sameBits(w.state().positions, r.positions)) << "positions differ at step " << k;

@@ -460,5 +460,19 @@ TEST(SceneIo, sizeLimits_modelEstimateBoundsTheWorld) {
   }
 }
 
+// Rules the core checks itself (settings_check.h, shared with World and the Python module) come
+// with the file and the key path too.
+TEST(SceneIo, parseScene_coreSettingsCheck_namesFileAndKey) {
+  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": {"integrator": "forward_euler"})"),
+              "simulation.integrator", "unstable at every dt without damping");
+  EXPECT_EQ(errorOf(scene3(R"("shape": "sphere", "size": 8)",
+                           R"("simulation": {"integrator": "forward_euler", "damping": 1})")),
+            "");
+  EXPECT_EQ(errorOf(scene3(R"("shape": "sphere", "size": 8)",
+                           R"("simulation": {"integrator": "forward_euler", "dt": 1e-5})")),
+            "");
+}
+
 }  // namespace
 }  // namespace gradel
+

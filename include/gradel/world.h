@@ -105,7 +105,7 @@ class World {
   ContactBounds contactBounds() const;
   void prepareTeam(int members);
   void stageContacts(size_t begin, size_t end);
-  Real resolveVertexContacts(const Vec3& previous, Vec3& x, Vec3& v) const;
+  Real resolveVertexContacts(const Vec3& previous, const Vec3& previousVelocity, Vec3& x, Vec3& v) const;
   void moveManipulators(Real tNext);
   void stepImplicit();
   void applyPins(Real t);

@@ -89,7 +89,7 @@ def test_layouts_materials_integrators_and_scene_files():
     body = gradel.Body.from_file(sample("mushroom.vox"), voxel_size=0.01)
     counts = {k: gradel.Simulation(body, layout=k).num_elements for k in ("gradational", "uniform", "voxel")}
     assert counts["gradational"] < counts["uniform"] < counts["voxel"] == body.filled
-    fe = gradel.Simulation(body, integrator="forward_euler", scaling="paper", k=5000)
+    fe = gradel.Simulation(body, integrator="forward_euler", scaling="paper", k=5000, damping=2.0)
     fe.step(10)
     with pytest.raises(ValueError, match="layout"):
         gradel.Simulation(body, layout="octree")

@@ -1,0 +1,72 @@
+#include "gradel/settings_check.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace gradel {
+
+namespace {
+std::string num(Real x) {
+  std::ostringstream o;
+  o << x;
+  return o.str();
+}
+[[noreturn]] void fail(const char* field, const std::string& what, Real got) {
+  throw InputError(std::string(field) + ": " + what + " (got " + num(got) + ")");
+}
+void unit(const char* field, Real x) {
+  if (!(x >= 0 && x <= 1)) fail(field, "must be in [0, 1]", x);
+}
+void nonNegative(const char* field, Real x) {
+  if (!(x >= 0) || !std::isfinite(x)) fail(field, "must be a finite number >= 0", x);
+}
+void positive(const char* field, Real x) {
+  if (!(x > 0) || !std::isfinite(x)) fail(field, "must be a finite number > 0", x);
+}
+}  // namespace
+
+void validate(const SimulationSettings& s) {
+  if (!(s.dt >= 0) || !std::isfinite(s.dt)) fail("dt", "must be 0 (auto) or a finite number of seconds > 0", s.dt);
+  if (!(s.dtFraction > 0 && s.dtFraction <= 1)) fail("dt_fraction", "must be in (0, 1]", s.dtFraction);
+  nonNegative("damping", s.damping);
+  if (!s.gravity.allFinite()) throw InputError("gravity: must be finite");
+  if (s.threads < 1 || s.threads > kMaxThreads)
+    fail("threads", "must be an integer in [1, " + std::to_string(kMaxThreads) + "]", s.threads);
+  if (s.rotationIterations < 1) fail("rotation_iterations", "must be >= 1", s.rotationIterations);
+  if (s.implicitIterations < 1) fail("implicit_iterations", "must be >= 1", s.implicitIterations);
+  // Forward Euler multiplies a vibration's energy by (1 + (omega dt)^2) / (1 + damping dt) every
+  // step: without damping no dt is stable, so "auto" has nothing to pick (World, docs/scenes.md).
+  if (s.integrator == IntegratorKind::ForwardEuler && s.dt == 0 && !(s.damping > 0))
+    throw InputError("integrator: forward_euler is unstable at every dt without damping (each step multiplies a "
+                     "vibration's energy by 1 + (omega dt)^2); give damping > 0 (dt auto is then damping / (2 omega^2)), "
+                     "an explicit dt, or use symplectic");
+}
+
+void validate(const ManipulatorSettings& s) {
+  positive("radius", s.radius);
+  if (s.shape == ManipulatorShape::Cylinder) {
+    positive("half_length", s.halfLength);
+    if (!(s.axis.norm() > 0) || !s.axis.allFinite()) throw InputError("axis: must be a finite non-zero direction");
+  }
+  unit("restitution", s.restitution);
+  nonNegative("friction", s.friction);
+}
+
+void validate(const DomainSettings& s, int dim) {
+  if (!s.enabled) return;
+  if (!s.min.allFinite() || !s.max.allFinite()) throw InputError("min, max: must be finite");
+  for (int a = 0; a < dim; ++a)
+    if (!(s.min[a] < s.max[a]))
+      throw InputError("max: must exceed min on every axis (axis " + std::to_string(a) + ": min " + num(s.min[a]) +
+                       ", max " + num(s.max[a]) + ")");
+  unit("restitution", s.restitution);
+  nonNegative("friction", s.friction);
+}
+
+void validate(const MaterialSettings& s) {
+  positive("youngs_modulus", s.youngsModulus);
+  positive("density", s.density);
+  positive("k", s.paperK);
+}
+
+}  // namespace gradel
