@@ -132,4 +132,26 @@ void ThreadTeam::barrier() {
   }
 }
 
+void ThreadGovernor::report(double seconds) {
+  time_ += seconds, ++steps_;
+  const bool windowDone = time_ >= kWindowSeconds && steps_ >= kWindowSteps;
+  switch (phase_) {
+    case Phase::MeasureCurrent:
+      if (!windowDone) return;
+      current_ = time_ / steps_;
+      phase_ = Phase::ProbeOther;
+      break;
+    case Phase::ProbeOther:
+      if (!windowDone) return;
+      if (time_ / steps_ < kMargin * current_) useOne_ = !useOne_;
+      phase_ = Phase::Run;
+      break;
+    case Phase::Run:
+      if (time_ < kRunSeconds) return;
+      phase_ = Phase::MeasureCurrent;
+      break;
+  }
+  time_ = 0, steps_ = 0;
+}
+
 }  // namespace gradel

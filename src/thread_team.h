@@ -80,4 +80,33 @@ class ThreadTeam {
   alignas(64) std::atomic<uint32_t> doneGeneration_{0};
 };
 
+/// Decides, step after step, whether a team of more than one member is worth it on this machine
+/// now, by timing both (results never depend on it). Waiting well (above) is not enough on a
+/// machine with other busy programs: with one busy process on 2 cores, 2 members ran 5-25 %
+/// slower than 1 (bench/results/*-threads.csv). So the governor times a window of steps with the
+/// mode in use, then a window with the other mode (all members or one), keeps the faster (by more
+/// than 5 %), runs it for kRunSeconds, and measures again. A window is at least kWindowSeconds
+/// and kWindowSteps steps. The probe of the slower mode costs ~2 % of the time.
+class ThreadGovernor {
+ public:
+  /// Members for the next step: 1 or `full`.
+  int choose(int full) const {
+    const bool one = phase_ == Phase::ProbeOther ? !useOne_ : useOne_;
+    return one ? 1 : full;
+  }
+  /// The wall time [s] of the step just taken with choose()'s members.
+  void report(double seconds);
+  bool usingOne() const { return useOne_; }
+
+  static constexpr double kWindowSeconds = 0.03, kRunSeconds = 1.0, kMargin = 0.95;
+  static constexpr int kWindowSteps = 8;
+
+ private:
+  enum class Phase { MeasureCurrent, ProbeOther, Run };
+  Phase phase_ = Phase::MeasureCurrent;
+  bool useOne_ = false;
+  double time_ = 0, current_ = 0;
+  int steps_ = 0;
+};
+
 }  // namespace gradel

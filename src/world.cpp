@@ -1,6 +1,7 @@
 #include "gradel/world.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -290,6 +291,7 @@ bool useOpenMp() {
 void World::prepareTeam(int members) {
   if (teamMembers_ == members && team_) return;
   team_ = std::make_unique<ThreadTeam>(members);
+  governor_ = std::make_unique<ThreadGovernor>();
   elementQueue_ = std::make_unique<ChunkQueue>(), vertexQueue_ = std::make_unique<ChunkQueue>();
   elementSplit_ = chunkSplit(model_->elemStart, kElementCost, members, kElementChunk);
   vertexSplit_ = chunkSplit(stageRest_->vertexStart, kVertexCost, members, kVertexChunk);
@@ -326,19 +328,27 @@ void World::step() {
     }
     scratch_->maxContactDepth = depth;
   } else {
-    // One job per step: element chunks, a barrier, vertex chunks (thread_team.h).
+    // One job per step: element chunks, a barrier, vertex chunks (thread_team.h), with all
+    // members or one, as the governor finds faster on this machine now.
     prepareTeam(members);
-    elementQueue_->reset(elementSplit_), vertexQueue_->reset(vertexSplit_);
-    team_->run([&](int t) {
-      size_t c;
-      while (elementQueue_->claim(t, &c)) stageElementFrames(c * kElementChunk, std::min(E, (c + 1) * kElementChunk));
-      team_->barrier();
-      Real depth = 0;
-      while (vertexQueue_->claim(t, &c))
-        depth = std::max(depth, stageVertices(c * kVertexChunk, std::min(V, (c + 1) * kVertexChunk), cb));
-      memberContactDepth_[size_t(t)] = depth;
-    });
-    scratch_->maxContactDepth = *std::max_element(memberContactDepth_.begin(), memberContactDepth_.end());
+    const auto t0 = std::chrono::steady_clock::now();
+    if (governor_->choose(members) == 1) {
+      stageElementFrames(0, E);
+      scratch_->maxContactDepth = stageVertices(0, V, cb);
+    } else {
+      elementQueue_->reset(elementSplit_), vertexQueue_->reset(vertexSplit_);
+      team_->run([&](int t) {
+        size_t c;
+        while (elementQueue_->claim(t, &c)) stageElementFrames(c * kElementChunk, std::min(E, (c + 1) * kElementChunk));
+        team_->barrier();
+        Real depth = 0;
+        while (vertexQueue_->claim(t, &c))
+          depth = std::max(depth, stageVertices(c * kVertexChunk, std::min(V, (c + 1) * kVertexChunk), cb));
+        memberContactDepth_[size_t(t)] = depth;
+      });
+      scratch_->maxContactDepth = *std::max_element(memberContactDepth_.begin(), memberContactDepth_.end());
+    }
+    governor_->report(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   }
   for (Manipulator& m : manipulators_) m.previousPosition = m.position;
   state_.time += dt_;

@@ -18,6 +18,7 @@ namespace gradel {
 
 class ThreadTeam;
 class ChunkQueue;
+class ThreadGovernor;
 struct ElementStageRest;
 
 /// Runtime state: what changes every step.
@@ -125,6 +126,7 @@ class World {
   // Threads of the explicit step (thread_team.h): the team, its chunk queues and each member's
   // first share of the element and vertex chunks (weighted by work), made for `teamMembers_`.
   std::unique_ptr<ThreadTeam> team_;
+  std::unique_ptr<ThreadGovernor> governor_;  ///< All members or one, whichever is faster now.
   std::unique_ptr<ChunkQueue> elementQueue_, vertexQueue_;
   std::vector<size_t> elementSplit_, vertexSplit_;
   std::vector<Real> memberContactDepth_;
