@@ -308,9 +308,12 @@ void World::step() {
   ContactBounds bounds;
   if (contacts) bounds = contactBounds();
   const ContactBounds* cb = contacts ? &bounds : nullptr;
-  if (members == 1) {
+  auto runOnThisThread = [&] {
     stageElementFrames(0, E);
     scratch_->maxContactDepth = stageVertices(0, V, cb);
+  };
+  if (members == 1) {
+    runOnThisThread();
   } else if (useOpenMp()) {
     Real depth = 0;
 #pragma omp parallel num_threads(members) reduction(max : depth)
@@ -333,8 +336,7 @@ void World::step() {
     prepareTeam(members);
     const auto t0 = std::chrono::steady_clock::now();
     if (governor_->choose(members) == 1) {
-      stageElementFrames(0, E);
-      scratch_->maxContactDepth = stageVertices(0, V, cb);
+      runOnThisThread();
     } else {
       elementQueue_->reset(elementSplit_), vertexQueue_->reset(vertexSplit_);
       team_->run([&](int t) {
