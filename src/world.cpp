@@ -52,9 +52,9 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
              std::vector<ManipulatorSettings> manipulators)
     : model_(model ? std::move(model) : throw std::invalid_argument("World: no model")),
       stageRest_(std::make_unique<const ElementStageRest>(*model_)),
-      scratch_(std::make_unique<StepScratch>()),
       sim_(sim),
-      domain_(domain) {
+      domain_(domain),
+      scratch_(std::make_unique<StepScratch>()) {
   validate(sim_);
   validate(domain_, model_->dim);
   const Real period = sim_.dtPeriod == PeriodRule::Element ? model_->smallestPeriod : model_->smallestVertexPeriod;
