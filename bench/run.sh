@@ -4,7 +4,7 @@
 #  real:    SI scenes (gravity, walls, a pressing manipulator, a pin, metrics per 1/60 s frame),
 #           n = 16..256, E = 1e4, 1e5, 1e6 Pa, 1 and 2 threads, gradational and uniform;
 #  paper:   the paper's Table 1 setting, for the comparison with the paper and with `real`;
-#  threads: the threading mechanisms compared (README, "Threads"), quiet and with one busy process.
+#  threads: the threading mechanisms compared (docs/speed.md, "Threads"), quiet and with one busy process.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build}

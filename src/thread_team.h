@@ -1,6 +1,6 @@
 // A persistent team of worker threads for the explicit step (private to the engine).
 //
-// Why not OpenMP: measured on the 2-core machine (README, "Threads"), libgomp's default waiting
+// Why not OpenMP: measured on the 2-core machine (docs/speed.md, "Threads"), libgomp's default waiting
 // spins for a long time at every barrier, so with one other busy program on the machine two
 // threads ran 3x slower than one; its passive policy can only be chosen by an environment
 // variable read when the program loads. This team
