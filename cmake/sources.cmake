@@ -76,6 +76,7 @@ set(GRADEL_TEST_SOURCES
   tests/test_embedding.cpp
   tests/test_golden.cpp
   tests/test_implicit.cpp
+  tests/test_integration.cpp
   tests/test_io_embedded.cpp
   tests/test_io_grey_readers.cpp
   tests/test_io_meshes.cpp

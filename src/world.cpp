@@ -11,6 +11,7 @@
 
 #include "element_stage.h"
 #include "gradel/element.h"
+#include "gradel/integration.h"
 #include "huge_pages.h"
 #include "gradel/rotation_fit.h"
 #include "gradel/settings_check.h"
@@ -160,7 +161,7 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
   constexpr size_t kBlock = 16;
   const RestModel& m = *model_;
   const Real dt = dt_;
-  const Real damp = 1.0 / (1.0 + sim_.damping * dt);
+  const Real damp = dampingFactor(sim_.damping, dt);
   const bool forward = sim_.integrator == IntegratorKind::ForwardEuler;
   Vec3 gravity = sim_.gravity;
   if (m.dim == 2) gravity.z() = 0;
@@ -177,13 +178,8 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
       const d4 a = force * invMass[i] + g;
       const d4 x0 = loadVec3(positions[i]), v0 = loadVec3(velocities[i]);
       d4 x = x0, v = v0;
-      if (forward) {
-        x = x + dt * v;  // eq. 3 with V(T): the paper's literal order
-        v = (v + dt * a) * damp;
-      } else {
-        v = (v + dt * a) * damp;
-        x = x + dt * v;  // symplectic: P(T+dT) = P(T) + V(T+dT) dT
-      }
+      if (forward) forwardEulerStep(x, v, a, dt, damp);  // integration.h
+      else symplecticEulerStep(x, v, a, dt, damp);
       storeVec3(positions[i], x), storeVec3(velocities[i], v);
       start[i - b] = x0, startVelocity[i - b] = v0;
       lo = min(lo, min(x0, x)), hi = max(hi, max(x0, x));
