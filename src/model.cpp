@@ -2,35 +2,12 @@
 
 #include <cmath>
 #include <limits>
-#include <unordered_map>
 
 #include "gradel/settings_check.h"
 
 namespace gradel {
 
 namespace {
-
-uint64_t packLattice(const Int3& p) {
-  // 21 bits per axis: lattice coordinates are in [0, 2^21) (volumes up to 2 million voxels a side).
-  return (uint64_t(uint32_t(p.x())) << 42) | (uint64_t(uint32_t(p.y())) << 21) | uint64_t(uint32_t(p.z()));
-}
-
-// The model vertex at a lattice point, built once per model.
-class VertexLookup {
- public:
-  explicit VertexLookup(const Layout& layout) {
-    at_.reserve(layout.numVertices() * 2);
-    for (size_t i = 0; i < layout.numVertices(); ++i) at_.emplace(packLattice(layout.vertices[i]), uint32_t(i));
-  }
-  /// The vertex id at lattice point p, UINT32_MAX when p is no model vertex.
-  uint32_t operator()(const Int3& p) const {
-    auto it = at_.find(packLattice(p));
-    return it == at_.end() ? UINT32_MAX : it->second;
-  }
-
- private:
-  std::unordered_map<uint64_t, uint32_t> at_;
-};
 
 // Step 1: rest positions, origin + lattice * h.
 void placeVertices(const Layout& layout, const Vec3& origin, RestModel& m) {
@@ -39,7 +16,7 @@ void placeVertices(const Layout& layout, const Vec3& origin, RestModel& m) {
 }
 
 // Step 2: lumped masses (material.h's rules), their inverses and the total.
-void lumpMasses(const Layout& layout, const VertexLookup& vertexAt, RestModel& m) {
+void lumpMasses(const Layout& layout, RestModel& m) {
   const int D = layout.dim;
   const size_t V = layout.numVertices();
   if (m.material.scaling == Scaling::Paper) {
@@ -59,8 +36,8 @@ void lumpMasses(const Layout& layout, const VertexLookup& vertexAt, RestModel& m
         const Int3 lo = layout.origin[e] + (full ? Int3(0, 0, 0) : Int3(c & 1, (c >> 1) & 1, (c >> 2) & 1) * layout.cellSize[e]);
         for (int k = 0; k < corners; ++k) {
           const Int3 p = lo + Int3(k & 1, (k >> 1) & 1, D == 3 ? (k >> 2) & 1 : 0) * cs;
-          const uint32_t id = vertexAt(p);
-          if (id == UINT32_MAX) throw std::logic_error("buildRestModel: a cell corner is not a model vertex");
+          const uint32_t id = layout.vertexAt(p);
+          if (id == Layout::kNoVertex) throw std::logic_error("buildRestModel: a cell corner is not a model vertex");
           m.mass[id] += cornerMass;
         }
       }
@@ -116,7 +93,7 @@ void vertexPeriod(RestModel& m) {
 }
 
 // Step 5: surface vertices, the corners of the voxel faces on the body's boundary.
-void markSurfaceVertices(const VoxelVolume& volume, const VertexLookup& vertexAt, RestModel& m) {
+void markSurfaceVertices(const Layout& layout, const VoxelVolume& volume, RestModel& m) {
   const int D = m.dim;
   m.onSurface.assign(m.numVertices(), 0);
   const auto& n = volume.dims();
@@ -137,8 +114,8 @@ void markSurfaceVertices(const VoxelVolume& volume, const VertexLookup& vertexAt
                 p[a] += s > 0 ? 1 : 0;
                 if (D == 3) p[b0] += u, p[b1] += w;
                 else p[a == 0 ? 1 : 0] += u;
-                const uint32_t id = vertexAt(p);
-                if (id != UINT32_MAX) m.onSurface[id] = 1;
+                const uint32_t id = layout.vertexAt(p);
+                if (id != Layout::kNoVertex) m.onSurface[id] = 1;
               }
           }
       }
@@ -154,12 +131,12 @@ RestModel buildRestModel(const Layout& layout, const VoxelVolume& volume, const 
   m.dim = layout.dim;
   m.voxelSize = layout.voxelSize;
   m.material = material;
-  const VertexLookup vertexAt(layout);
+  m.origin = origin;
   placeVertices(layout, origin, m);
-  lumpMasses(layout, vertexAt, m);
+  lumpMasses(layout, m);
   buildElements(layout, m);
   vertexPeriod(m);
-  markSurfaceVertices(volume, vertexAt, m);
+  markSurfaceVertices(layout, volume, m);
   return m;
 }
 
