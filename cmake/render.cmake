@@ -29,8 +29,12 @@ if(GRADEL_BUILD_TESTS)
   target_compile_options(gradel_render_tests PRIVATE -Wall -Wextra)
   target_compile_definitions(gradel_render_tests PRIVATE
     GRADEL_SOURCE_DIR="${CMAKE_CURRENT_SOURCE_DIR}"
-    GRADEL_CLI_PATH="$<TARGET_FILE:gradel>"
-    GRADEL_VIEW_PATH="$<IF:$<TARGET_EXISTS:gradel-view>,$<TARGET_FILE:gradel-view>,gradel-view-not-built>")
+    GRADEL_CLI_PATH="$<TARGET_FILE:gradel>")
+  # The viewer's path: cmake/viewer.cmake sets it when the viewer is built ($<TARGET_FILE> of a
+  # target that does not exist fails generation even inside a false $<IF>).
+  if(NOT GRADEL_BUILD_VIEWER)
+    target_compile_definitions(gradel_render_tests PRIVATE GRADEL_VIEW_PATH="gradel-view-not-built")
+  endif()
   add_dependencies(gradel_render_tests gradel)
   # One ctest test: a missing GL fails it (never skipped).
   add_test(NAME render.headless COMMAND gradel_render_tests --gtest_filter=-ViewerWindow.*)

@@ -13,6 +13,7 @@ set(GRADEL_CORE_SOURCES
   src/huge_pages.cpp
   src/isosurface.cpp
   src/layout.cpp
+  src/material.cpp
   src/mesh.cpp
   src/model.cpp
   src/output.cpp
@@ -76,12 +77,14 @@ set(GRADEL_TEST_SOURCES
   tests/test_embedding.cpp
   tests/test_golden.cpp
   tests/test_implicit.cpp
+  tests/test_integration.cpp
   tests/test_io_embedded.cpp
   tests/test_io_grey_readers.cpp
   tests/test_io_meshes.cpp
   tests/test_io_samples.cpp
   tests/test_io_voxel_readers.cpp
   tests/test_layout.cpp
+  tests/test_material.cpp
   tests/test_model.cpp
   tests/test_output.cpp
   tests/test_pins.cpp

@@ -13,6 +13,7 @@ target_compile_definitions(gradel-view PRIVATE GRADEL_SOURCE_DIR="${CMAKE_CURREN
 # missing = failure, not a skip.
 if(GRADEL_BUILD_TESTS)
   add_dependencies(gradel_render_tests gradel-view)
+  target_compile_definitions(gradel_render_tests PRIVATE GRADEL_VIEW_PATH="$<TARGET_FILE:gradel-view>")
   find_program(XVFB_RUN xvfb-run)
   if(NOT XVFB_RUN)
     set(XVFB_RUN xvfb-run)

@@ -463,8 +463,7 @@ PYBIND11_MODULE(gradel, m) {
                 if (!s.isoEmbedded) {
                   const Layout& layout = s.built.layout;
                   const RestModel& model = *s.built.model;
-                  const Vec3 origin = model.restPositions[0] - layout.vertices[0].cast<Real>() * model.voxelSize;
-                  s.isoEmbedded = embedMesh(isosurface(s.built.volume, origin), layout, model);
+                  s.isoEmbedded = embedMesh(isosurface(s.built.volume, model.origin), layout, model);
                 }
                 em = &*s.isoEmbedded;
               }

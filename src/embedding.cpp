@@ -92,9 +92,8 @@ EmbeddedMesh embedMesh(const TriangleMesh& restMesh, const Layout& layout, const
   for (const Vec3& p : restMesh.vertices)
     if (!p.allFinite()) throw InputError("embedded mesh: non-finite vertex coordinate");
 
-  // World position of lattice point (0,0,0): restPositions = origin + lattice * h (model.h).
   const Real h = model.voxelSize;
-  const Vec3 origin = model.restPositions[0] - layout.vertices[0].cast<Real>() * h;
+  const Vec3& origin = model.origin;  // world position of lattice point (0,0,0) (model.h)
   const std::vector<int32_t> owner = voxelOwners(layout);
   std::vector<Vec3> means(model.numElements());
   for (size_t e = 0; e < means.size(); ++e) means[e] = restMean(model, e);

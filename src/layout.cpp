@@ -244,6 +244,16 @@ int Layout::numLevels() const {
   return top + 1;
 }
 
+uint32_t Layout::vertexAt(const Int3& p) const {
+  auto before = [](const Int3& a, const Int3& b) {
+    if (a.z() != b.z()) return a.z() < b.z();
+    if (a.y() != b.y()) return a.y() < b.y();
+    return a.x() < b.x();
+  };
+  const auto it = std::lower_bound(vertices.begin(), vertices.end(), p, before);
+  return it != vertices.end() && *it == p ? uint32_t(it - vertices.begin()) : kNoVertex;
+}
+
 int64_t Layout::regionVoxels(size_t e) const {
   int64_t cellVolume = 1;
   for (int b = 0; b < dim; ++b) cellVolume *= cellSize[e];

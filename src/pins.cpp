@@ -6,7 +6,7 @@ namespace gradel {
 
 namespace {
 
-// A mask, loaded once: is the closed cube of some filled voxel holding x?
+// A mask: is the closed cube of some filled voxel holding x?
 class LoadedMask {
  public:
   LoadedMask(const PinMask& m, size_t index) : m_(m) {
@@ -17,20 +17,13 @@ class LoadedMask {
     for (size_t b = 0; b < m.boxes.size(); ++b)
       if ((m.boxes[b][1] - m.boxes[b][0]).minCoeff() < 0)
         throw InputError(where + "boxes[" + std::to_string(b) + "]: max must be >= min on every axis");
-    if (!m.source && m.boxes.empty()) throw InputError(where + "has neither a file nor boxes");
-    if (m.source) {
-      try {
-        volume_ = m.source->load();
-      } catch (const InputError& e) {
-        throw InputError(where + e.what());
-      }
-      if (volume_.countFilled() == 0) throw InputError(where + m.source->describe() + ": no filled voxel");
-    }
+    if (!m.volume && m.boxes.empty()) throw InputError(where + "has neither a file nor boxes");
+    if (m.volume && m.volume->countFilled() == 0) throw InputError(where + m.name + ": no filled voxel");
   }
 
   bool filled(const Int3& v) const {
-    if (m_.source) {
-      if (volume_.at(v.x(), v.y(), v.z())) return true;
+    if (m_.volume) {
+      if (m_.volume->at(v.x(), v.y(), v.z())) return true;
     }
     for (const auto& b : m_.boxes)
       if ((v.array() >= b[0].array()).all() && (v.array() <= b[1].array()).all()) return true;
@@ -56,7 +49,6 @@ class LoadedMask {
 
  private:
   const PinMask& m_;
-  VoxelVolume volume_;
 };
 
 }  // namespace

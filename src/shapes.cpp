@@ -50,8 +50,8 @@ VoxelVolume rasterize(const ShapeSpec& spec) {
 }
 
 ShapeSpec presetShape(const std::string& name, int size, int dim, Real voxelSize) {
-  if (dim != 2 && dim != 3) throw InputError("--dim must be 2 or 3");
-  if (size < 1 || size > 4096) throw InputError("--size must be between 1 and 4096 voxels");
+  if (dim != 2 && dim != 3) throw InputError("dim: must be 2 or 3 (got " + std::to_string(dim) + ")");
+  if (size < 1 || size > 4096) throw InputError("size: must be between 1 and 4096 voxels (got " + std::to_string(size) + ")");
   ShapeSpec s;
   s.dim = dim;
   s.dims = {size, size, dim == 3 ? size : 1};
@@ -67,7 +67,7 @@ ShapeSpec presetShape(const std::string& name, int size, int dim, Real voxelSize
     p.center = Vec3(h, h, dim == 3 ? h : 0);
     p.radius = h;
   } else if (name == "cylinder") {
-    if (dim == 2) throw InputError("--shape cylinder is 3D only; use box or sphere in 2D");
+    if (dim == 2) throw InputError("shape: cylinder is 3D only (expected box or sphere in 2D)");
     p.kind = PrimitiveKind::Cylinder;
     p.center = Vec3(h, h, h);
     p.radius = h;

@@ -20,11 +20,6 @@ namespace {
 using Pt2 = std::array<int32_t, 2>;
 using Tri = std::array<uint32_t, 3>;
 
-uint64_t latticeKey(const Int3& p) {
-  // 21 bits per axis: lattice coordinates up to 2^21 voxels.
-  return uint64_t(uint32_t(p.x())) | (uint64_t(uint32_t(p.y())) << 21) | (uint64_t(uint32_t(p.z())) << 42);
-}
-
 int64_t cross2(const Pt2& o, const Pt2& a, const Pt2& b) {
   return int64_t(a[0] - o[0]) * (b[1] - o[1]) - int64_t(a[1] - o[1]) * (b[0] - o[0]);
 }
@@ -115,12 +110,9 @@ std::vector<std::array<size_t, 3>> earClip(const std::vector<Pt2>& poly) {
 // Collects surface vertices (one per model vertex used) and triangles.
 class SurfaceBuilder {
  public:
-  explicit SurfaceBuilder(const Layout& layout) {
-    ids_.reserve(layout.numVertices());
-    for (size_t i = 0; i < layout.numVertices(); ++i) ids_.emplace(latticeKey(layout.vertices[i]), uint32_t(i));
-  }
+  explicit SurfaceBuilder(const Layout& layout) : layout_(layout) {}
 
-  bool isVertex(const Int3& p) const { return ids_.count(latticeKey(p)) != 0; }
+  bool isVertex(const Int3& p) const { return layout_.vertexAt(p) != Layout::kNoVertex; }
 
   // Adds the squares' region in the plane {axis = w}, u = (axis+1)%3, v = (axis+2)%3, facing
   // +axis (flip = false) or -axis.
@@ -157,13 +149,14 @@ class SurfaceBuilder {
 
  private:
   uint32_t surfaceId(const Int3& p) {
-    const uint32_t model = ids_.at(latticeKey(p));
+    const uint32_t model = layout_.vertexAt(p);
+    if (model == Layout::kNoVertex) throw std::logic_error("display surface: a triangle corner is not a model vertex");
     auto [it, added] = local_.emplace(model, uint32_t(out_.modelVertex.size()));
     if (added) out_.modelVertex.push_back(model);
     return it->second;
   }
 
-  std::unordered_map<uint64_t, uint32_t> ids_;    // lattice point -> model vertex
+  const Layout& layout_;                          // lattice point -> model vertex (vertexAt)
   std::unordered_map<uint32_t, uint32_t> local_;  // model vertex -> surface vertex
   DisplaySurface out_;
 };

@@ -11,6 +11,7 @@
 
 #include "element_stage.h"
 #include "gradel/element.h"
+#include "gradel/integration.h"
 #include "huge_pages.h"
 #include "gradel/rotation_fit.h"
 #include "gradel/settings_check.h"
@@ -57,6 +58,7 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
       scratch_(std::make_unique<StepScratch>()) {
   validate(sim_);
   validate(domain_, model_->dim);
+  if (model_->dim == 2) sim_.gravity.z() = 0;  // a 2D body moves in its plane: the one place gravity is projected
   const Real period = sim_.dtPeriod == PeriodRule::Element ? model_->smallestPeriod : model_->smallestVertexPeriod;
   // The implicit integrator is stable at any dt: "auto" is one display frame.
   Real autoDt = sim_.integrator == IntegratorKind::Implicit ? 1.0 / 60.0 : sim_.dtFraction * period;
@@ -69,7 +71,7 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
     autoDt = std::min(autoDt, 0.5 * sim_.damping / (omega * omega));
   }
   dt_ = sim_.dt > 0 ? sim_.dt : autoDt;
-  if (!(dt_ > 0) || !std::isfinite(dt_)) throw InputError("simulation.dt: could not derive a positive time step");
+  if (!(dt_ > 0) || !std::isfinite(dt_)) throw InputError("dt: could not derive a positive time step");
 
   const size_t V = model_->numVertices(), E = model_->numElements();
   state_.positions = model_->restPositions;
@@ -160,11 +162,9 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
   constexpr size_t kBlock = 16;
   const RestModel& m = *model_;
   const Real dt = dt_;
-  const Real damp = 1.0 / (1.0 + sim_.damping * dt);
+  const Real damp = dampingFactor(sim_.damping, dt);
   const bool forward = sim_.integrator == IntegratorKind::ForwardEuler;
-  Vec3 gravity = sim_.gravity;
-  if (m.dim == 2) gravity.z() = 0;
-  const d4 g = loadVec3(gravity);
+  const d4 g = loadVec3(sim_.gravity);
   Vec3* positions = state_.positions.data();
   Vec3* velocities = state_.velocities.data();
   const Real* invMass = m.invMass.data();
@@ -177,13 +177,8 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
       const d4 a = force * invMass[i] + g;
       const d4 x0 = loadVec3(positions[i]), v0 = loadVec3(velocities[i]);
       d4 x = x0, v = v0;
-      if (forward) {
-        x = x + dt * v;  // eq. 3 with V(T): the paper's literal order
-        v = (v + dt * a) * damp;
-      } else {
-        v = (v + dt * a) * damp;
-        x = x + dt * v;  // symplectic: P(T+dT) = P(T) + V(T+dT) dT
-      }
+      if (forward) forwardEulerStep(x, v, a, dt, damp);  // integration.h
+      else symplecticEulerStep(x, v, a, dt, damp);
       storeVec3(positions[i], x), storeVec3(velocities[i], v);
       start[i - b] = x0, startVelocity[i - b] = v0;
       lo = min(lo, min(x0, x)), hi = max(hi, max(x0, x));
@@ -388,8 +383,7 @@ void World::applyPins(Real t) {
 // velocities (x_new - x_old) / dt).
 void World::stepImplicit() {
   if (!projective_) projective_ = std::make_unique<ProjectiveSolver>(*model_, dt_, pinSet_.vertices);
-  Vec3 g = sim_.gravity;
-  if (model_->dim == 2) g.z() = 0;
+  const Vec3 g = sim_.gravity;
   const bool contacts = !manipulators_.empty() || domain_.enabled;
   if (contacts) scratch_->previousPositions = state_.positions, scratch_->previousVelocities = state_.velocities;
   scratch_->contactDepth.assign(model_->numVertices(), 0.0);
@@ -462,8 +456,7 @@ Metrics World::metrics(std::vector<Real>* elementStress) const {
   Metrics r;
   if (elementStress) elementStress->assign(m.numElements(), 0.0);
   r.time = state_.time;
-  Vec3 g = sim_.gravity;
-  if (m.dim == 2) g.z() = 0;
+  const Vec3 g = sim_.gravity;
 
   // Elastic forces and energy at the current positions.
   std::vector<Vec3> forces(m.numVertices(), Vec3::Zero());

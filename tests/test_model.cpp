@@ -82,3 +82,23 @@ TEST(Model, RestOffsetsAreCentred) {
     EXPECT_LT(s.norm(), 1e-12 * m.size[e]);  // zero up to rounding
   }
 }
+
+// Rest-derived data born with the layout and the model: the lattice-to-vertex lookup finds every
+// vertex and nothing else, and the model keeps its origin (rest = origin + lattice * h).
+TEST(Model, VertexLookupAndOrigin) {
+  for (int dim : {2, 3})
+    for (LayoutKind kind : {LayoutKind::Gradational, LayoutKind::Voxel}) {
+      const Vec3 origin(0.3, -1.7, dim == 3 ? 2.9 : 0);
+      Body b = makeBody("sphere", 9, dim, kind, {}, 0.01, origin);
+      const Layout& L = b.layout;
+      for (size_t i = 0; i < L.numVertices(); ++i) {
+        ASSERT_EQ(L.vertexAt(L.vertices[i]), i);
+        EXPECT_EQ(L.vertexAt(L.vertices[i] + Int3(0, 0, 11)), Layout::kNoVertex);  // above the grid
+      }
+      // The grid's corner is outside the sphere.
+      EXPECT_EQ(L.vertexAt(Int3(0, 0, 0)), Layout::kNoVertex);
+      EXPECT_EQ(b.model->origin, origin);
+      for (size_t i = 0; i < L.numVertices(); i += 7)
+        EXPECT_EQ(b.model->restPositions[i], Vec3(origin + L.vertices[i].cast<Real>() * 0.01));
+    }
+}

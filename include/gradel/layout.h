@@ -49,7 +49,7 @@ struct Layout {
   LayoutKind kind = LayoutKind::Gradational;
 
   // ---- vertices ----
-  std::vector<Int3> vertices;  ///< Lattice coordinates of each unique vertex [voxels].
+  std::vector<Int3> vertices;  ///< Lattice coordinates of each unique vertex [voxels], in (z, y, x) order.
 
   // ---- elements (one entry each) ----
   std::vector<uint8_t> level;     ///< Level L (0 = finest).
@@ -69,6 +69,10 @@ struct Layout {
   bool isFull(size_t e) const { return cellMask[e] == (dim == 3 ? 0xFF : 0x0F); }
   /// Lattice volume of element e's region [voxels^dim].
   int64_t regionVoxels(size_t e) const;
+  /// The vertex at lattice point p, or kNoVertex: the one lattice-to-vertex lookup (a binary
+  /// search of `vertices`, which are sorted by (z, y, x); no table kept).
+  uint32_t vertexAt(const Int3& p) const;
+  static constexpr uint32_t kNoVertex = UINT32_MAX;
 };
 
 struct LayoutStats {

@@ -39,4 +39,22 @@ struct MaterialSettings {
   Real paperK = 10000.0;                 ///< [N] paper scaling: force per unit strain (the paper's k).
 };
 
+// ---- the rules, as pure functions (src/material.cpp); buildRestModel applies them (model.h) ----
+
+/// `paper`: the mass of every vertex, one voxel's: density * h^3 [kg] (sec. 2.3).
+Real paperVertexMass(const MaterialSettings& m, Real voxelSize);
+/// `consistent`: the mass [kg] a filled cube of `cellEdge` voxels (a square slab one voxel thick
+/// in 2D) gives each of its 2^dim corners: density * h^3 * cellEdge^dim / 2^dim.
+Real cellCornerMass(const MaterialSettings& m, Real voxelSize, int cellEdge, int dim);
+/// The second moment S = sum_i R0_i R0_i^T of an element's n rest offsets [m^2].
+Mat3 restSecondMoment(const Vec3* restOffsets, size_t n);
+/// An element's stiffness k_e [N/m]. `consistent`: E V_e / lambda_max(S) with S its rest offsets'
+/// second moment (the top-left 2x2 block in 2D) and V_e = regionVoxels * h^3; `paper`: k / s_e
+/// with s_e = elementSize [m].
+Real elementStiffness(const MaterialSettings& m, int dim, Real voxelSize, int64_t regionVoxels, Real elementSize,
+                      const Vec3* restOffsets, size_t n);
+/// The period [s] of a mass m [kg] on a spring k [N/m]: 2 pi sqrt(m / k). Every non-rigid mode of
+/// a shape-matching element with vertex masses >= m has omega^2 <= k_e / m (sec. 3.4).
+Real springPeriod(Real mass, Real stiffness);
+
 }  // namespace gradel

@@ -14,6 +14,7 @@ struct RestModel {
   int dim = 3;
   Real voxelSize = 1;       ///< [m]
   MaterialSettings material;
+  Vec3 origin{0, 0, 0};     ///< [m] world position of lattice point (0, 0, 0) at rest.
 
   // ---- per vertex ----
   std::vector<Vec3> restPositions;  ///< [m] origin + lattice * voxelSize (buildRestModel).

@@ -9,6 +9,7 @@
 
 #include <array>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "gradel/contacts.h"
@@ -16,13 +17,16 @@
 
 namespace gradel {
 
-/// A voxel mask: the union of the filled voxels of `source` (if any) and of `boxes`, on a lattice
+/// A voxel mask: the union of the filled voxels of `volume` (if any) and of `boxes`, on a lattice
 /// of edge `voxelSize` whose voxel (0, 0, 0) has its lower corner at `origin` (world, at rest).
 /// A vertex is selected when it lies on the closed cube of a filled mask voxel; on the body's own
 /// lattice (origin = body.position + offset * h, voxelSize = h, what scenes use) these are exactly
 /// the corners of the filled voxels. In 2D the mask is one voxel thick (z index 0).
 struct PinMask {
-  std::shared_ptr<const VolumeSource> source;  ///< A volume (e.g. io::openVolume); null: boxes only.
+  /// A label volume, already read (the scene reader reads a mask file when it reads the scene;
+  /// in code: io::openVolume(spec)->load()); null: boxes only.
+  std::shared_ptr<const VoxelVolume> volume;
+  std::string name;                            ///< Where `volume` came from (a file), for messages.
   std::vector<std::array<Int3, 2>> boxes;      ///< Inclusive voxel index ranges {lo, hi} on the mask lattice.
   Vec3 origin{0, 0, 0};                        ///< [m] lower corner of mask voxel (0, 0, 0).
   Real voxelSize = 0;                          ///< [m] mask voxel edge (> 0).
@@ -44,9 +48,9 @@ struct PinSet {
 };
 
 /// Selects the pinned vertices from rest positions (a vertex held by several pins goes to the
-/// first). Throws InputError when a pin holds no vertex, its box is inverted, or its mask cannot
-/// be read or is malformed (messages "pins[i]: ..." and "pins[i].mask: ...", the latter naming
-/// the file).
+/// first). Reads no file. Throws InputError when a pin holds no vertex, its box is inverted, or
+/// its mask is malformed or empty (messages "pins[i]: ..." and "pins[i].mask: ...", the latter
+/// naming the mask's file).
 PinSet selectPins(const std::vector<PinSettings>& pins, const std::vector<Vec3>& restPositions);
 
 }  // namespace gradel

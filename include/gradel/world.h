@@ -62,6 +62,7 @@ class World {
   std::shared_ptr<const RestModel> modelPtr() const { return model_; }
   const State& state() const { return state_; }
   State& state() { return state_; }  ///< For tests and tools: set positions / velocities directly.
+  /// The settings as applied (a 2D body's gravity projected into its plane).
   const SimulationSettings& settings() const { return sim_; }
   const DomainSettings& domain() const { return domain_; }
 

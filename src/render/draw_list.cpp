@@ -174,16 +174,11 @@ BodyView makeBodyView(const BuiltScene& scene, const TriangleMesh* restMesh) {
   } else if (scene.embedded) {
     v.embedded = scene.embedded;  // the body's own mesh file
   } else if (layout.dim == 3) {
-    // restPositions = origin + lattice * h (model.h).
-    const Vec3 origin = model.restPositions[0] - layout.vertices[0].cast<Real>() * model.voxelSize;
-    v.embedded = embedMesh(isosurface(scene.volume, origin), layout, model);
+    v.embedded = embedMesh(isosurface(scene.volume, model.origin), layout, model);
   }
   v.smooth = buildDisplaySurface(layout, scene.volume, SurfaceKind::Smooth);
   v.voxel = buildDisplaySurface(layout, scene.volume, SurfaceKind::Voxel);
   v.levels = layout.numLevels();
-  std::unordered_map<uint64_t, uint32_t> id;
-  auto key = [](const Int3& p) { return uint64_t(uint32_t(p.x())) | uint64_t(uint32_t(p.y())) << 21 | uint64_t(uint32_t(p.z())) << 42; };
-  for (size_t i = 0; i < layout.numVertices(); ++i) id.emplace(key(layout.vertices[i]), uint32_t(i));
   const int dim = layout.dim, corners = dim == 3 ? 8 : 4;
   for (size_t e = 0; e < layout.numElements(); ++e) {
     // Outline of a full element: its block; of an incomplete one: its filled cells (fig. 6).
@@ -200,8 +195,8 @@ BodyView makeBodyView(const BuiltScene& scene, const TriangleMesh* restMesh) {
           const Int3 p = lo + span * Int3(corner & 1, corner >> 1 & 1, corner >> 2 & 1);
           Int3 q = p;
           q[a] += span;
-          auto ip = id.find(key(p)), iq = id.find(key(q));
-          if (ip != id.end() && iq != id.end()) edges.insert(std::minmax(ip->second, iq->second));
+          const uint32_t ip = layout.vertexAt(p), iq = layout.vertexAt(q);
+          if (ip != Layout::kNoVertex && iq != Layout::kNoVertex) edges.insert(std::minmax(ip, iq));
         }
     }
     // The section plane runs through voxel centres (z = nz/2 + 1/2), so no element only touches it.
