@@ -59,7 +59,8 @@ ElementStageRest::ElementStageRest(const RestModel& m)
       c += X;
       for (int a = 0; a < 3; ++a) {
         const Real d = (X[a] - first[a]) / h, r = std::round(d);
-        if (!(std::abs(d - r) <= 1e-6) || std::abs(r) > 32767)
+        // Rest positions are origin + lattice * h (model.h): d is an integer to rounding.
+        if (!(std::abs(d - r) <= 1e-3) || std::abs(r) > 32767)
           throw std::logic_error("ElementStageRest: a rest position is off the voxel lattice");
         pairs[p].lattice[a] = int16_t(r);
         sum[a] += int(r);
