@@ -280,9 +280,9 @@ std::vector<size_t> chunkSplit(const std::vector<uint32_t>& prefix, uint64_t ite
   for (int t = 0; t <= members; ++t) split[size_t(t)] = (splitPoint(prefix, itemCost, t, members, chunk) + chunk - 1) / chunk;
   return split;
 }
-// Measured costs in pairs (instruction counts, callgrind): an element's moments, rotation fit
-// and frame cost about as much as 24 of its pairs; a vertex's integration about 3 of its pairs.
-constexpr uint64_t kElementCost = 24, kVertexCost = 3;
+// Measured costs in pairs (instruction counts, callgrind): an element's moments set-up, rotation
+// fit and frame cost about as much as 21 of its pairs; a vertex's integration about 4 of its pairs.
+constexpr uint64_t kElementCost = 21, kVertexCost = 4;
 // Chunks handed out by the team: ~20-40 us of work each (kElementChunk a multiple of the
 // rotation fit's lanes, kVertexChunk of stageVertices' blocks).
 constexpr size_t kElementChunk = 256, kVertexChunk = 512;
