@@ -12,9 +12,10 @@
 //     four 4-wide additions per pair, in a fixed order (the vertex's elements in id order).
 // Rest offsets are lattice vectors: R0_i = h (P_i - mean P), P_i the vertex's lattice offset from
 // the element's first vertex in voxels (h the voxel size), and since sum (x_i - c) = 0,
-// A = h (sum x_i P_i^T - c sum P_i^T). Pass 1 streams P_i as four int16 (P_i, 1) per pair, 8 bytes
-// instead of R0's 24, and forms the rows of sum x_i (P_i, 1)^T, whose last lane is sum x_i; the
-// factor h does not change the fitted rotation, and sum P_i is an exact integer. Four
+// A = h (sum x_i P_i^T - c sum P_i^T). Pass 1 streams a 12-byte record per pair (the vertex and
+// (P_i, 1) as four int16; the vertex id and R0 took 28 bytes) and forms the rows of
+// sum x_i (P_i, 1)^T, whose last lane is sum x_i; the factor h does not change the fitted
+// rotation, and sum P_i is an exact integer. Four
 // elements' rows are then transposed into the rotation fit's lanes, and the frames computed
 // four at a time and transposed back. Each vertex is one 4-wide register (x, y, z, 0); pass 1
 // prefetches the vertex of the pair kPrefetchPairs ahead, since large bodies are bound by these
