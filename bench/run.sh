@@ -2,7 +2,8 @@
 # Runs the benchmark and writes bench/results/<date>-<host>-{real,paper,threads}.csv with the
 # machine description. Usage: bench/run.sh [build-dir]   (default build/, from scripts/setup)
 #  real:    SI scenes (gravity, walls, a pressing manipulator, a pin, metrics per 1/60 s frame),
-#           n = 16..256, E = 1e4, 1e5, 1e6 Pa, 1 and 2 threads, gradational and uniform;
+#           n = 16..256, E = 1e4, 1e5, 1e6 Pa, 1 and 2 threads, gradational and uniform
+#           (uniform at n = 256 too: where gradational should pass 5x, README "Speed");
 #  paper:   the paper's Table 1 setting, for the comparison with the paper and with `real`;
 #  threads: the threading mechanisms compared (docs/speed.md, "Threads"), quiet and with one busy process.
 set -euo pipefail
@@ -19,12 +20,12 @@ bench() { "$build/gradel-bench" --reps 5 --min-time 0.3 "$@"; }
   describe
   bench --sets real --sizes 16,32,64,128 --layouts gradational --moduli 1e4,1e5,1e6 --threads 1,2
   bench --sets real --sizes 256 --layouts gradational --moduli 1e5 --threads 1,2 | grep -v '^set,'
-  bench --sets real --sizes 64,128 --layouts uniform --moduli 1e5 --threads 1,2 | grep -v '^set,'
+  bench --sets real --sizes 64,128,256 --layouts uniform --moduli 1e5 --threads 1,2 | grep -v '^set,'
 } > "$stem-real.csv.tmp" && mv "$stem-real.csv.tmp" "$stem-real.csv"
 {
   describe
   bench --sets paper --shapes sphere --sizes 16,32,64,128,256 --layouts gradational --threads 1,2
-  bench --sets paper --shapes sphere --sizes 64,128 --layouts uniform --threads 1,2 | grep -v '^set,'
+  bench --sets paper --shapes sphere --sizes 64,128,256 --layouts uniform --threads 1,2 | grep -v '^set,'
 } > "$stem-paper.csv.tmp" && mv "$stem-paper.csv.tmp" "$stem-paper.csv"
 # The threading mechanisms: the team (default), OpenMP with libgomp's default (spinning) wait and
 # with OMP_WAIT_POLICY=passive; each on a quiet machine and beside one busy process (--load).

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "gradel/rotation_fit.h"
 #include "simd.h"
@@ -12,47 +13,69 @@ namespace {
 
 using namespace simd;
 
-// Sums over one element's pairs: s = sum x_i and the columns a_c = sum x_i R0_i[c] (A before
-// centring). R0 streams in pair order (the hardware prefetches it); the gathers of x are
-// prefetched by the caller. Two interleaved accumulator sets hide the fused multiply-adds'
-// latency.
-struct ElementMoments {
-  d4 s, a0, a1, a2;
+// One element's rows of sum x_i (P_i, 1)^T: row j is (sum x_i[j] P_i, sum x_i[j]). The pairs
+// stream in order (the hardware prefetches them); the gathers of x are not predictable, so each
+// pair prefetches the vertex of the pair kPrefetchPairs ahead. Two interleaved accumulator sets
+// hide the fused multiply-adds' latency.
+struct ElementRows {
+  d4 r0, r1, r2;
 };
 
-inline ElementMoments elementMoments(const Vec3* x, const Vec3* R0, const uint32_t* verts, uint32_t n) {
-  d4 s0 = splat(0), s1 = splat(0), a0 = s0, a1 = s0, a2 = s0, b0 = s0, b1 = s0, b2 = s0;
+inline ElementRows elementRows(const Vec3* x, const StagePair* pair, uint32_t n) {
+  d4 a0 = splat(0), a1 = a0, a2 = a0, b0 = a0, b1 = a0, b2 = a0;
   uint32_t i = 0;
   for (; i + 1 < n; i += 2) {
-    const d4 p = loadVec3(x[verts[i]]), q = loadVec3(x[verts[i + 1]]);
-    const Real* r = R0[i].data();
-    const Real* t = R0[i + 1].data();
-    s0 += p, a0 += p * r[0], a1 += p * r[1], a2 += p * r[2];
-    s1 += q, b0 += q * t[0], b1 += q * t[1], b2 += q * t[2];
+    __builtin_prefetch(&x[pair[i + kPrefetchPairs].vertex]);
+    __builtin_prefetch(&x[pair[i + 1 + kPrefetchPairs].vertex]);
+    const Real* p = x[pair[i].vertex].data();
+    const Real* q = x[pair[i + 1].vertex].data();
+    const d4 u = loadInt16x4(pair[i].lattice), w = loadInt16x4(pair[i + 1].lattice);
+    a0 += p[0] * u, a1 += p[1] * u, a2 += p[2] * u;
+    b0 += q[0] * w, b1 += q[1] * w, b2 += q[2] * w;
   }
   if (i < n) {
-    const d4 p = loadVec3(x[verts[i]]);
-    const Real* r = R0[i].data();
-    s0 += p, a0 += p * r[0], a1 += p * r[1], a2 += p * r[2];
+    __builtin_prefetch(&x[pair[i + kPrefetchPairs].vertex]);
+    const Real* p = x[pair[i].vertex].data();
+    const d4 u = loadInt16x4(pair[i].lattice);
+    a0 += p[0] * u, a1 += p[1] * u, a2 += p[2] * u;
   }
-  return {s0 + s1, a0 + b0, a1 + b1, a2 + b2};
+  return {a0 + b0, a1 + b1, a2 + b2};
 }
 
 }  // namespace
 
 ElementStageRest::ElementStageRest(const RestModel& m)
-    : sumRestOffsets(m.numElements(), Vec3::Zero()), restCentroids(m.numElements(), Vec3::Zero()) {
+    : elements(m.numElements()), pairs(m.numPairs() + kPrefetchPairs, StagePair{{0, 0, 0, 0}, 0}) {
   const size_t V = m.numVertices(), E = m.numElements();
+  const Real h = m.voxelSize;
   for (size_t e = 0; e < E; ++e) {
-    // The same summation order as element.cpp's reference kernel.
-    Real s0 = 0, s1 = 0, s2 = 0;
-    Vec3 c = Vec3::Zero();
-    for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) {
-      s0 += m.restOffsets[p].x(), s1 += m.restOffsets[p].y(), s2 += m.restOffsets[p].z();
-      c += m.restPositions[m.elemVerts[p]];
+    const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
+    // The same summation order as the model's rest offsets (model.cpp), so X - C reproduces them.
+    Vec3 c = Vec3::Zero(), residue = Vec3::Zero();
+    Eigen::Vector3i sum = Eigen::Vector3i::Zero();
+    const Vec3& first = m.restPositions[m.elemVerts[b]];
+    for (uint32_t p = b; p < b + n; ++p) {
+      const Vec3& X = m.restPositions[m.elemVerts[p]];
+      c += X;
+      for (int a = 0; a < 3; ++a) {
+        const Real d = (X[a] - first[a]) / h, r = std::round(d);
+        // Rest positions are origin + lattice * h (model.h): d is an integer to rounding.
+        if (!(std::abs(d - r) <= 1e-3) || std::abs(r) > 32767)
+          throw std::logic_error("ElementStageRest: a rest position is off the voxel lattice");
+        pairs[p].lattice[a] = int16_t(r);
+        sum[a] += int(r);
+      }
+      pairs[p].lattice[3] = 1;
+      pairs[p].vertex = m.elemVerts[p];
     }
-    sumRestOffsets[e] = Vec3(s0, s1, s2);
-    restCentroids[e] = c / Real(m.elemStart[e + 1] - m.elemStart[e]);
+    c /= Real(n);
+    for (uint32_t p = b; p < b + n; ++p) residue += m.restPositions[m.elemVerts[p]] - c;
+    residue /= Real(n);
+    ElementConstants& k = elements[e];
+    for (int a = 0; a < 3; ++a) k.sumLattice[a] = sum[a], k.restCentroid[a] = c[a], k.meanRestOffset[a] = residue[a];
+    k.meanRestOffset[3] = 0;
+    k.invCount = 1.0 / Real(n);
+    k.stiffness = m.stiffness[e];
   }
   // Transpose element -> vertex into vertex -> elements, ascending per vertex.
   vertexStart.assign(V + 1, 0);
@@ -65,44 +88,49 @@ ElementStageRest::ElementStageRest(const RestModel& m)
 }
 
 size_t ElementStageRest::memoryBytes() const {
-  return (sumRestOffsets.capacity() + restCentroids.capacity()) * sizeof(Vec3) +
+  return elements.capacity() * sizeof(ElementConstants) + pairs.capacity() * sizeof(StagePair) +
          (vertexStart.capacity() + vertexElements.capacity()) * sizeof(uint32_t);
 }
 
 void computeElementFrames(const RestModel& m, const ElementStageRest& rest, size_t begin, size_t end, const Vec3* x,
                           Quat* rotations, ElementFrame* frames, int maxIterations) {
+  static_assert(kRotationLanes == 4, "the transposes below are 4 x 4");
   constexpr int L = kRotationLanes;
-  constexpr size_t kPrefetchBatches = 2;  // 4 and 8 measured no better at n = 288
+  const ElementConstants* constants = rest.elements.data();
   RotationBatch batch;
-  d4 centroid[L];
   for (size_t e0 = begin; e0 < end; e0 += L) {
     const int lanes = int(std::min<size_t>(L, end - e0));
-    // The vertices of the batch after next, fetched ahead: the pair list says where they are,
-    // which no hardware prefetcher can guess (large bodies are bound by these gathers).
-    if (e0 + (kPrefetchBatches + 1) * L <= end)
-      for (uint32_t p = m.elemStart[e0 + kPrefetchBatches * L]; p < m.elemStart[e0 + (kPrefetchBatches + 1) * L]; ++p) {
-        __builtin_prefetch(&x[m.elemVerts[p]]);
-      }
-    // 1. Moments: centroid and A = sum (x_i - c) R0_i^T = sum x_i R0_i^T - c (sum R0_i)^T.
+    // 1. Rows of sum x_i (P_i, 1)^T per element, then transposed into lanes (one element per
+    //    lane): S[j][k] = sum x_i[j] P_i[k], S[j][3] = sum x_i[j]. A padding lane gets rows
+    //    (I, 0), sum P = 0 and q = I: A = I, which the fit leaves alone.
+    d4 S[3][4], K[12], Q[4];
     for (int l = 0; l < L; ++l) {
-      if (l >= lanes) {  // padding: A = I, q = I converges at once
-        for (int k = 0; k < 9; ++k) batch.A[k][l] = k % 4 == 0 ? 1 : 0;
-        batch.q[0][l] = 1, batch.q[1][l] = batch.q[2][l] = batch.q[3][l] = 0;
+      if (l >= lanes) {
+        S[0][l] = d4{1, 0, 0, 0}, S[1][l] = d4{0, 1, 0, 0}, S[2][l] = d4{0, 0, 1, 0};
+        K[l] = K[4 + l] = K[8 + l] = splat(0), Q[l] = d4{0, 0, 0, 1};
         continue;
       }
       const size_t e = e0 + l;
-      const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
-      const ElementMoments mo = elementMoments(x, &m.restOffsets[b], &m.elemVerts[b], n);
-      const d4 c = mo.s / Real(n);
-      const Vec3& sr = rest.sumRestOffsets[e];
-      const d4 col[3] = {mo.a0 - c * sr.x(), mo.a1 - c * sr.y(), mo.a2 - c * sr.z()};
-      for (int r = 0; r < 3; ++r)
-        for (int k = 0; k < 3; ++k) batch.A[3 * r + k][l] = col[k][r];
-      centroid[l] = c;
-      const Quat& q = rotations[e];
-      batch.q[0][l] = q.w(), batch.q[1][l] = q.x(), batch.q[2][l] = q.y(), batch.q[3][l] = q.z();
+      const uint32_t b = m.elemStart[e];
+      const ElementRows r = elementRows(x, &rest.pairs[b], m.elemStart[e + 1] - b);
+      S[0][l] = r.r0, S[1][l] = r.r1, S[2][l] = r.r2;
+      K[l] = load4(constants[e].sumLattice), K[4 + l] = load4(constants[e].restCentroid);
+      K[8 + l] = load4(constants[e].meanRestOffset);
+      Q[l] = load4(rotations[e].coeffs().data());  // x, y, z, w
     }
-    // 2. Best-fit rotations (eq. 1), four at once; 2D has a closed form (rotation about z).
+    for (int j = 0; j < 3; ++j) transpose(S[j][0], S[j][1], S[j][2], S[j][3]);
+    transpose(K[0], K[1], K[2], K[3]);  // sum P (3 lanes), 1 / n
+    transpose(K[4], K[5], K[6], K[7]);  // C (3 lanes), k
+    transpose(K[8], K[9], K[10], K[11]);  // mean R0 (3 lanes), 0
+    transpose(Q[0], Q[1], Q[2], Q[3]);  // x, y, z, w
+    // 2. Centroid c = sum x / n and A / h = sum x P^T - c (sum P)^T.
+    d4 c[3];
+    for (int j = 0; j < 3; ++j) {
+      c[j] = S[j][3] * K[3];
+      for (int k = 0; k < 3; ++k) store4(batch.A[3 * j + k], S[j][k] - c[j] * K[k]);
+    }
+    store4(batch.q[0], Q[3]), store4(batch.q[1], Q[0]), store4(batch.q[2], Q[1]), store4(batch.q[3], Q[2]);
+    // 3. Best-fit rotations (eq. 1), four at once; 2D has a closed form (rotation about z).
     if (m.dim == 2) {
       for (int l = 0; l < lanes; ++l) {
         Mat3 A;
@@ -115,22 +143,25 @@ void computeElementFrames(const RestModel& m, const ElementStageRest& rest, size
     } else {
       fitRotation3Batch(batch, maxIterations, 1e-12);
     }
-    // 3. Frames: G = k M and t = (k (e - M C), k), e = c - M sum R0 / n.
+    // 4. Frames, four at once: G = k M and t = (k (e - M C), k), e = c - M mean R0 (the
+    //    residue's share removed as in element.h: the forces then sum to zero to rounding),
+    //    transposed back to one frame per element; the rotations likewise.
+    d4 M[9];
+    for (int k = 0; k < 9; ++k) M[k] = load4(batch.M[k]);
+    const d4 k = K[7], zero = splat(0);
+    d4 F[4][4];  // F[column][lane before the transpose]
+    for (int col = 0; col < 3; ++col) F[col][0] = k * M[col], F[col][1] = k * M[3 + col], F[col][2] = k * M[6 + col], F[col][3] = zero;
+    for (int r = 0; r < 3; ++r)
+      F[3][r] = k * (c[r] - (M[3 * r] * K[8] + M[3 * r + 1] * K[9] + M[3 * r + 2] * K[10]) -
+                     (M[3 * r] * K[4] + M[3 * r + 1] * K[5] + M[3 * r + 2] * K[6]));
+    F[3][3] = k;
+    for (int col = 0; col < 4; ++col) transpose(F[col][0], F[col][1], F[col][2], F[col][3]);
+    d4 q[4] = {load4(batch.q[1]), load4(batch.q[2]), load4(batch.q[3]), load4(batch.q[0])};
+    transpose(q[0], q[1], q[2], q[3]);
     for (int l = 0; l < lanes; ++l) {
-      const size_t e = e0 + l;
-      const uint32_t n = m.elemStart[e + 1] - m.elemStart[e];
-      rotations[e] = Quat(batch.q[0][l], batch.q[1][l], batch.q[2][l], batch.q[3][l]);
-      const Real k = m.stiffness[e];
-      const d4 col0 = {batch.M[0][l], batch.M[3][l], batch.M[6][l], 0};
-      const d4 col1 = {batch.M[1][l], batch.M[4][l], batch.M[7][l], 0};
-      const d4 col2 = {batch.M[2][l], batch.M[5][l], batch.M[8][l], 0};
-      const Vec3& sr = rest.sumRestOffsets[e];
-      const Vec3& C = rest.restCentroids[e];
-      d4 t = k * (centroid[l] - (col0 * sr.x() + col1 * sr.y() + col2 * sr.z()) / Real(n) -
-                  (col0 * C.x() + col1 * C.y() + col2 * C.z()));
-      t[3] = k;
-      ElementFrame& f = frames[e];
-      store4(f.c0, k * col0), store4(f.c1, k * col1), store4(f.c2, k * col2), store4(f.t, t);
+      ElementFrame& f = frames[e0 + l];
+      store4(f.c0, F[0][l]), store4(f.c1, F[1][l]), store4(f.c2, F[2][l]), store4(f.t, F[3][l]);
+      store4(rotations[e0 + l].coeffs().data(), q[l]);
     }
   }
 }

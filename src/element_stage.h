@@ -2,21 +2,29 @@
 // integrated (eqs. 2-3), laid out for speed.
 //
 // The element is element.h's (c = mean x_i, A = sum (x_i - c) R0_i^T, M = best-fit rotation,
-// f_i = k_e (M R0_i - x_i + e) with e = c - M sum R0 / n, the rounding residue's share removed),
-// split in two passes that need no locks and no colouring:
+// f_i = k_e (M R0_i - x_i + e) with e = c - M sum R0 / n), split in two passes that need no locks
+// and no colouring:
 //  1. per element (computeElementFrames): moments, the rotation fitted four elements at a time
 //     (fitRotation3Batch), and the element's "frame": the columns of G = k_e M and
 //     t = (k_e (e - M C_e), k_e), C_e the rest centroid;
 //  2. per vertex (gatherVertexForces): with R0 = X_v - C_e (X_v the rest position),
 //     f_v = sum_e k_e (M R0 + e - x_v) = (sum_e G_e) X_v + sum_e t_e - (sum_e k_e) x_v:
 //     four 4-wide additions per pair, in a fixed order (the vertex's elements in id order).
-// Each vertex is one 4-wide register (x, y, z, 0), so a pair of pass 1 costs a load, three
-// broadcasts and four fused multiply-adds; pass 1 prefetches the vertices of the elements two
-// batches ahead, since large bodies are bound by these indirect gathers. Every sum is formed in an order that does not depend
-// on how ranges are split, so the result is the same at any thread count; it equals element.h's
-// reference kernel to rounding (tested).
+// Rest offsets are lattice vectors: R0_i = h (P_i - mean P), P_i the vertex's lattice offset from
+// the element's first vertex in voxels (h the voxel size), and since sum (x_i - c) = 0,
+// A = h (sum x_i P_i^T - c sum P_i^T). Pass 1 streams a 12-byte record per pair (the vertex and
+// (P_i, 1) as four int16; the vertex id and R0 took 28 bytes) and forms the rows of
+// sum x_i (P_i, 1)^T, whose last lane is sum x_i; the factor h does not change the fitted
+// rotation, and sum P_i is an exact integer. Four
+// elements' rows are then transposed into the rotation fit's lanes, and the frames computed
+// four at a time and transposed back. Each vertex is one 4-wide register (x, y, z, 0); pass 1
+// prefetches the vertex of the pair kPrefetchPairs ahead, since large bodies are bound by these
+// indirect gathers. Every sum is formed in an order that does not depend on how ranges are
+// split, so the result is the same at any thread count; it equals element.h's reference kernel to
+// rounding (tested).
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "gradel/model.h"
@@ -30,10 +38,31 @@ struct alignas(32) ElementFrame {
   Real c0[4], c1[4], c2[4], t[4];
 };
 
+/// Per element, read by pass 1 four at a time (transposed into lanes): (sum_i P_i, 1 / n),
+/// (C_e [m], k_e [N/m]) and (sum_i R0_i / n [m], 0), the mean rest offset as pass 2 forms it
+/// (R0_i = X_i - C_e in floating point: a rounding residue, ~1e-16 |X|).
+struct alignas(32) ElementConstants {
+  Real sumLattice[3], invCount;
+  Real restCentroid[3], stiffness;
+  Real meanRestOffset[4];
+};
+
+/// Per element-vertex pair, in the model's pair order: the vertex and (P_i, 1), P_i its lattice
+/// offset [voxels] from the element's first vertex. 12 bytes.
+struct StagePair {
+  int16_t lattice[4];
+  uint32_t vertex;
+};
+
+/// Pass 1 prefetches the vertex of the pair this many pairs ahead (~2 batches of 4 elements).
+constexpr size_t kPrefetchPairs = 128;
+
 /// Rest data of the two passes, derived once from the RestModel.
 struct ElementStageRest {
-  std::vector<Vec3> sumRestOffsets;    ///< Per element: sum_i R0_i (a rounding residue, ~1e-16).
-  std::vector<Vec3> restCentroids;     ///< Per element: C_e [m], the mean rest position of its vertices.
+  std::vector<ElementConstants> elements;
+  /// The model's pairs, then kPrefetchPairs padding pairs (vertex 0) for the prefetch to read.
+  /// std::logic_error when a rest position is off the model's voxel lattice.
+  std::vector<StagePair> pairs;
   std::vector<uint32_t> vertexStart;   ///< Per vertex + 1: its range in vertexElements.
   std::vector<uint32_t> vertexElements;  ///< The elements of each vertex, ascending.
 
@@ -58,8 +87,8 @@ inline void gatherVertexForces(const RestModel& model, const ElementStageRest& r
   for (size_t v = begin; v < end; ++v) {
     // sum G, sum t; lane 3 of sum t is sum k, which multiplies -x_v.
     d4 g0 = splat(0), g1 = g0, g2 = g0, t = g0;
-    for (uint32_t j = start[v]; j < start[v + 1]; ++j) {
-      const ElementFrame& f = frames[elements[j]];
+    for (const uint32_t *j = elements + start[v], *je = elements + start[v + 1]; j != je; ++j) {
+      const ElementFrame& f = frames[*j];
       g0 += load4(f.c0), g1 += load4(f.c1), g2 += load4(f.c2), t += load4(f.t);
     }
     const Real* r = X[v].data();

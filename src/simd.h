@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstdint>
 #if defined(__AVX__)
 #include <immintrin.h>
 #endif
@@ -68,5 +69,27 @@ inline d4 max(d4 a, d4 b) {
 #endif
 }
 inline bool none(m4 m) { return !(m[0] | m[1] | m[2] | m[3]); }
+
+/// Four int16 converted to doubles (exact).
+inline d4 loadInt16x4(const int16_t* p) {
+#if defined(__AVX2__)
+  return (d4)_mm256_cvtepi32_pd(_mm_cvtepi16_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p))));
+#else
+  return d4{Real(p[0]), Real(p[1]), Real(p[2]), Real(p[3])};
+#endif
+}
+
+/// 4x4 transpose in place: afterwards a holds the old lane 0 of a, b, c, d, and so on.
+inline void transpose(d4& a, d4& b, d4& c, d4& d) {
+#if defined(__AVX__)
+  const __m256d t0 = _mm256_unpacklo_pd((__m256d)a, (__m256d)b), t1 = _mm256_unpackhi_pd((__m256d)a, (__m256d)b);
+  const __m256d t2 = _mm256_unpacklo_pd((__m256d)c, (__m256d)d), t3 = _mm256_unpackhi_pd((__m256d)c, (__m256d)d);
+  a = (d4)_mm256_permute2f128_pd(t0, t2, 0x20), b = (d4)_mm256_permute2f128_pd(t1, t3, 0x20);
+  c = (d4)_mm256_permute2f128_pd(t0, t2, 0x31), d = (d4)_mm256_permute2f128_pd(t1, t3, 0x31);
+#else
+  const d4 r[4] = {a, b, c, d};
+  for (int l = 0; l < 4; ++l) a[l] = r[l][0], b[l] = r[l][1], c[l] = r[l][2], d[l] = r[l][3];
+#endif
+}
 
 }  // namespace gradel::simd

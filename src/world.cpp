@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <type_traits>
 #ifdef _OPENMP
 #include <omp.h>
 #endif
@@ -84,7 +85,7 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   adviseHugePages(state_.rotations), adviseHugePages(scratch_->frames), adviseHugePages(m.invMass);
   adviseHugePages(m.elemVerts), adviseHugePages(m.restOffsets), adviseHugePages(m.elemStart), adviseHugePages(m.stiffness);
   adviseHugePages(stageRest_->vertexElements), adviseHugePages(stageRest_->vertexStart);
-  adviseHugePages(stageRest_->sumRestOffsets), adviseHugePages(stageRest_->restCentroids);
+  adviseHugePages(stageRest_->elements), adviseHugePages(stageRest_->pairs);
 
   for (ManipulatorSettings& s : manipulators) addManipulator(std::move(s));
 }
@@ -162,39 +163,50 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
   constexpr size_t kBlock = 16;
   const RestModel& m = *model_;
   const Real dt = dt_;
-  const Real damp = dampingFactor(sim_.damping, dt);
-  const bool forward = sim_.integrator == IntegratorKind::ForwardEuler;
+  const Real damp = dampingFactor(sim_.damping, dt);  // integration.h
   const d4 g = loadVec3(sim_.gravity);
   Vec3* positions = state_.positions.data();
   Vec3* velocities = state_.velocities.data();
   const Real* invMass = m.invMass.data();
   Real depth = 0;
-  d4 start[kBlock], startVelocity[kBlock];
-  for (size_t b = begin; b < end; b += kBlock) {
-    const size_t be = std::min(end, b + kBlock);
-    d4 lo = splat(std::numeric_limits<Real>::infinity()), hi = -lo;
-    gatherVertexForces(m, *stageRest_, scratch_->frames.data(), positions, b, be, [&](size_t i, d4 force) {
-      const d4 a = force * invMass[i] + g;
-      const d4 x0 = loadVec3(positions[i]), v0 = loadVec3(velocities[i]);
-      d4 x = x0, v = v0;
-      if (forward) forwardEulerStep(x, v, a, dt, damp);  // integration.h
-      else symplecticEulerStep(x, v, a, dt, damp);
-      storeVec3(positions[i], x), storeVec3(velocities[i], v);
-      start[i - b] = x0, startVelocity[i - b] = v0;
-      lo = min(lo, min(x0, x)), hi = max(hi, max(x0, x));
-    });
-    if (!cb) continue;
-    // Broad phase (a NaN position cannot be changed by a contact, so it may be skipped).
-    bool touch = !none(lo < cb->wallLo) || !none(hi > cb->wallHi);
-    for (size_t k = 0; !touch && k < cb->lo.size(); ++k)
-      touch = none(hi < cb->lo[k]) && none(lo > cb->hi[k]);
-    if (!touch) continue;
-    for (size_t i = b; i < be; ++i) {
-      Vec3 previous, previousVelocity;
-      storeVec3(previous, start[i - b]), storeVec3(previousVelocity, startVelocity[i - b]);
-      depth = std::max(depth, resolveVertexContacts(previous, previousVelocity, positions[i], velocities[i]));
+  // One loop per integrator and per "contacts possible": neither test is made per vertex, and
+  // without contacts nothing is kept for them.
+  auto run = [&](auto forward, auto contacts) {
+    d4 start[kBlock], startVelocity[kBlock];
+    for (size_t b = begin; b < end; b += kBlock) {
+      const size_t be = std::min(end, b + kBlock);
+      d4 lo = splat(std::numeric_limits<Real>::infinity()), hi = -lo;
+      gatherVertexForces(m, *stageRest_, scratch_->frames.data(), positions, b, be, [&](size_t i, d4 force) {
+        const d4 a = force * invMass[i] + g;
+        const d4 x0 = loadVec3(positions[i]), v0 = loadVec3(velocities[i]);
+        d4 x = x0, v = v0;
+        if constexpr (forward()) forwardEulerStep(x, v, a, dt, damp);  // integration.h
+        else symplecticEulerStep(x, v, a, dt, damp);
+        storeVec3(positions[i], x), storeVec3(velocities[i], v);
+        if constexpr (contacts()) {
+          start[i - b] = x0, startVelocity[i - b] = v0;
+          lo = min(lo, min(x0, x)), hi = max(hi, max(x0, x));
+        }
+      });
+      if constexpr (contacts()) {
+        // Broad phase (a NaN position cannot be changed by a contact, so it may be skipped).
+        bool touch = !none(lo < cb->wallLo) || !none(hi > cb->wallHi);
+        for (size_t k = 0; !touch && k < cb->lo.size(); ++k) touch = none(hi < cb->lo[k]) && none(lo > cb->hi[k]);
+        if (!touch) continue;
+        for (size_t i = b; i < be; ++i) {
+          Vec3 previous, previousVelocity;
+          storeVec3(previous, start[i - b]), storeVec3(previousVelocity, startVelocity[i - b]);
+          depth = std::max(depth, resolveVertexContacts(previous, previousVelocity, positions[i], velocities[i]));
+        }
+      }
     }
-  }
+  };
+  using Yes = std::true_type;
+  using No = std::false_type;
+  if (sim_.integrator == IntegratorKind::ForwardEuler)
+    cb ? run(Yes{}, Yes{}) : run(Yes{}, No{});
+  else
+    cb ? run(No{}, Yes{}) : run(No{}, No{});
   return depth;
 }
 
@@ -263,9 +275,9 @@ std::vector<size_t> chunkSplit(const std::vector<uint32_t>& prefix, uint64_t ite
   for (int t = 0; t <= members; ++t) split[size_t(t)] = (splitPoint(prefix, itemCost, t, members, chunk) + chunk - 1) / chunk;
   return split;
 }
-// Measured costs in pairs (instruction counts, callgrind): an element's moments, rotation fit
-// and frame cost about as much as 24 of its pairs; a vertex's integration about 3 of its pairs.
-constexpr uint64_t kElementCost = 24, kVertexCost = 3;
+// Measured costs in pairs (instruction counts, callgrind): an element's moments set-up, rotation
+// fit and frame cost about as much as 21 of its pairs; a vertex's integration about 4 of its pairs.
+constexpr uint64_t kElementCost = 21, kVertexCost = 4;
 // Chunks handed out by the team: ~20-40 us of work each (kElementChunk a multiple of the
 // rotation fit's lanes, kVertexChunk of stageVertices' blocks).
 constexpr size_t kElementChunk = 256, kVertexChunk = 512;

@@ -112,17 +112,38 @@ TEST(RotationFitBatch, EachLaneMatchesTheScalarFit) {
   }
 }
 
-// The element pass forms R0 = X - C from the rest positions instead of streaming restOffsets:
-// that must reproduce the model's offsets bit for bit (else the two would drift apart).
-TEST(ElementStageRest, RestCentroidsReproduceTheRestOffsetsExactly) {
+// The element pass forms R0 = X - C from the rest positions (pass 2) and from lattice offsets
+// (pass 1, R0 = h (P - mean P)): both must reproduce the model's offsets, X - C bit for bit.
+TEST(ElementStageRest, RestCentroidsAndLatticeOffsetsReproduceTheRestOffsets) {
   for (LayoutKind kind : {LayoutKind::Gradational, LayoutKind::Uniform, LayoutKind::Voxel}) {
     Body b = makeBody("sphere", 14, 3, kind, {}, 0.01, Vec3(0.3, -0.2, 0.7));
     const RestModel& m = *b.model;
     const ElementStageRest rest(m);
     size_t mismatches = 0;
-    for (size_t e = 0; e < m.numElements(); ++e)
-      for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p)
-        mismatches += (m.restPositions[m.elemVerts[p]] - rest.restCentroids[e]) != m.restOffsets[p];
+    Real worst = 0;
+    for (size_t e = 0; e < m.numElements(); ++e) {
+      const ElementConstants& k = rest.elements[e];
+      const Vec3 C(k.restCentroid[0], k.restCentroid[1], k.restCentroid[2]);
+      const Vec3 meanP = Vec3(k.sumLattice[0], k.sumLattice[1], k.sumLattice[2]) * k.invCount;
+      EXPECT_EQ(k.stiffness, m.stiffness[e]);
+      for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) {
+        mismatches += (m.restPositions[m.elemVerts[p]] - C) != m.restOffsets[p];
+        const int16_t* P = rest.pairs[p].lattice;
+        ASSERT_EQ(P[3], 1);
+        ASSERT_EQ(rest.pairs[p].vertex, m.elemVerts[p]);
+        const Vec3 R0 = m.voxelSize * (Vec3(P[0], P[1], P[2]) - meanP);
+        worst = std::max(worst, (R0 - m.restOffsets[p]).norm() / m.voxelSize);
+      }
+    }
     EXPECT_EQ(mismatches, 0u) << layoutKindName(kind);
+    EXPECT_LT(worst, 1e-12) << layoutKindName(kind);
   }
+}
+
+// A rest position off the voxel lattice cannot be streamed as lattice offsets: refused loudly.
+TEST(ElementStageRest, RefusesRestPositionsOffTheLattice) {
+  Body b = makeBody("sphere", 6, 3, LayoutKind::Gradational);
+  RestModel m = *b.model;
+  m.restPositions[3].x() += 0.3 * m.voxelSize;
+  EXPECT_THROW(ElementStageRest{m}, std::logic_error);
 }
