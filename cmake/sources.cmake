@@ -18,6 +18,7 @@ set(GRADEL_CORE_SOURCES
   src/output.cpp
   src/pins.cpp
   src/projective.cpp
+  src/large_step.cpp
   src/rotation_fit.cpp
   src/run_budget.cpp
   src/settings_check.cpp
@@ -76,6 +77,7 @@ set(GRADEL_TEST_SOURCES
   tests/test_embedding.cpp
   tests/test_golden.cpp
   tests/test_implicit.cpp
+  tests/test_large_step.cpp
   tests/test_io_embedded.cpp
   tests/test_io_grey_readers.cpp
   tests/test_io_meshes.cpp
