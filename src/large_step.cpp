@@ -9,7 +9,6 @@ namespace gradel {
 
 namespace {
 
-constexpr Real kappaScale() { return 10; }  // contact stiffness / the vertex's diagonal
 
 struct RigidFit {
   Vec3 centre = Vec3::Zero(), velocity = Vec3::Zero(), omega = Vec3::Zero(), momentum = Vec3::Zero();
@@ -39,7 +38,6 @@ RigidFit rigidFit(const RestModel& m, const std::vector<Vec3>& x, const std::vec
 LargeStepSolver::LargeStepSolver(const RestModel& model, Real dt, const std::vector<uint32_t>& pinned)
     : model_(&model), dt_(dt), pinned_(pinned), half_(model, 0.5 * dt, pinned) {
   acceleration_.assign(model.numVertices(), Vec3::Zero());
-  contactForce_.assign(model.numVertices(), 0.0);
 }
 
 Real LargeStepSolver::energy(const std::vector<Vec3>& x, const std::vector<Vec3>& v, const std::vector<Quat>& q,
@@ -72,8 +70,7 @@ void LargeStepSolver::forces(const std::vector<Vec3>& x, std::vector<Quat>& q, s
 
 LargeStepReport LargeStepSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vector<Quat>& q,
                                       const Vec3& gravity, Real damping, int passes, int rotationIterations,
-                                      const std::vector<Vec3>& pinStart, const std::vector<Vec3>& pinEnd,
-                                      const ContactGap& gap) {
+                                      const std::vector<Vec3>& pinStart, const std::vector<Vec3>& pinEnd) {
   const RestModel& m = *model_;
   const size_t V = m.numVertices();
   const Real h = 0.5 * dt_, invH2 = 1.0 / (h * h);
@@ -85,36 +82,12 @@ LargeStepReport LargeStepSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v
   const int fitIterations = std::max(rotationIterations, 20);
 
   const std::vector<Vec3> x0 = x;
-  std::vector<Vec3> y(V), force(V, Vec3::Zero());
+  std::vector<Vec3> y(V);
   for (size_t i = 0; i < V; ++i) {
     y[i] = x0[i] + h * v[i] + h * h * gravity;
     x[i] = x0[i] + h * v[i] + h * h * acceleration_[i];
   }
   for (size_t j = 0; j < pinned_.size(); ++j) y[pinned_[j]] = x[pinned_[j]] = 0.5 * (pinStart[j] + pinEnd[j]);
-
-  // Contacts (augmented Lagrangian): a vertex whose end point 2 x - x_n is inside a surface (gap
-  // d < 0) feels (lambda + kappa (-d)) n, kappa = 10 x its diagonal of the global matrix (stiffer
-  // than everything holding it); after every Newton iteration lambda += kappa (-d).
-  std::vector<Real> depth(V, 0.0);
-  std::vector<Vec3> normal(V, Vec3::Zero());
-  auto updateContacts = [&](bool multipliers) {
-    for (size_t i = 0; i < V; ++i) {
-      if (!half_.isFree(uint32_t(i))) continue;
-      Vec3 n;
-      const Real d = gap(2 * x[i] - x0[i], &n);
-      Real& lambda = contactForce_[i];
-      const Real kappa = kappaScale() * half_.diagonal(uint32_t(i));
-      if (multipliers && depth[i] > 0) lambda += kappa * depth[i];
-      if (d >= 0 && lambda == 0) {
-        force[i].setZero(), depth[i] = 0;
-        continue;
-      }
-      if (d >= 0) lambda = std::max(Real(0), lambda - kappa * d);  // released
-      depth[i] = std::max(Real(0), -d);
-      normal[i] = n;
-      force[i] = (lambda + kappa * depth[i]) * n;
-    }
-  };
 
   // Newton on Phi(x) = 1/(2 h^2) |x - y|_M^2 + E(x) - f_c.x: each Newton system
   // (M / h^2 + K(x)) dx = -grad Phi is solved by conjugate gradients preconditioned with the
@@ -129,11 +102,10 @@ LargeStepReport LargeStepSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v
   };
   int budget = std::max(passes, 1);
   for (int newton = 0; newton < 4 && budget > 0; ++newton) {
-    if (gap) updateContacts(newton > 0);
     forces(x, q, f, fitIterations);
     Real rNorm = 0, scale = 0;
     for (size_t i = 0; i < V; ++i) {
-      r[i] = half_.isFree(uint32_t(i)) ? Vec3(f[i] + force[i] - m.mass[i] * invH2 * (x[i] - y[i])) : Vec3::Zero();
+      r[i] = half_.isFree(uint32_t(i)) ? Vec3(f[i] - m.mass[i] * invH2 * (x[i] - y[i])) : Vec3::Zero();
       rNorm = std::max(rNorm, r[i].norm() * m.invMass[i]);
       scale = std::max(scale, (v[i].norm() / h + gravity.norm()));
     }
@@ -154,9 +126,6 @@ LargeStepReport LargeStepSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v
       forces(xp, qp, fp, fitIterations);
       for (size_t i = 0; i < V; ++i)
         Ap[i] = half_.isFree(uint32_t(i)) ? Vec3(m.mass[i] * invH2 * p[i] - (fp[i] - f[i]) / eps) : Vec3::Zero();
-      if (gap)
-        for (size_t i = 0; i < V; ++i)
-          if (depth[i] > 0) Ap[i] += 2 * kappaScale() * half_.diagonal(uint32_t(i)) * normal[i].dot(p[i]) * normal[i];
       const Real pAp = dot(p, Ap);
       if (!(pAp > 0)) {
         if (newton == 0 && dx[0].isZero() && report.passes == 1) dx = z;  // no curvature: take the PD step
@@ -173,8 +142,6 @@ LargeStepReport LargeStepSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v
     }
     for (size_t i = 0; i < V; ++i) x[i] += dx[i];
   }
-  if (gap) updateContacts(true);
-
   for (size_t i = 0; i < V; ++i) {
     const Vec3 d = x[i] - x0[i];
     if (half_.isFree(uint32_t(i))) acceleration_[i] = (d - h * v[i]) * invH2;
@@ -182,11 +149,7 @@ LargeStepReport LargeStepSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v
     x[i] = x0[i] + 2 * d;
   }
   for (size_t j = 0; j < pinned_.size(); ++j) x[pinned_[j]] = pinEnd[j], v[pinned_[j]] = (pinEnd[j] - pinStart[j]) / dt_;
-  bool contactForce = false;
-  for (size_t i = 0; gap && i < V; ++i)
-    if (contactForce_[i] > 0) contactForce = true, ++report.contactVertices;
-
-  if (pinned_.empty() && !contactForce) {
+  if (pinned_.empty()) {
     const RigidFit after = rigidFit(m, x, v);
     const Eigen::FullPivLU<Mat3> lu(after.inertia);
     if (lu.rank() == 3 || m.dim == 2) {
@@ -201,10 +164,6 @@ LargeStepReport LargeStepSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v
     Real removed = 0;
     for (size_t i = 0; i < V; ++i) removed += 0.5 * m.mass[i] * v[i].squaredNorm() * (1 - damp * damp), v[i] *= damp;
     budget_ -= removed;
-  }
-  if (contactForce) {
-    budgetValid_ = false;
-    return report;
   }
   const Real e = energy(x, v, q, gravity);
   if (e > budget_) {

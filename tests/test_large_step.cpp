@@ -210,5 +210,49 @@ TEST(LargeStep, sameStateAtOneAndTwoThreads) {
   EXPECT_EQ(hash[0], hash[1]);
 }
 
+// A manipulator that crosses the ball within one step (the strike scene at 100 and 1000 m/s,
+// dt = 1/60 s) still hits it: the ball leaves faster after the faster strike, and no vertex is
+// left inside anything (before the sweep both ended in the same state).
+TEST(LargeStep, strikeWithinOneStep_hitsTheBallAtItsSpeed) {
+  Real momentum[2];
+  uint64_t hash[2];
+  for (int k = 0; k < 2; ++k) {
+    const Real speed = k == 0 ? 100 : 1000;
+    Scene scene = loadScene(std::string(GRADEL_SOURCE_DIR) + "/scenes/strike.json");
+    scene.simulation.integrator = IntegratorKind::LargeStep;
+    scene.simulation.dt = 1.0 / 60.0;
+    scene.domain.enabled = false;  // the walls would stop what flies off
+    Path& path = scene.manipulators.at(0).path;
+    path.keys = {{0.0, Vec3(-0.35, 0.06, 0.06), {}}, {0.8 / speed, Vec3(0.45, 0.06, 0.06), {}}};
+    BuiltScene b = buildScene(scene);
+    b.world->step();
+    const Metrics m = b.world->metrics();
+    EXPECT_LE(m.maxPenetration, 1e-9) << speed;
+    EXPECT_TRUE(std::isfinite(m.kineticEnergy)) << speed;
+    momentum[k] = m.linearMomentum.x(), hash[k] = b.world->stateHash();
+  }
+  std::printf("momentum after the strike: %.4g (100 m/s), %.4g (1000 m/s) kg m/s\n", momentum[0], momentum[1]);
+  EXPECT_NE(hash[0], hash[1]);
+  EXPECT_GT(momentum[0], 0.01);  // the ball (0.9 kg) was hit
+  EXPECT_GT(momentum[1], 2 * momentum[0]);
+}
+
+TEST(LargeStep, autoIntegrator_explicitWhileRealTimeElseLargeStep) {
+  SimulationSettings s;
+  s.integrator = IntegratorKind::Auto;
+  test::Body small = test::makeBody("sphere", 6, 3, LayoutKind::Gradational);
+  World a(small.model, s, {}, {});
+  EXPECT_EQ(a.settings().integrator, IntegratorKind::SymplecticEuler) << a.integratorChoice();
+  EXPECT_LT(a.dt(), 1e-3);
+  MaterialSettings stiff;
+  stiff.youngsModulus = 1e9;
+  test::Body big = test::makeBody("sphere", 24, 3, LayoutKind::Gradational, stiff);
+  World b(big.model, s, {}, {});
+  EXPECT_EQ(b.settings().integrator, IntegratorKind::LargeStep) << b.integratorChoice();
+  EXPECT_DOUBLE_EQ(b.dt(), 1.0 / 60.0);
+  EXPECT_NE(b.integratorChoice().find("large_step"), std::string::npos);
+  EXPECT_EQ(parseIntegratorKind("auto"), IntegratorKind::Auto);
+}
+
 }  // namespace
 }  // namespace gradel
