@@ -137,6 +137,10 @@ TEST(LargeStep, bendingMode_keepsItsAmplitudeAndFrequencyAtOneFrame) {
   EXPECT_LT(ls.decayPerPeriod, 0.10);
   EXPECT_GT(ls.decayPerPeriod, -0.01);  // and no growth
   EXPECT_NEAR(ls.frequency, ref.frequency, 0.10 * ref.frequency);
+  // A step a hair off 1/60 s: with 10 CG iterations per substep this bar's vibration died.
+  const TipSignal off = vibrateBar(largeStep(0.0166666667), 2.0);
+  EXPECT_LT(off.decayPerPeriod, 0.10);
+  EXPECT_NEAR(off.frequency, ref.frequency, 0.10 * ref.frequency);
 }
 
 TEST(LargeStep, clampedBar_settlesOnTheExplicitStaticSag) {
