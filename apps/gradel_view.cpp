@@ -44,7 +44,7 @@ constexpr const char* kPlayScene = R"({
   "dim": 3,
   "body": { "shape": "sphere", "size": 12, "voxel_size": 0.01, "layout": "gradational", "position": [0, 0, 0] },
   "material": { "scaling": "consistent", "youngs_modulus": 1e5, "density": 1000 },
-  "simulation": { "dt": "auto", "damping": 1.0, "gravity": [0, -9.81, 0] },
+  "simulation": { "integrator": "auto", "dt": "auto", "damping": 1.0, "gravity": [0, -9.81, 0] },
   "domain": { "min": [-0.3, 0.0, -0.3], "max": [0.4, 0.5, 0.4], "restitution": 0.3, "friction": 0.5 },
   "manipulators": [ { "type": "sphere", "radius": 0.03, "restitution": 0.5, "friction": 0.5,
                       "path": [ { "t": 0, "position": [-0.1, 0.06, 0.06] } ] } ]
@@ -171,7 +171,8 @@ class Viewer {
     // ---- live figures ----
     ImGui::Text("%.0f fps   %.0f steps/s   real time x%.2f", rates_.fps(), rates_.stepsPerSecond(), realTime_);
     if (behind_) ImGui::TextColored(ImVec4(0.9f, 0.1f, 0.1f, 1), "cannot keep up: simulation slower than real time");
-    ImGui::Text("t = %.3f s  dt = %.3g s", w.time(), w.dt());
+    ImGui::Text("t = %.3f s  dt = %.3g s  %s", w.time(), w.dt(), integratorKindName(w.settings().integrator));
+    if (!w.integratorChoice().empty()) ImGui::TextWrapped("auto: %s", w.integratorChoice().c_str());
     ImGui::Text("%zu elements  %zu vertices  %zu pairs", w.model().numElements(), w.model().numVertices(), w.model().numPairs());
     const std::vector<Real> es = w.elementStress();
     ImGui::Text("max stress %.4f", es.empty() ? 0.0 : *std::max_element(es.begin(), es.end()));
@@ -241,8 +242,8 @@ class Viewer {
       changed = true;
     }
     int integrator = int(scene_.simulation.integrator);
-    static const char* integrators[] = {"symplectic", "forward_euler"};
-    if (ImGui::Combo("integrator", &integrator, integrators, 2))
+    static const char* integrators[] = {"symplectic", "forward_euler", "implicit", "large_step", "auto"};  // IntegratorKind order
+    if (ImGui::Combo("integrator", &integrator, integrators, 5))
       scene_.simulation.integrator = IntegratorKind(integrator), changed = true;
     bool autoDt = scene_.simulation.dt == 0;
     if (ImGui::Checkbox("dt auto", &autoDt)) scene_.simulation.dt = autoDt ? 0 : w.dt(), changed = true;

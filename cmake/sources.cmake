@@ -19,6 +19,7 @@ set(GRADEL_CORE_SOURCES
   src/output.cpp
   src/pins.cpp
   src/projective.cpp
+  src/large_step.cpp
   src/rotation_fit.cpp
   src/run_budget.cpp
   src/settings_check.cpp
@@ -78,6 +79,7 @@ set(GRADEL_TEST_SOURCES
   tests/test_golden.cpp
   tests/test_implicit.cpp
   tests/test_integration.cpp
+  tests/test_large_step.cpp
   tests/test_io_embedded.cpp
   tests/test_io_grey_readers.cpp
   tests/test_io_meshes.cpp

@@ -17,6 +17,7 @@ struct ProjectiveSolver::Impl {
   Real dt = 0;                       ///< [s]; 0 = static solver (no inertia term).
   std::vector<int32_t> freeIndex;    ///< Per vertex: row in the reduced system, -1 if pinned.
   std::vector<uint32_t> pinned;      ///< Pinned vertex ids (ascending).
+  std::vector<Real> diagonal;        ///< Per vertex: the global matrix's diagonal entry (0 if pinned).
   Eigen::SimplicialLDLT<SpMat> ldlt;  ///< Factor of the reduced global matrix.
   Rhs rhs, sol;                      ///< Scratch, numFree x 3.
 
@@ -119,6 +120,9 @@ ProjectiveSolver::ProjectiveSolver(const RestModel& model, Real dt, const std::v
   }
   SpMat A(nFree, nFree);
   A.setFromTriplets(t.begin(), t.end());
+  s.diagonal.assign(V, 0.0);
+  for (size_t i = 0; i < V; ++i)
+    if (s.freeIndex[i] >= 0) s.diagonal[i] = A.coeff(s.freeIndex[i], s.freeIndex[i]);
   s.ldlt.compute(A);
   if (s.ldlt.info() != Eigen::Success)
     throw InputError("implicit integrator: the global matrix could not be factored (a body without pins in a static solve?)");
@@ -159,6 +163,21 @@ void ProjectiveSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vec
   for (size_t i = 0; i < V; ++i) v[i] = (x[i] - x0[i]) / dt * damp;
   s.heldRows.clear();
 }
+
+void ProjectiveSolver::applyInverse(const std::vector<Vec3>& r, std::vector<Vec3>& z) const {
+  const Impl& s = *impl_;
+  Rhs b(s.rhs.rows(), 3);
+  for (size_t i = 0; i < s.freeIndex.size(); ++i)
+    if (s.freeIndex[i] >= 0) b.row(s.freeIndex[i]) = r[i].transpose();
+  const Rhs sol = s.ldlt.solve(b);
+  z.assign(r.size(), Vec3::Zero());
+  for (size_t i = 0; i < s.freeIndex.size(); ++i)
+    if (s.freeIndex[i] >= 0) z[i] = sol.row(s.freeIndex[i]).transpose();
+}
+
+Real ProjectiveSolver::diagonal(uint32_t vertex) const { return impl_->diagonal.at(vertex); }
+
+bool ProjectiveSolver::isFree(uint32_t vertex) const { return impl_->freeIndex.at(vertex) >= 0; }
 
 int ProjectiveSolver::solveStatic(std::vector<Vec3>& x, std::vector<Quat>& q, const Vec3& gravity,
                                   const std::vector<Vec3>& pinTargets, int maxIterations, Real tolerance) {

@@ -12,7 +12,7 @@ RunEstimate estimateRun(double duration, double dt, size_t vertices, IntegratorK
   RunEstimate e;
   e.steps = std::ceil(duration / dt - 1e-9);
   e.vertexSteps = e.steps * double(vertices);
-  e.wallSeconds = e.vertexSteps * (integrator == IntegratorKind::Implicit ? kImplicitSecondsPerVertexStep
+  e.wallSeconds = e.vertexSteps * (integrator == IntegratorKind::Implicit || integrator == IntegratorKind::LargeStep ? kImplicitSecondsPerVertexStep
                                                                            : kExplicitSecondsPerVertexStep);
   return e;
 }

@@ -696,6 +696,8 @@ void readSimulation(Fields f, Scene& scene) {
   scene.output.frameInterval = f.number("frame_interval", scene.output.frameInterval, kPositive, "s");
   s.threads = f.optInteger("threads", 1, 1024).value_or(s.threads);
   s.implicitIterations = f.optInteger("implicit_iterations", 1, 1000).value_or(s.implicitIterations);
+  s.largeStepPasses = f.optInteger("large_step_passes", 1, 1000).value_or(s.largeStepPasses);
+  s.largeStepSubsteps = f.optInteger("large_step_substeps", 1, 64).value_or(s.largeStepSubsteps);
   coreCheck(f, [&] { validate(s); });
   f.finish();
 }

@@ -34,6 +34,8 @@ void validate(const SimulationSettings& s) {
     fail("threads", "must be an integer in [1, " + std::to_string(kMaxThreads) + "]", s.threads);
   if (s.rotationIterations < 1) fail("rotation_iterations", "must be >= 1", s.rotationIterations);
   if (s.implicitIterations < 1) fail("implicit_iterations", "must be >= 1", s.implicitIterations);
+  if (s.largeStepPasses < 1) fail("large_step_passes", "must be >= 1", s.largeStepPasses);
+  if (s.largeStepSubsteps < 1 || s.largeStepSubsteps > 64) fail("large_step_substeps", "must be in [1, 64]", s.largeStepSubsteps);
   // Forward Euler multiplies a vibration's energy by (1 + (omega dt)^2) / (1 + damping dt) every
   // step: without damping no dt is stable, so "auto" has nothing to pick (World, docs/scenes.md).
   if (s.integrator == IntegratorKind::ForwardEuler && s.dt == 0 && !(s.damping > 0))

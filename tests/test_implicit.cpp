@@ -76,34 +76,10 @@ TEST(Implicit, clampedBar_pinsHoldAndSettlesOnTheStaticSag) {
   EXPECT_NEAR(sag, ref.sag, 0.01 * ref.sag);
 }
 
-// The target: at dt = 1/60 s with E 100x the shipped scenes' value, no NaN, no
-// blow-up: the body stays in the box, moves no faster than the manipulators can make it, and
-// ends with no inverted element. Returns the world for scene-specific outcome checks.
 std::unique_ptr<BuiltScene> runStiff(const std::string& file, Real duration) {
-  Scene scene = loadScene(std::string(GRADEL_SOURCE_DIR) + "/scenes/" + file);
-  scene.body.material.youngsModulus *= 100;
-  scene.simulation.integrator = IntegratorKind::Implicit;
-  scene.simulation.dt = 1.0 / 60.0;
-  auto b = std::make_unique<BuiltScene>(buildScene(scene));
-  World& w = *b->world;
-  while (w.time() < duration) {
-    w.step();
-    const Metrics m = w.metrics();
-    EXPECT_TRUE(std::isfinite(m.kineticEnergy) && std::isfinite(m.elasticEnergy)) << file << " t=" << w.time();
-    EXPECT_LE(m.maxPenetration, 1e-9) << file << " t=" << w.time();
-    // A 0.9 kg ball moved at manipulator speeds (~1 m/s) holds well under 2 J of kinetic energy.
-    EXPECT_LT(m.kineticEnergy, 2.0) << file << " t=" << w.time();
-    if (::testing::Test::HasFailure()) break;
-  }
-  EXPECT_GT(w.metrics().minElementDet, 0.3) << file;
-  return b;
+  return test::runStiffScene(file, duration, IntegratorKind::Implicit, 100, 1.0 / 60.0);
 }
-
-Vec3 centroid(const World& w) {
-  Vec3 c = Vec3::Zero();
-  for (const Vec3& x : w.state().positions) c += x;
-  return c / Real(w.state().positions.size());
-}
+using test::centroid;
 
 TEST(Implicit, strikeScene_stiffAtFrameStep_isStableAndSendsTheBallAway) {
   auto b = runStiff("strike.json", 0.5);

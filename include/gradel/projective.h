@@ -49,8 +49,15 @@ class ProjectiveSolver {
   int solveStatic(std::vector<Vec3>& x, std::vector<Quat>& q, const Vec3& gravity, const std::vector<Vec3>& pinTargets,
                   int maxIterations, Real tolerance);
 
+  /// z = A^-1 r on the free vertices (A the factored global matrix), pinned entries 0.
+  void applyInverse(const std::vector<Vec3>& r, std::vector<Vec3>& z) const;
+
+  /// The global matrix's diagonal entry of a free vertex [N/m].
+  Real diagonal(uint32_t vertex) const;
+
   Real dt() const;
   size_t numFree() const;
+  bool isFree(uint32_t vertex) const;
 
  private:
   struct Impl;

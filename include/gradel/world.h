@@ -6,10 +6,12 @@
 #pragma once
 
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "gradel/contacts.h"
 #include "gradel/integrator.h"
+#include "gradel/large_step.h"
 #include "gradel/model.h"
 #include "gradel/pins.h"
 #include "gradel/projective.h"
@@ -62,8 +64,11 @@ class World {
   std::shared_ptr<const RestModel> modelPtr() const { return model_; }
   const State& state() const { return state_; }
   State& state() { return state_; }  ///< For tests and tools: set positions / velocities directly.
-  /// The settings as applied (a 2D body's gravity projected into its plane).
+  /// The settings as applied (a 2D body's gravity projected into its plane; with integrator
+  /// "auto" on input, `integrator` is the one chosen).
   const SimulationSettings& settings() const { return sim_; }
+  /// Which integrator "auto" chose and why (empty when the integrator was given).
+  const std::string& integratorChoice() const { return integratorChoice_; }
   const DomainSettings& domain() const { return domain_; }
 
   std::vector<Manipulator>& manipulators() { return manipulators_; }
@@ -109,7 +114,11 @@ class World {
   void stageContacts(size_t begin, size_t end);
   Real resolveVertexContacts(const Vec3& previous, const Vec3& previousVelocity, Vec3& x, Vec3& v) const;
   void moveManipulators(Real tNext);
-  void stepImplicit();
+  void stepImplicit(bool sweep);
+  void stepLargeStep();
+  void finishFrameStep(Real tNext);
+  void sweepManipulatorPaths(Real t0);
+  void chooseIntegrator(Real period);
   void applyPins(Real t);
   std::vector<Vec3> pinTargets(Real t) const;
 
@@ -121,9 +130,11 @@ class World {
   State state_;
   std::unique_ptr<StepScratch> scratch_;  ///< Per-step scratch (world.cpp).
   Real dt_ = 0;
+  std::string integratorChoice_;
   std::vector<PinSettings> pins_;
   PinSet pinSet_;
   std::unique_ptr<ProjectiveSolver> projective_;  ///< Implicit only: built at the first step (dt, pins fixed).
+  std::unique_ptr<LargeStepSolver> largeStep_;    ///< LargeStep only: built at the first step (dt, pins fixed).
   // Threads of the explicit step (thread_team.h): the team, its chunk queues and each member's
   // first share of the element and vertex chunks (weighted by work), made for `teamMembers_`.
   std::unique_ptr<ThreadTeam> team_;

@@ -1,0 +1,89 @@
+// The large-step integrator (issue 11): implicit midpoint on the shape-matching element energy
+// of element.h, each step's system solved by Newton's method with conjugate gradients
+// preconditioned by the projective-dynamics matrix (projective.h, factored once), and two guards
+// that keep what the material and the rigid motion must keep.
+//
+// Implicit midpoint, x_{n+1} = x_n + dt (v_n + v_{n+1}) / 2, v_{n+1} = v_n + dt a(x_{n+1/2}), is
+// one backward-Euler step of h = dt / 2 to the midpoint followed by a linear extrapolation:
+//   x_m = argmin Phi(x) = 1/(2 h^2) |x - (x_n + h v_n + h^2 g)|_M^2 + sum_e E_e(x),
+//   x_{n+1} = 2 x_m - x_n,   v_{n+1} = 2 (x_m - x_n) / h - v_n.
+// Backward Euler damps a mode by 1/(1 + (omega dt)^2)^(1/2) per step (the bar's 13 Hz mode loses
+// 52 % per period at dt = 1/60 s) and its inertia term pulls a spinning body onto the chord of
+// its arc (a third of the angular momentum lost in 0.83 s). The midpoint is symplectic and
+// A-stable: a linear mode keeps its amplitude at any dt, its period lengthened by
+// omega dt / (2 atan(omega dt / 2)) (12 % for 13 Hz at 1/60 s, 3 % at 1/120 s: World runs
+// large_step_substeps = 2 midpoint steps per step), and angular momentum is a quadratic
+// invariant it keeps when the system is solved.
+//
+// The solve. The projective-dynamics local/global iteration (projective.h) converges far too
+// slowly on bending to serve the midpoint: its error is doubled by the extrapolation, and 300
+// passes still left the clamped bar unstable (measured). Here each Newton system
+// (M / h^2 + K(x)) dx = -grad Phi(x) is solved by preconditioned conjugate gradients: K(x) p is a
+// forward difference of the element forces (elementForces, rotations refitted, 20 iterations
+// warm-started), the preconditioner is the projective-dynamics matrix M / h^2 + sum_e k_e G_e^T G_e
+// (K(x) without the rotations' derivative), one back-solve per CG iteration. `passes` bounds the
+// CG iterations of a step (bounded time); up to 4 Newton iterations share them. Warm start:
+// x_m^0 = x_n + h v_n + h^2 a_{n-1} (the last step's acceleration: a body at rest starts at its
+// equilibrium); the rotations are warm-started from the last fit.
+//
+// Guards, after the extrapolation:
+//   momentum  with no pins, the angular momentum about the centre of mass is restored to its
+//           start-of-step value by a rigid rotation increment (uniform gravity exerts no torque
+//           about it; an unconverged solve does): the free spin keeps it to 1e-4.
+//   energy    kinetic + elastic + gravity energy never exceeds the budget: the energy when the
+//           budget was set (first step, or after contacts or moving pins did work, reset by the
+//           caller), less what velocity damping took out. An excess is taken from the
+//           deformation part of the velocities (for a free body the velocities minus their rigid
+//           fit, which keeps linear and angular momentum; for a pinned body all of them). At a
+//           turning point (no such velocity) the excess waits for the next step.
+// Contacts are not in this solve: World::stepLargeStep runs a step that could touch anything as
+// a projective-dynamics (backward Euler) step with held contacts (stepImplicit), see world.cpp.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "gradel/model.h"
+#include "gradel/projective.h"
+
+namespace gradel {
+
+struct LargeStepReport {
+  int passes = 0;            ///< Conjugate-gradient iterations run.
+  bool momentumKept = false;  ///< The angular-momentum guard ran.
+  Real energyRemoved = 0;    ///< [J] taken out by the energy guard.
+};
+
+class LargeStepSolver {
+ public:
+  /// Factors the midpoint system (h = dt / 2) with the vertices `pinned` eliminated.
+  LargeStepSolver(const RestModel& model, Real dt, const std::vector<uint32_t>& pinned);
+
+  /// One step of dt: x, v (per vertex), q (per element, warm start) in/out. pinStart / pinEnd:
+  /// the pinned vertices' positions at the start and end of the step (order of `pinned`).
+  /// passes >= 1: the conjugate-gradient iterations of the step (a bounded cost).
+  LargeStepReport step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vector<Quat>& q, const Vec3& gravity,
+                       Real damping, int passes, int rotationIterations, const std::vector<Vec3>& pinStart,
+                       const std::vector<Vec3>& pinEnd);
+
+  /// Kinetic + elastic + gravity energy [J] (rotations fitted at x, warm-started from a copy of q).
+  Real energy(const std::vector<Vec3>& x, const std::vector<Vec3>& v, const std::vector<Quat>& q,
+              const Vec3& gravity) const;
+  /// Forget the energy budget (contacts or moving pins did work, or the state was set from
+  /// outside): the next step sets it from its start state.
+  void resetEnergyBudget() { budgetValid_ = false; }
+  Real dt() const { return dt_; }
+
+ private:
+  void forces(const std::vector<Vec3>& x, std::vector<Quat>& q, std::vector<Vec3>& f, int iterations) const;
+
+  const RestModel* model_;
+  Real dt_;
+  std::vector<uint32_t> pinned_;
+  ProjectiveSolver half_;            ///< Backward Euler at h = dt / 2.
+  std::vector<Vec3> acceleration_;   ///< [m/s^2] last step's, the warm start.
+  bool budgetValid_ = false;
+  Real budget_ = 0;                  ///< [J]
+};
+
+}  // namespace gradel

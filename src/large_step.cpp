@@ -1,0 +1,187 @@
+#include "gradel/large_step.h"
+
+#include <Eigen/Dense>
+#include <cmath>
+
+#include "gradel/element.h"
+
+namespace gradel {
+
+namespace {
+
+
+struct RigidFit {
+  Vec3 centre = Vec3::Zero(), velocity = Vec3::Zero(), omega = Vec3::Zero(), momentum = Vec3::Zero();
+  Mat3 inertia = Mat3::Zero();
+};
+
+// Centre of mass, its velocity, angular momentum about it, inertia tensor and angular velocity.
+RigidFit rigidFit(const RestModel& m, const std::vector<Vec3>& x, const std::vector<Vec3>& v) {
+  RigidFit r;
+  Real mass = 0;
+  for (size_t i = 0; i < x.size(); ++i) mass += m.mass[i], r.centre += m.mass[i] * x[i], r.velocity += m.mass[i] * v[i];
+  r.centre /= mass, r.velocity /= mass;
+  for (size_t i = 0; i < x.size(); ++i) {
+    const Vec3 d = x[i] - r.centre;
+    r.momentum += m.mass[i] * d.cross(v[i] - r.velocity);
+    r.inertia += m.mass[i] * (d.squaredNorm() * Mat3::Identity() - d * d.transpose());
+  }
+  if (m.dim == 2) r.inertia(2, 2) = std::max(r.inertia(2, 2), Real(1e-300));
+  const Eigen::FullPivLU<Mat3> lu(r.inertia);
+  r.omega = lu.rank() == 3 ? Vec3(lu.solve(r.momentum)) : Vec3::Zero();
+  if (m.dim == 2) r.omega.x() = r.omega.y() = 0;
+  return r;
+}
+
+}  // namespace
+
+LargeStepSolver::LargeStepSolver(const RestModel& model, Real dt, const std::vector<uint32_t>& pinned)
+    : model_(&model), dt_(dt), pinned_(pinned), half_(model, 0.5 * dt, pinned) {
+  acceleration_.assign(model.numVertices(), Vec3::Zero());
+}
+
+Real LargeStepSolver::energy(const std::vector<Vec3>& x, const std::vector<Vec3>& v, const std::vector<Quat>& q,
+                             const Vec3& gravity) const {
+  const RestModel& m = *model_;
+  Real e = 0;
+  std::vector<Vec3> f;
+  for (size_t el = 0; el < m.numElements(); ++el) {
+    const uint32_t b = m.elemStart[el], n = m.elemStart[el + 1] - b;
+    f.resize(n);
+    Quat r = q[el];
+    e += elementForces(m.dim, x.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[el], r, f.data(), 8).energy;
+  }
+  for (size_t i = 0; i < x.size(); ++i) e += 0.5 * m.mass[i] * v[i].squaredNorm() - m.mass[i] * gravity.dot(x[i]);
+  return e;
+}
+
+// Elastic forces [N] per vertex at x (rotations fitted, warm-started from q, written back).
+void LargeStepSolver::forces(const std::vector<Vec3>& x, std::vector<Quat>& q, std::vector<Vec3>& f, int iterations) const {
+  const RestModel& m = *model_;
+  f.assign(m.numVertices(), Vec3::Zero());
+  std::vector<Vec3> fe;
+  for (size_t el = 0; el < m.numElements(); ++el) {
+    const uint32_t b = m.elemStart[el], n = m.elemStart[el + 1] - b;
+    fe.resize(n);
+    elementForces(m.dim, x.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[el], q[el], fe.data(), iterations);
+    for (uint32_t i = 0; i < n; ++i) f[m.elemVerts[b + i]] += fe[i];
+  }
+}
+
+LargeStepReport LargeStepSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vector<Quat>& q,
+                                      const Vec3& gravity, Real damping, int passes, int rotationIterations,
+                                      const std::vector<Vec3>& pinStart, const std::vector<Vec3>& pinEnd) {
+  const RestModel& m = *model_;
+  const size_t V = m.numVertices();
+  const Real h = 0.5 * dt_, invH2 = 1.0 / (h * h);
+  LargeStepReport report;
+  const bool pinsMove = pinStart != pinEnd;
+  if (pinsMove) budgetValid_ = false;
+  if (!budgetValid_) budget_ = energy(x, v, q, gravity), budgetValid_ = true;
+  const RigidFit before = pinned_.empty() ? rigidFit(m, x, v) : RigidFit{};
+  const int fitIterations = std::max(rotationIterations, 20);
+
+  const std::vector<Vec3> x0 = x;
+  std::vector<Vec3> y(V);
+  for (size_t i = 0; i < V; ++i) {
+    y[i] = x0[i] + h * v[i] + h * h * gravity;
+    x[i] = x0[i] + h * v[i] + h * h * acceleration_[i];
+  }
+  for (size_t j = 0; j < pinned_.size(); ++j) y[pinned_[j]] = x[pinned_[j]] = 0.5 * (pinStart[j] + pinEnd[j]);
+
+  // Newton on Phi(x) = 1/(2 h^2) |x - y|_M^2 + E(x) - f_c.x: each Newton system
+  // (M / h^2 + K(x)) dx = -grad Phi is solved by conjugate gradients preconditioned with the
+  // projective-dynamics matrix (M / h^2 + sum_e k_e G_e^T G_e, factored once), K(x) p by a
+  // forward difference of the elastic forces. `passes` bounds the CG iterations of the step.
+  std::vector<Vec3> f, fp, r(V), z, p(V), Ap(V), xp(V), dx(V);
+  std::vector<Quat> qp;
+  auto dot = [&](const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+    Real sum = 0;
+    for (size_t i = 0; i < V; ++i) sum += a[i].dot(b[i]);
+    return sum;
+  };
+  int budget = std::max(passes, 1);
+  for (int newton = 0; newton < 4 && budget > 0; ++newton) {
+    forces(x, q, f, fitIterations);
+    Real rNorm = 0, scale = 0;
+    for (size_t i = 0; i < V; ++i) {
+      r[i] = half_.isFree(uint32_t(i)) ? Vec3(f[i] - m.mass[i] * invH2 * (x[i] - y[i])) : Vec3::Zero();
+      rNorm = std::max(rNorm, r[i].norm() * m.invMass[i]);
+      scale = std::max(scale, (v[i].norm() / h + gravity.norm()));
+    }
+    if (rNorm <= 1e-10 * std::max(scale, Real(1e-3)) * invH2 * h * h) break;
+    half_.applyInverse(r, z);
+    p = z;
+    std::fill(dx.begin(), dx.end(), Vec3::Zero());
+    Real rz = dot(r, z);
+    const Real rz0 = rz;
+    for (; budget > 0; --budget) {
+      ++report.passes;
+      Real pMax = 0, xMax = 0;
+      for (size_t i = 0; i < V; ++i) pMax = std::max(pMax, p[i].norm()), xMax = std::max(xMax, x[i].norm());
+      if (pMax == 0) break;
+      const Real eps = 1e-7 * std::max(xMax, Real(1e-3)) / pMax;
+      for (size_t i = 0; i < V; ++i) xp[i] = x[i] + eps * p[i];
+      qp = q;
+      forces(xp, qp, fp, fitIterations);
+      for (size_t i = 0; i < V; ++i)
+        Ap[i] = half_.isFree(uint32_t(i)) ? Vec3(m.mass[i] * invH2 * p[i] - (fp[i] - f[i]) / eps) : Vec3::Zero();
+      const Real pAp = dot(p, Ap);
+      if (!(pAp > 0)) {
+        if (newton == 0 && dx[0].isZero() && report.passes == 1) dx = z;  // no curvature: take the PD step
+        break;
+      }
+      const Real alpha = rz / pAp;
+      for (size_t i = 0; i < V; ++i) dx[i] += alpha * p[i], r[i] -= alpha * Ap[i];
+      half_.applyInverse(r, z);
+      const Real rzNew = dot(r, z);
+      if (rzNew <= 1e-8 * rz0) { --budget; break; }
+      const Real beta = rzNew / rz;
+      rz = rzNew;
+      for (size_t i = 0; i < V; ++i) p[i] = z[i] + beta * p[i];
+    }
+    for (size_t i = 0; i < V; ++i) x[i] += dx[i];
+  }
+  for (size_t i = 0; i < V; ++i) {
+    const Vec3 d = x[i] - x0[i];
+    if (half_.isFree(uint32_t(i))) acceleration_[i] = (d - h * v[i]) * invH2;
+    v[i] = 2 * d / h - v[i];
+    x[i] = x0[i] + 2 * d;
+  }
+  for (size_t j = 0; j < pinned_.size(); ++j) x[pinned_[j]] = pinEnd[j], v[pinned_[j]] = (pinEnd[j] - pinStart[j]) / dt_;
+  if (pinned_.empty()) {
+    const RigidFit after = rigidFit(m, x, v);
+    const Eigen::FullPivLU<Mat3> lu(after.inertia);
+    if (lu.rank() == 3 || m.dim == 2) {
+      Vec3 dOmega = m.dim == 2 ? Vec3(0, 0, (before.momentum.z() - after.momentum.z()) / after.inertia(2, 2))
+                               : Vec3(lu.solve(before.momentum - after.momentum));
+      for (size_t i = 0; i < V; ++i) v[i] += dOmega.cross(x[i] - after.centre);
+      report.momentumKept = true;
+    }
+  }
+  if (damping > 0) {
+    const Real damp = 1.0 / (1.0 + damping * dt_);
+    Real removed = 0;
+    for (size_t i = 0; i < V; ++i) removed += 0.5 * m.mass[i] * v[i].squaredNorm() * (1 - damp * damp), v[i] *= damp;
+    budget_ -= removed;
+  }
+  const Real e = energy(x, v, q, gravity);
+  if (e > budget_) {
+    const RigidFit r = pinned_.empty() ? rigidFit(m, x, v) : RigidFit{};  // a pinned body has no free rigid motion
+    Real kDef = 0;
+    for (size_t i = 0; i < V; ++i)
+      if (half_.isFree(uint32_t(i)))
+        kDef += 0.5 * m.mass[i] * (v[i] - r.velocity - r.omega.cross(x[i] - r.centre)).squaredNorm();
+    const Real excess = e - budget_;
+    const Real s = kDef > 0 ? std::sqrt(std::max(Real(0), 1 - excess / kDef)) : 1;
+    for (size_t i = 0; i < V; ++i) {
+      if (!half_.isFree(uint32_t(i))) continue;
+      const Vec3 rigid = r.velocity + r.omega.cross(x[i] - r.centre);
+      v[i] = rigid + s * (v[i] - rigid);
+    }
+    report.energyRemoved = std::min(excess, kDef);
+  }
+  return report;
+}
+
+}  // namespace gradel
