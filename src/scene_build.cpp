@@ -34,7 +34,11 @@ BuiltScene buildScene(const Scene& scene, const SizeLimits& limits) {
     b.sourceMesh = std::move(rest);
   }
   b.world = std::make_unique<World>(b.model, scene.simulation, scene.domain, scene.manipulators);
-  if (!scene.pins.empty()) b.world->setPins(scene.pins);
+  if (!scene.pins.empty()) {
+    std::vector<PinSettings> pins = scene.pins;
+    loadPinMasks(pins);  // the mask files, read here once (World::setPins reads no file)
+    b.world->setPins(std::move(pins));
+  }
   Vec3 v0 = scene.body.velocity;
   if (scene.dim == 2) v0.z() = 0;
   for (Vec3& v : b.world->state().velocities) v = v0;
