@@ -4,7 +4,7 @@
 #include <set>
 
 #include "gradel/element.h"
-#include "gradel/validation.h"
+#include "gradel/shared/validation.h"
 #include "test_support.h"
 
 using namespace gradel;

@@ -11,7 +11,7 @@
 
 #include "gradel/pins.h"
 #include "gradel/scene.h"
-#include "gradel/validation.h"
+#include "gradel/shared/validation.h"
 #include "test_support.h"
 
 namespace gradel {
