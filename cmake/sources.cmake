@@ -96,4 +96,5 @@ set(GRADEL_TEST_SOURCES
   tests/test_rotation_fit.cpp
   tests/test_scene_io.cpp
   tests/test_scenes.cpp
+  tests/test_settings_check.cpp
   tests/test_surface.cpp)
