@@ -18,10 +18,9 @@ BuiltScene buildScene(const Scene& scene, const SizeLimits& limits) {
   }
   checkLayoutSize(b.volume, scene.body.layout, limits, scene.body.sizeKey);
   b.layout = buildLayout(b.volume, scene.body.layout);
-  Vec3 origin = scene.body.position;
-  if (scene.dim == 2) origin.z() = 0;
-  auto model = std::make_shared<RestModel>(buildRestModel(b.layout, b.volume, scene.body.material, origin));
+  auto model = std::make_shared<RestModel>(buildRestModel(b.layout, b.volume, scene.body.material, scene.body.position));
   b.model = model;
+  const Vec3& origin = model->origin;
   if (!latticeMesh.triangles.empty() && scene.dim == 3) {
     // restPositions = origin + lattice * h (model.h): the mesh goes exactly where it was voxelised.
     TriangleMesh rest = std::move(latticeMesh);
