@@ -28,7 +28,8 @@
 #include "gradel/divergence.h"
 #include "gradel/layout.h"
 #include "gradel/output.h"
-#include "gradel/run_budget.h"
+#include "gradel/shared/frame_loop.h"
+#include "gradel/shared/run_budget.h"
 #include "gradel/scene.h"
 #include "gradel/shapes.h"
 #include "gradel/size_limits.h"
@@ -232,7 +233,7 @@ int runScene(const RunOptions& o) {
   if (o.maxSteps && !(*o.maxSteps >= 1 && *o.maxSteps <= 1e18))
     throw InputError("--max-steps: must be a number of steps in [1, 1e18]");
   const Real duration = scene.output.duration;
-  Real interval = scene.output.frameInterval;
+  const Real interval = scene.output.frameInterval;
 
   gradel::BuiltScene built;
   try {
@@ -251,18 +252,16 @@ int runScene(const RunOptions& o) {
   } catch (const InputError& e) {
     throw InputError(o.scene + ": " + e.what());
   }
-  // Frames land on distinct steps: at most one per step.
-  if (interval < dt) {
+  // The frames (frame_loop.h): at t = 0, every frame_interval, the last one exactly at `duration`.
+  gradel::FrameSchedule schedule;
+  try {
+    schedule = gradel::frameSchedule(0, duration, interval, dt);
+  } catch (const InputError& e) {
+    throw InputError(o.scene + ": simulation." + e.what());
+  }
+  if (schedule.intervalRaisedToDt)
     std::fprintf(stderr, "gradel: %s: simulation.frame_interval %.3g s is shorter than dt = %.3g s; writing one frame per step\n",
                  o.scene.c_str(), interval, dt);
-    interval = dt;
-  }
-  // Frames after t = 0; the last one lands exactly on `duration`.
-  const double framesD = std::ceil(duration / interval - 1e-9);
-  if (framesD > 1e6)
-    throw InputError(o.scene + ": simulation.frame_interval: " + json(interval).dump() + " s gives " +
-                     json(framesD).dump() + " frames (expected at most 1000000 frames)");
-  const size_t frames = size_t(std::max(1.0, framesD));
 
   // SIGINT, SIGTERM and SIGHUP all stop the run the same way: nothing written, exit 128 + signal.
   // Installed before the output folder exists and restored after it is gone.
@@ -304,33 +303,22 @@ int runScene(const RunOptions& o) {
   };
 
 
-  // Advance in chunks of a few steps so that divergence, Ctrl-C and the progress bar are
-  // noticed within a frame; the sequence of steps is the same as one advanceTo per frame.
-  constexpr Real kChunkSteps = 32;
+  // Divergence, Ctrl-C and the progress bar are noticed within a frame (frame_loop.h).
   Progress progress;
-  const auto wallStart = std::chrono::steady_clock::now();
-  writeFrame(0);
-  for (size_t f = 1; f <= frames; ++f) {
-    const Real tFrame = std::min(Real(f) * interval, duration);
-    while (world.time() < tFrame - 0.5 * dt) {
-      const Real before = world.time();
-      world.advanceTo(std::min(tFrame, before + kChunkSteps * dt));
-      if (world.time() == before) world.step();  // never spin without progress
-      if (!finiteState(world.state())) {
-        char msg[160];
-        std::snprintf(msg, sizeof msg, "simulation diverged at t=%.6g s (dt = %.3g s): non-finite numbers; ", world.time(), dt);
-        throw Diverged(msg + cause);
-      }
-      if (const int sig = gSignal)
-        throw Interrupted(sig, std::string("interrupted by ") + (sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "SIGHUP") +
-                                   "; nothing written");
-      progress.update(world.time() / duration);
+  gradel::FrameLoopChecks checks;
+  checks.afterChunk = [&] {
+    if (!finiteState(world.state())) {
+      char msg[160];
+      std::snprintf(msg, sizeof msg, "simulation diverged at t=%.6g s (dt = %.3g s): non-finite numbers; ", world.time(), dt);
+      throw Diverged(msg + cause);
     }
-    // A frame whose time no step reached (the last one, when duration is not a whole number
-    // of steps past the previous frame) would repeat the previous frame: frames land on
-    // distinct steps.
-    if (world.time() > pvd.back().time) writeFrame(pvd.size());
-  }
+    if (const int sig = gSignal)
+      throw Interrupted(sig, std::string("interrupted by ") + (sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "SIGHUP") +
+                                 "; nothing written");
+  };
+  checks.progress = [&](double fraction) { progress.update(fraction); };
+  const auto wallStart = std::chrono::steady_clock::now();
+  gradel::runFrames(world, schedule, writeFrame, checks);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
   csv.close();
   gradel::writePvd(dir.file("run.pvd"), pvd);

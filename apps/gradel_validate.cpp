@@ -1,5 +1,5 @@
 // gradel-validate: physical validity, measured (issue 5). Runs the experiments of
-// include/gradel/validation.h for both scalings and the three layouts and writes
+// include/gradel/shared/validation.h for both scalings and the three layouts and writes
 // OUT/report.md, OUT/*.csv, OUT/plots.py and (with matplotlib) OUT/*.png.
 //
 //   gradel-validate [--out docs/validation] [--quick]
@@ -17,7 +17,7 @@
 #include <map>
 #include <sstream>
 
-#include "gradel/validation.h"
+#include "gradel/shared/validation.h"
 
 using namespace gradel;
 using Clock = std::chrono::steady_clock;
@@ -443,7 +443,7 @@ fig.tight_layout(); fig.savefig(os.path.join(d, "large_step_sweep.png"), dpi=110
   const Real sagEB = beamTipSag(kAspect * kWidth, kWidth, kRho, kE);
   md << "# Physical validation\n\n"
      << "Written by `gradel-validate" << (quick ? " --quick" : "") << "` (apps/gradel_validate.cpp; experiments in "
-     << "include/gradel/validation.h) in " << fmt(std::chrono::duration<double>(Clock::now() - tStart).count(), 3)
+     << "include/gradel/shared/validation.h) in " << fmt(std::chrono::duration<double>(Clock::now() - tStart).count(), 3)
      << " s. Every number below is in the CSV files next to this report.\n\n"
      << "**Bar**: square section a = " << kWidth << " m, length L = " << kAspect << " a = " << kAspect * kWidth
      << " m, density " << kRho << " kg/m^3, clamped at x = 0 (every vertex of that face pinned), gravity 9.81 m/s^2. "

@@ -30,7 +30,7 @@
 #include <optional>
 #include <sstream>
 
-#include "gradel/scene_presets.h"
+#include "gradel/shared/scene_presets.h"
 
 using namespace gradel;
 using Clock = std::chrono::steady_clock;

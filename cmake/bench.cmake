@@ -1,6 +1,6 @@
 # GRADEL_BUILD_BENCH: gradel-bench, the speed benchmark (issue 4), printing CSV (bench/run.sh).
 add_executable(gradel-bench ${CMAKE_CURRENT_SOURCE_DIR}/bench/gradel_bench.cpp)
-target_link_libraries(gradel-bench PRIVATE gradel::core CLI11::CLI11)
+target_link_libraries(gradel-bench PRIVATE gradel::shared CLI11::CLI11)
 target_compile_options(gradel-bench PRIVATE -Wall -Wextra)
 if(GRADEL_BUILD_TESTS)
   enable_testing()

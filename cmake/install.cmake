@@ -9,9 +9,10 @@ install(TARGETS gradel_core EXPORT gradelTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT gradel_dev
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT gradel_dev
         RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT gradel_dev)
-# The engine's headers; render/ belongs to gradel_render, which is not installed.
+# The engine's headers; render/ and shared/ belong to gradel_render and gradel_shared (the tools'
+# layers), which are not installed.
 install(DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR}/include/gradel DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
-        COMPONENT gradel_dev FILES_MATCHING PATTERN "*.h" PATTERN "render" EXCLUDE)
+        COMPONENT gradel_dev FILES_MATCHING PATTERN "*.h" PATTERN "render" EXCLUDE PATTERN "shared" EXCLUDE)
 install(EXPORT gradelTargets NAMESPACE gradel:: DESTINATION ${GRADEL_CMAKE_DIR} COMPONENT gradel_dev)
 configure_package_config_file(${CMAKE_CURRENT_SOURCE_DIR}/cmake/gradelConfig.cmake.in
                               ${CMAKE_CURRENT_BINARY_DIR}/gradelConfig.cmake INSTALL_DESTINATION ${GRADEL_CMAKE_DIR})

@@ -8,7 +8,7 @@ find_package(OpenGL REQUIRED COMPONENTS OpenGL EGL)
 
 list(TRANSFORM GRADEL_RENDER_SOURCES PREPEND ${CMAKE_CURRENT_SOURCE_DIR}/)
 add_library(gradel_render STATIC ${GRADEL_RENDER_SOURCES})
-target_link_libraries(gradel_render PUBLIC gradel::core OpenGL::OpenGL OpenGL::EGL
+target_link_libraries(gradel_render PUBLIC gradel::shared OpenGL::OpenGL OpenGL::EGL
                                     PRIVATE PkgConfig::STB nlohmann_json::nlohmann_json)
 target_compile_options(gradel_render PRIVATE -Wall -Wextra)
 

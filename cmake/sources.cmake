@@ -21,7 +21,6 @@ set(GRADEL_CORE_SOURCES
   src/projective.cpp
   src/large_step.cpp
   src/rotation_fit.cpp
-  src/run_budget.cpp
   src/settings_check.cpp
   src/shapes.cpp
   src/size_limits.cpp
@@ -29,12 +28,17 @@ set(GRADEL_CORE_SOURCES
   src/thread_team.cpp
   src/volume.cpp
   src/world.cpp
-  # Scene files (JSON, nlohmann_json as a private build dependency) and scene builders.
+  # Scene files (JSON, nlohmann_json as a private build dependency) and the scene builder.
   src/scene_build.cpp
-  src/scene_io.cpp
-  src/scene_presets.cpp
-  # The cantilever / stretch experiments behind gradel-validate and the tests.
-  src/validation.cpp)
+  src/scene_io.cpp)
+
+# gradel_shared: the layer between the engine and its tools, used by `gradel` (run, render),
+# gradel-view, gradel-validate, gradel-bench and the tests; not part of the installed package.
+set(GRADEL_SHARED_SOURCES
+  src/shared/frame_loop.cpp      # the frame loop of `gradel run` and `gradel render`
+  src/shared/run_budget.cpp      # how long a run will take, refused beyond a budget
+  src/shared/scene_presets.cpp   # scenes built in code (the benchmark's)
+  src/shared/validation.cpp)     # the cantilever / stretch experiments behind gradel-validate and the tests
 
 # The volume and mesh readers (docs/io.md), part of gradel_core: zlib for gzip-encoded NRRD and
 # .nii.gz, the NIfTI-1/2 header layouts from libnifti2-dev (headers only). Also fuzzed (fuzz/).
@@ -76,6 +80,7 @@ set(GRADEL_TEST_SOURCES
   tests/test_element.cpp
   tests/test_element_stage.cpp
   tests/test_embedding.cpp
+  tests/test_frame_loop.cpp
   tests/test_golden.cpp
   tests/test_implicit.cpp
   tests/test_integration.cpp
@@ -93,4 +98,5 @@ set(GRADEL_TEST_SOURCES
   tests/test_rotation_fit.cpp
   tests/test_scene_io.cpp
   tests/test_scenes.cpp
+  tests/test_settings_check.cpp
   tests/test_surface.cpp)

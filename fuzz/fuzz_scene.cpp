@@ -11,7 +11,7 @@
 #include <string>
 
 #include "gradel/divergence.h"
-#include "gradel/run_budget.h"
+#include "gradel/shared/run_budget.h"
 #include "gradel/scene.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -126,13 +126,14 @@ void markSurfaceVertices(const Layout& layout, const VoxelVolume& volume, RestMo
 RestModel buildRestModel(const Layout& layout, const VoxelVolume& volume, const MaterialSettings& material,
                          const Vec3& origin) {
   validate(material);
-  if (!origin.allFinite()) throw InputError("origin: must be finite");
   RestModel m;
   m.dim = layout.dim;
   m.voxelSize = layout.voxelSize;
   m.material = material;
   m.origin = origin;
-  placeVertices(layout, origin, m);
+  if (m.dim == 2) m.origin.z() = 0;  // a 2D body lies in the plane z = 0
+  if (!m.origin.allFinite()) throw InputError("origin: must be finite");
+  placeVertices(layout, m.origin, m);
   lumpMasses(layout, m);
   buildElements(layout, m);
   vertexPeriod(m);

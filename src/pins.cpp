@@ -17,8 +17,10 @@ class LoadedMask {
     for (size_t b = 0; b < m.boxes.size(); ++b)
       if ((m.boxes[b][1] - m.boxes[b][0]).minCoeff() < 0)
         throw InputError(where + "boxes[" + std::to_string(b) + "]: max must be >= min on every axis");
-    if (!m.volume && m.boxes.empty()) throw InputError(where + "has neither a file nor boxes");
-    if (m.volume && m.volume->countFilled() == 0) throw InputError(where + m.name + ": no filled voxel");
+    if (!m.source && !m.volume && m.boxes.empty()) throw InputError(where + "has neither a file nor boxes");
+    if (m.source && !m.volume) throw InputError(where + m.source->describe() + ": not read (loadPinMasks)");
+    if (m.volume && m.volume->countFilled() == 0)
+      throw InputError(where + (m.source ? m.source->describe() + ": " : std::string()) + "no filled voxel");
   }
 
   bool filled(const Int3& v) const {
@@ -52,6 +54,19 @@ class LoadedMask {
 };
 
 }  // namespace
+
+void loadPinMasks(std::vector<PinSettings>& pins) {
+  for (size_t p = 0; p < pins.size(); ++p) {
+    if (!pins[p].mask || !pins[p].mask->source || pins[p].mask->volume) continue;
+    auto mask = std::make_shared<PinMask>(*pins[p].mask);
+    try {
+      mask->volume = std::make_shared<const VoxelVolume>(mask->source->load());
+    } catch (const InputError& e) {
+      throw InputError("pins[" + std::to_string(p) + "].mask: " + e.what());
+    }
+    pins[p].mask = std::move(mask);
+  }
+}
 
 PinSet selectPins(const std::vector<PinSettings>& pins, const std::vector<Vec3>& restPositions) {
   PinSet s;

@@ -18,10 +18,9 @@ BuiltScene buildScene(const Scene& scene, const SizeLimits& limits) {
   }
   checkLayoutSize(b.volume, scene.body.layout, limits, scene.body.sizeKey);
   b.layout = buildLayout(b.volume, scene.body.layout);
-  Vec3 origin = scene.body.position;
-  if (scene.dim == 2) origin.z() = 0;
-  auto model = std::make_shared<RestModel>(buildRestModel(b.layout, b.volume, scene.body.material, origin));
+  auto model = std::make_shared<RestModel>(buildRestModel(b.layout, b.volume, scene.body.material, scene.body.position));
   b.model = model;
+  const Vec3& origin = model->origin;
   if (!latticeMesh.triangles.empty() && scene.dim == 3) {
     // restPositions = origin + lattice * h (model.h): the mesh goes exactly where it was voxelised.
     TriangleMesh rest = std::move(latticeMesh);
@@ -34,7 +33,11 @@ BuiltScene buildScene(const Scene& scene, const SizeLimits& limits) {
     b.sourceMesh = std::move(rest);
   }
   b.world = std::make_unique<World>(b.model, scene.simulation, scene.domain, scene.manipulators);
-  if (!scene.pins.empty()) b.world->setPins(scene.pins);
+  if (!scene.pins.empty()) {
+    std::vector<PinSettings> pins = scene.pins;
+    loadPinMasks(pins);  // the mask files, read here once (World::setPins reads no file)
+    b.world->setPins(std::move(pins));
+  }
   Vec3 v0 = scene.body.velocity;
   if (scene.dim == 2) v0.z() = 0;
   for (Vec3& v : b.world->state().velocities) v = v0;

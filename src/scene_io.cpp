@@ -768,13 +768,7 @@ PinSettings readPin(Fields& f, const Scene& scene) {
       mask->boxes.push_back({Int3(lo[0], lo[1], dim == 3 ? lo[2] : 0), Int3(hi[0], hi[1], dim == 3 ? hi[2] : 0)});
     }
     if (mf->take("file")) {
-      const std::shared_ptr<const VolumeSource> source = readSource(*mf, dim, mask->voxelSize);  // also finishes mf
-      mask->name = source->describe();
-      try {
-        mask->volume = std::make_shared<const VoxelVolume>(source->load());  // read here, once (pins.h)
-      } catch (const InputError& e) {
-        mf->fail("file", e.what());
-      }
+      mask->source = readSource(*mf, dim, mask->voxelSize);  // also finishes mf; read by buildScene
     } else {
       if (mask->boxes.empty()) mf->fail("file", "missing (expected a volume file, or \"boxes\": voxel index boxes)");
       mf->finish();

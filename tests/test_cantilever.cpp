@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "gradel/validation.h"
+#include "gradel/shared/validation.h"
 
 namespace gradel {
 namespace {

@@ -4,7 +4,7 @@
 #include <set>
 
 #include "gradel/element.h"
-#include "gradel/validation.h"
+#include "gradel/shared/validation.h"
 #include "test_support.h"
 
 using namespace gradel;
@@ -88,8 +88,8 @@ TEST(Model, RestOffsetsAreCentred) {
 TEST(Model, VertexLookupAndOrigin) {
   for (int dim : {2, 3})
     for (LayoutKind kind : {LayoutKind::Gradational, LayoutKind::Voxel}) {
-      const Vec3 origin(0.3, -1.7, dim == 3 ? 2.9 : 0);
-      Body b = makeBody("sphere", 9, dim, kind, {}, 0.01, origin);
+      const Vec3 given(0.3, -1.7, 2.9), origin(0.3, -1.7, dim == 3 ? 2.9 : 0);  // a 2D body lies in z = 0
+      Body b = makeBody("sphere", 9, dim, kind, {}, 0.01, given);
       const Layout& L = b.layout;
       for (size_t i = 0; i < L.numVertices(); ++i) {
         ASSERT_EQ(L.vertexAt(L.vertices[i]), i);

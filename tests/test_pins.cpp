@@ -11,7 +11,7 @@
 
 #include "gradel/pins.h"
 #include "gradel/scene.h"
-#include "gradel/validation.h"
+#include "gradel/shared/validation.h"
 #include "test_support.h"
 
 namespace gradel {
@@ -191,11 +191,13 @@ TEST(Pins, maskErrors_nameTheFieldAndTheFile) {
   std::string both = maskScene("\"boxes\": [ { \"min\": [0, 0, 0], \"max\": [0, 3, 3] } ]");
   both.replace(both.find("\"mask\""), 6, "\"min\": [0, 0, 0], \"mask\"");
   expectInputError([&] { parseScene(both, "s.json"); }, {"pins[0].min", "not both"});
-  // An empty label volume: read with the scene (never inside World::setPins); the message names
-  // the scene, the key and the file.
+  // An empty label volume: read when the scene is built; the message names the pin and the file.
   const std::string empty = writeMask("empty.raw", 99);
-  expectInputError([&] { parseScene(maskScene("\"file\": \"" + empty + "\", \"dims\": [4, 4, 4], \"type\": \"uint8\""), "s.json"); },
-                   {"s.json", "pins[0].mask.file", "empty.raw", "empty"});
+  const Scene s = parseScene(maskScene("\"file\": \"" + empty + "\", \"dims\": [4, 4, 4], \"type\": \"uint8\""), "s.json");
+  expectInputError([&] { buildScene(s); }, {"pins[0].mask", "empty.raw"});
+  // World::setPins reads no file: a mask whose file nobody read (loadPinMasks) is refused.
+  BuiltScene plain = buildScene(parseScene(maskScene("\"boxes\": [ { \"min\": [0, 0, 0], \"max\": [0, 3, 3] } ]"), "s.json"));
+  expectInputError([&] { plain.world->setPins(s.pins); }, {"pins[0].mask", "empty.raw", "not read"});
   std::filesystem::remove(empty);
   // A mask outside the body.
   expectInputError([&] { buildScene(parseScene(maskScene("\"boxes\": [ { \"min\": [10, 10, 10], \"max\": [11, 11, 11] } ]"), "s.json")); },

@@ -43,8 +43,9 @@ struct RestModel {
   size_t numPairs() const { return elemVerts.size(); }
 };
 
-/// Builds the rest model. `origin` is the world position [m] of lattice point (0,0,0).
-/// Throws InputError for non-positive or non-finite material parameters.
+/// Builds the rest model. `origin` is the world position [m] of lattice point (0,0,0); a 2D
+/// body lies in the plane z = 0 (origin's z is dropped). Throws InputError for invalid material
+/// parameters (validate(MaterialSettings)) or a non-finite origin.
 RestModel buildRestModel(const Layout& layout, const VoxelVolume& volume, const MaterialSettings& material,
                          const Vec3& origin);
 

@@ -9,7 +9,6 @@
 
 #include <array>
 #include <memory>
-#include <string>
 #include <vector>
 
 #include "gradel/contacts.h"
@@ -23,10 +22,8 @@ namespace gradel {
 /// lattice (origin = body.position + offset * h, voxelSize = h, what scenes use) these are exactly
 /// the corners of the filled voxels. In 2D the mask is one voxel thick (z index 0).
 struct PinMask {
-  /// A label volume, already read (the scene reader reads a mask file when it reads the scene;
-  /// in code: io::openVolume(spec)->load()); null: boxes only.
-  std::shared_ptr<const VoxelVolume> volume;
-  std::string name;                            ///< Where `volume` came from (a file), for messages.
+  std::shared_ptr<const VolumeSource> source;  ///< A volume file (e.g. io::openVolume), read by loadPinMasks.
+  std::shared_ptr<const VoxelVolume> volume;   ///< The voxels read from `source` (loadPinMasks); null: boxes only.
   std::vector<std::array<Int3, 2>> boxes;      ///< Inclusive voxel index ranges {lo, hi} on the mask lattice.
   Vec3 origin{0, 0, 0};                        ///< [m] lower corner of mask voxel (0, 0, 0).
   Real voxelSize = 0;                          ///< [m] mask voxel edge (> 0).
@@ -48,9 +45,14 @@ struct PinSet {
 };
 
 /// Selects the pinned vertices from rest positions (a vertex held by several pins goes to the
-/// first). Reads no file. Throws InputError when a pin holds no vertex, its box is inverted, or
-/// its mask is malformed or empty (messages "pins[i]: ..." and "pins[i].mask: ...", the latter
-/// naming the mask's file).
+/// first). Reads no file (a mask whose source was not read by loadPinMasks is an error). Throws
+/// InputError when a pin holds no vertex, its box is inverted, or its mask is malformed or empty
+/// (messages "pins[i]: ..." and "pins[i].mask: ...", the latter naming the mask's file).
 PinSet selectPins(const std::vector<PinSettings>& pins, const std::vector<Vec3>& restPositions);
+
+/// Reads every mask's file (PinMask::source) into PinMask::volume, once, before the pins reach a
+/// World (buildScene does this; World::setPins reads no file). Throws InputError
+/// "pins[i].mask: <file>: ..." when a file cannot be read.
+void loadPinMasks(std::vector<PinSettings>& pins);
 
 }  // namespace gradel

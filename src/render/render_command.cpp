@@ -15,6 +15,7 @@
 #include "gradel/render/offscreen.h"
 #include "gradel/render/renderer.h"
 #include "gradel/scene.h"
+#include "gradel/shared/frame_loop.h"
 
 namespace gradel::render {
 
@@ -62,10 +63,7 @@ int runRenderCommand(const RenderCommandOptions& o) {
   if (o.exportFormat != "none" && o.exportFormat != "obj" && o.exportFormat != "ply")
     throw InputError("--export: \"" + o.exportFormat + "\" (expected none, obj or ply)");
   if (o.noPictures && o.exportFormat == "none") throw InputError("--no-pictures without --export: nothing to write");
-  const Real interval = scene.output.frameInterval;
-  const long allFrames = std::lround(std::floor(scene.output.duration / interval + 1e-9)) + 1;
   if (o.frames && (*o.frames < 1 || *o.frames > 100000)) throw InputError("--frames: must be in [1, 100000]");
-  const long frames = o.frames ? *o.frames : allFrames;
 
   BuiltScene built;
   try {
@@ -74,6 +72,16 @@ int runRenderCommand(const RenderCommandOptions& o) {
     throw InputError(o.scene + ": " + e.what());
   }
   World& world = *built.world;
+  // The frames (frame_loop.h, as `gradel run`): from --start every frame_interval to the end of
+  // the duration (the last one exactly at its end), or --frames of them.
+  FrameSchedule schedule;
+  try {
+    schedule = frameSchedule(o.start, scene.output.duration, scene.output.frameInterval, world.dt(),
+                             o.frames ? std::optional<long>(*o.frames) : std::nullopt);
+  } catch (const InputError& e) {
+    throw InputError(o.scene + ": simulation." + e.what());
+  }
+  const Real interval = schedule.interval;
   if (o.surface == "auto") view.surface = built.embedded ? SurfaceMode::Embedded : SurfaceMode::Smooth;
   const BodyView body = makeBodyView(built);
   Vec3 lo, hi;
@@ -104,8 +112,7 @@ int runRenderCommand(const RenderCommandOptions& o) {
   const DisplaySurface& exportSurface = exportKind == SurfaceKind::Voxel ? body.voxel : body.smooth;
   const auto wallStart = std::chrono::steady_clock::now();
   double drawSeconds = 0;
-  for (long f = 0; f < frames; ++f) {
-    world.advanceTo(o.start + Real(f) * interval);
+  const size_t frames = runFrames(world, schedule, [&](size_t f) {
     char name[48];
     if (!o.noPictures) {
       const auto t0 = std::chrono::steady_clock::now();
@@ -115,11 +122,11 @@ int runRenderCommand(const RenderCommandOptions& o) {
       renderer->draw(buildDrawList(body, world, view, width, height), camera, width, height);
       const Image img = gl->read();
       drawSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      std::snprintf(name, sizeof name, "frame_%05ld.png", f);
+      std::snprintf(name, sizeof name, "frame_%05zu.png", f);
       writePng(dir.file(name).string(), img);
     }
     if (o.exportFormat != "none") {
-      std::snprintf(name, sizeof name, "surface_%05ld.%s", f, o.exportFormat.c_str());
+      std::snprintf(name, sizeof name, "surface_%05zu.%s", f, o.exportFormat.c_str());
       const TriangleMesh m = view.surface == SurfaceMode::Embedded && body.embedded
                                  ? embeddedMesh(*body.embedded, world.state().positions)
                                  : surfaceMesh(exportSurface, world.state().positions);
@@ -128,7 +135,7 @@ int runRenderCommand(const RenderCommandOptions& o) {
       else
         writePly(dir.file(name).string(), m);
     }
-  }
+  });
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
 
   bool video = false;

@@ -18,7 +18,7 @@
 #include "gradel/render/camera.h"
 #include "gradel/render/draw_list.h"
 #include "gradel/scene.h"
-#include "gradel/scene_presets.h"
+#include "gradel/shared/scene_presets.h"
 
 namespace {
 

@@ -1,4 +1,4 @@
-#include "gradel/validation.h"
+#include "gradel/shared/validation.h"
 
 #include <cmath>
 #include <numbers>

@@ -1,4 +1,4 @@
-#include "gradel/run_budget.h"
+#include "gradel/shared/run_budget.h"
 
 #include <algorithm>
 #include <cmath>

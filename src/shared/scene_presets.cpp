@@ -1,4 +1,4 @@
-#include "gradel/scene_presets.h"
+#include "gradel/shared/scene_presets.h"
 
 #include <cmath>
 
