@@ -11,8 +11,8 @@
 #include <string>
 
 #include "gradel/divergence.h"
-#include "gradel/shared/run_budget.h"
 #include "gradel/scene.h"
+#include "gradel/shared/run_budget.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace gradel;

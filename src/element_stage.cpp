@@ -119,10 +119,10 @@ void computeElementFrames(const RestModel& m, const ElementStageRest& rest, size
       Q[l] = load4(rotations[e].coeffs().data());  // x, y, z, w
     }
     for (int j = 0; j < 3; ++j) transpose(S[j][0], S[j][1], S[j][2], S[j][3]);
-    transpose(K[0], K[1], K[2], K[3]);  // sum P (3 lanes), 1 / n
-    transpose(K[4], K[5], K[6], K[7]);  // C (3 lanes), k
+    transpose(K[0], K[1], K[2], K[3]);    // sum P (3 lanes), 1 / n
+    transpose(K[4], K[5], K[6], K[7]);    // C (3 lanes), k
     transpose(K[8], K[9], K[10], K[11]);  // mean R0 (3 lanes), 0
-    transpose(Q[0], Q[1], Q[2], Q[3]);  // x, y, z, w
+    transpose(Q[0], Q[1], Q[2], Q[3]);    // x, y, z, w
     // 2. Centroid c = sum x / n and A / h = sum x P^T - c (sum P)^T.
     d4 c[3];
     for (int j = 0; j < 3; ++j) {
@@ -150,7 +150,8 @@ void computeElementFrames(const RestModel& m, const ElementStageRest& rest, size
     for (int k = 0; k < 9; ++k) M[k] = load4(batch.M[k]);
     const d4 k = K[7], zero = splat(0);
     d4 F[4][4];  // F[column][lane before the transpose]
-    for (int col = 0; col < 3; ++col) F[col][0] = k * M[col], F[col][1] = k * M[3 + col], F[col][2] = k * M[6 + col], F[col][3] = zero;
+    for (int col = 0; col < 3; ++col)
+      F[col][0] = k * M[col], F[col][1] = k * M[3 + col], F[col][2] = k * M[6 + col], F[col][3] = zero;
     for (int r = 0; r < 3; ++r)
       F[3][r] = k * (c[r] - (M[3 * r] * K[8] + M[3 * r + 1] * K[9] + M[3 * r + 2] * K[10]) -
                      (M[3 * r] * K[4] + M[3 * r + 1] * K[5] + M[3 * r + 2] * K[6]));

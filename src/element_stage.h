@@ -63,7 +63,7 @@ struct ElementStageRest {
   /// The model's pairs, then kPrefetchPairs padding pairs (vertex 0) for the prefetch to read.
   /// std::logic_error when a rest position is off the model's voxel lattice.
   std::vector<StagePair> pairs;
-  std::vector<uint32_t> vertexStart;   ///< Per vertex + 1: its range in vertexElements.
+  std::vector<uint32_t> vertexStart;     ///< Per vertex + 1: its range in vertexElements.
   std::vector<uint32_t> vertexElements;  ///< The elements of each vertex, ascending.
 
   explicit ElementStageRest(const RestModel& model);

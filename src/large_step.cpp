@@ -9,7 +9,6 @@ namespace gradel {
 
 namespace {
 
-
 struct RigidFit {
   Vec3 centre = Vec3::Zero(), velocity = Vec3::Zero(), omega = Vec3::Zero(), momentum = Vec3::Zero();
   Mat3 inertia = Mat3::Zero();
@@ -49,21 +48,24 @@ Real LargeStepSolver::energy(const std::vector<Vec3>& x, const std::vector<Vec3>
     const uint32_t b = m.elemStart[el], n = m.elemStart[el + 1] - b;
     f.resize(n);
     Quat r = q[el];
-    e += elementForces(m.dim, x.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[el], r, f.data(), 8).energy;
+    e += elementForces(m.dim, x.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[el], r, f.data(), 8)
+             .energy;
   }
   for (size_t i = 0; i < x.size(); ++i) e += 0.5 * m.mass[i] * v[i].squaredNorm() - m.mass[i] * gravity.dot(x[i]);
   return e;
 }
 
 // Elastic forces [N] per vertex at x (rotations fitted, warm-started from q, written back).
-void LargeStepSolver::forces(const std::vector<Vec3>& x, std::vector<Quat>& q, std::vector<Vec3>& f, int iterations) const {
+void LargeStepSolver::forces(const std::vector<Vec3>& x, std::vector<Quat>& q, std::vector<Vec3>& f,
+                             int iterations) const {
   const RestModel& m = *model_;
   f.assign(m.numVertices(), Vec3::Zero());
   std::vector<Vec3> fe;
   for (size_t el = 0; el < m.numElements(); ++el) {
     const uint32_t b = m.elemStart[el], n = m.elemStart[el + 1] - b;
     fe.resize(n);
-    elementForces(m.dim, x.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[el], q[el], fe.data(), iterations);
+    elementForces(m.dim, x.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[el], q[el], fe.data(),
+                  iterations);
     for (uint32_t i = 0; i < n; ++i) f[m.elemVerts[b + i]] += fe[i];
   }
 }
@@ -135,7 +137,10 @@ LargeStepReport LargeStepSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v
       for (size_t i = 0; i < V; ++i) dx[i] += alpha * p[i], r[i] -= alpha * Ap[i];
       half_.applyInverse(r, z);
       const Real rzNew = dot(r, z);
-      if (rzNew <= 1e-8 * rz0) { --budget; break; }
+      if (rzNew <= 1e-8 * rz0) {
+        --budget;
+        break;
+      }
       const Real beta = rzNew / rz;
       rz = rzNew;
       for (size_t i = 0; i < V; ++i) p[i] = z[i] + beta * p[i];
@@ -148,7 +153,8 @@ LargeStepReport LargeStepSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v
     v[i] = 2 * d / h - v[i];
     x[i] = x0[i] + 2 * d;
   }
-  for (size_t j = 0; j < pinned_.size(); ++j) x[pinned_[j]] = pinEnd[j], v[pinned_[j]] = (pinEnd[j] - pinStart[j]) / dt_;
+  for (size_t j = 0; j < pinned_.size(); ++j)
+    x[pinned_[j]] = pinEnd[j], v[pinned_[j]] = (pinEnd[j] - pinStart[j]) / dt_;
   if (pinned_.empty()) {
     const RigidFit after = rigidFit(m, x, v);
     const Eigen::FullPivLU<Mat3> lu(after.inertia);

@@ -41,10 +41,11 @@ Real elementStiffness(const MaterialSettings& m, int dim, Real h, int64_t region
   // No direction stiffer than the continuum (material.h): k_e = E V_e / lambda_max(S),
   // S = sum R0_i R0_i^T. A complete element's S is isotropic and this is D E V_e / tr S.
   const Mat3 S = restSecondMoment(restOffsets, n);
-  const Real lambdaMax = dim == 3 ? Eigen::SelfAdjointEigenSolver<Mat3>(S, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff()
-                                  : Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(S.topLeftCorner<2, 2>(), Eigen::EigenvaluesOnly)
-                                        .eigenvalues()
-                                        .maxCoeff();
+  const Real lambdaMax =
+      dim == 3 ? Eigen::SelfAdjointEigenSolver<Mat3>(S, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff()
+               : Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(S.topLeftCorner<2, 2>(), Eigen::EigenvaluesOnly)
+                     .eigenvalues()
+                     .maxCoeff();
   const Real voxelVolume = h * h * h;
   const Real regionVolume = Real(regionVoxels) * voxelVolume;
   return m.youngsModulus * regionVolume / lambdaMax;

@@ -12,7 +12,8 @@ namespace {
 // Step 1: rest positions, origin + lattice * h.
 void placeVertices(const Layout& layout, const Vec3& origin, RestModel& m) {
   m.restPositions.resize(layout.numVertices());
-  for (size_t i = 0; i < layout.numVertices(); ++i) m.restPositions[i] = origin + layout.vertices[i].cast<Real>() * layout.voxelSize;
+  for (size_t i = 0; i < layout.numVertices(); ++i)
+    m.restPositions[i] = origin + layout.vertices[i].cast<Real>() * layout.voxelSize;
 }
 
 // Step 2: lumped masses (material.h's rules), their inverses and the total.
@@ -33,7 +34,8 @@ void lumpMasses(const Layout& layout, RestModel& m) {
       const int cells = D == 3 ? 8 : 4;
       for (int c = 0; c < (full ? 1 : cells); ++c) {
         if (!full && !(layout.cellMask[e] >> c & 1)) continue;
-        const Int3 lo = layout.origin[e] + (full ? Int3(0, 0, 0) : Int3(c & 1, (c >> 1) & 1, (c >> 2) & 1) * layout.cellSize[e]);
+        const Int3 lo =
+            layout.origin[e] + (full ? Int3(0, 0, 0) : Int3(c & 1, (c >> 1) & 1, (c >> 2) & 1) * layout.cellSize[e]);
         for (int k = 0; k < corners; ++k) {
           const Int3 p = lo + Int3(k & 1, (k >> 1) & 1, D == 3 ? (k >> 2) & 1 : 0) * cs;
           const uint32_t id = layout.vertexAt(p);
@@ -112,8 +114,10 @@ void markSurfaceVertices(const Layout& layout, const VoxelVolume& volume, RestMo
               for (int w = 0; w < (D == 3 ? 2 : 1); ++w) {
                 Int3 p(i, j, k);
                 p[a] += s > 0 ? 1 : 0;
-                if (D == 3) p[b0] += u, p[b1] += w;
-                else p[a == 0 ? 1 : 0] += u;
+                if (D == 3)
+                  p[b0] += u, p[b1] += w;
+                else
+                  p[a == 0 ? 1 : 0] += u;
                 const uint32_t id = layout.vertexAt(p);
                 if (id != Layout::kNoVertex) m.onSurface[id] = 1;
               }

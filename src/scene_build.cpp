@@ -18,7 +18,8 @@ BuiltScene buildScene(const Scene& scene, const SizeLimits& limits) {
   }
   checkLayoutSize(b.volume, scene.body.layout, limits, scene.body.sizeKey);
   b.layout = buildLayout(b.volume, scene.body.layout);
-  auto model = std::make_shared<RestModel>(buildRestModel(b.layout, b.volume, scene.body.material, scene.body.position));
+  auto model =
+      std::make_shared<RestModel>(buildRestModel(b.layout, b.volume, scene.body.material, scene.body.position));
   b.model = model;
   const Vec3& origin = model->origin;
   if (!latticeMesh.triangles.empty() && scene.dim == 3) {

@@ -35,13 +35,15 @@ void validate(const SimulationSettings& s) {
   if (s.rotationIterations < 1) fail("rotation_iterations", "must be >= 1", s.rotationIterations);
   if (s.implicitIterations < 1) fail("implicit_iterations", "must be >= 1", s.implicitIterations);
   if (s.largeStepPasses < 1) fail("large_step_passes", "must be >= 1", s.largeStepPasses);
-  if (s.largeStepSubsteps < 1 || s.largeStepSubsteps > 64) fail("large_step_substeps", "must be in [1, 64]", s.largeStepSubsteps);
+  if (s.largeStepSubsteps < 1 || s.largeStepSubsteps > 64)
+    fail("large_step_substeps", "must be in [1, 64]", s.largeStepSubsteps);
   // Forward Euler multiplies a vibration's energy by (1 + (omega dt)^2) / (1 + damping dt) every
   // step: without damping no dt is stable, so "auto" has nothing to pick (World, docs/scenes.md).
   if (s.integrator == IntegratorKind::ForwardEuler && s.dt == 0 && !(s.damping > 0))
-    throw InputError("integrator: forward_euler is unstable at every dt without damping (each step multiplies a "
-                     "vibration's energy by 1 + (omega dt)^2); give damping > 0 (dt auto is then damping / (2 omega^2)), "
-                     "an explicit dt, or use symplectic");
+    throw InputError(
+        "integrator: forward_euler is unstable at every dt without damping (each step multiplies a "
+        "vibration's energy by 1 + (omega dt)^2); give damping > 0 (dt auto is then damping / (2 omega^2)), "
+        "an explicit dt, or use symplectic");
 }
 
 void validate(const ManipulatorSettings& s) {

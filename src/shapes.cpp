@@ -6,10 +6,8 @@ namespace gradel {
 
 bool Primitive::contains(const Vec3& p) const {
   switch (kind) {
-    case PrimitiveKind::Box:
-      return (p.array() >= min.array()).all() && (p.array() <= max.array()).all();
-    case PrimitiveKind::Sphere:
-      return (p - center).squaredNorm() <= radius * radius;
+    case PrimitiveKind::Box: return (p.array() >= min.array()).all() && (p.array() <= max.array()).all();
+    case PrimitiveKind::Sphere: return (p - center).squaredNorm() <= radius * radius;
     case PrimitiveKind::Cylinder: {
       Vec3 d = p - center;
       if (std::abs(d[axis]) > halfLength) return false;
@@ -24,8 +22,7 @@ VoxelVolume rasterize(const ShapeSpec& spec) {
   if (spec.primitives.empty()) throw InputError("shape: at least one primitive is needed");
   VoxelVolume vol(spec.dim, spec.dims[0], spec.dims[1], spec.dims[2], spec.voxelSize);
   for (const Primitive& p : spec.primitives) {
-    if (p.kind != PrimitiveKind::Box && !(p.radius > 0))
-      throw InputError("shape: radius must be positive");
+    if (p.kind != PrimitiveKind::Box && !(p.radius > 0)) throw InputError("shape: radius must be positive");
     if (p.kind == PrimitiveKind::Cylinder && !(p.halfLength > 0))
       throw InputError("shape: cylinder half_length must be positive");
     if (p.kind == PrimitiveKind::Cylinder && spec.dim == 2)
@@ -51,7 +48,8 @@ VoxelVolume rasterize(const ShapeSpec& spec) {
 
 ShapeSpec presetShape(const std::string& name, int size, int dim, Real voxelSize) {
   if (dim != 2 && dim != 3) throw InputError("dim: must be 2 or 3 (got " + std::to_string(dim) + ")");
-  if (size < 1 || size > 4096) throw InputError("size: must be between 1 and 4096 voxels (got " + std::to_string(size) + ")");
+  if (size < 1 || size > 4096)
+    throw InputError("size: must be between 1 and 4096 voxels (got " + std::to_string(size) + ")");
   ShapeSpec s;
   s.dim = dim;
   s.dims = {size, size, dim == 3 ? size : 1};

@@ -14,10 +14,10 @@
 #include "element_stage.h"
 #include "gradel/element.h"
 #include "gradel/integration.h"
-#include "huge_pages.h"
 #include "gradel/rotation_fit.h"
 #include "gradel/run_budget.h"
 #include "gradel/settings_check.h"
+#include "huge_pages.h"
 #include "simd.h"
 #include "thread_team.h"
 
@@ -25,11 +25,11 @@ namespace gradel {
 
 /// Per-step scratch (never read across steps except for output).
 struct World::StepScratch {
-  std::vector<ElementFrame> frames;     ///< Per element: k M and (k e, k), written by the element stage.
-  std::vector<Vec3> previousPositions;  ///< [m] positions at the start of an implicit step (swept contacts).
+  std::vector<ElementFrame> frames;      ///< Per element: k M and (k e, k), written by the element stage.
+  std::vector<Vec3> previousPositions;   ///< [m] positions at the start of an implicit step (swept contacts).
   std::vector<Vec3> previousVelocities;  ///< [m/s] velocities then (the bounce's crossing speed, contacts.h).
-  std::vector<Real> contactDepth;   ///< [m] per vertex, implicit step only: depth before correction.
-  Real maxContactDepth = 0;         ///< [m] deepest vertex found (and corrected) in the last step.
+  std::vector<Real> contactDepth;        ///< [m] per vertex, implicit step only: depth before correction.
+  Real maxContactDepth = 0;              ///< [m] deepest vertex found (and corrected) in the last step.
 };
 
 IntegratorKind parseIntegratorKind(const std::string& name) {
@@ -38,7 +38,8 @@ IntegratorKind parseIntegratorKind(const std::string& name) {
   if (name == "implicit") return IntegratorKind::Implicit;
   if (name == "large_step") return IntegratorKind::LargeStep;
   if (name == "auto") return IntegratorKind::Auto;
-  throw InputError("unknown integrator '" + name + "' (expected symplectic, forward_euler, implicit, large_step or auto)");
+  throw InputError("unknown integrator '" + name +
+                   "' (expected symplectic, forward_euler, implicit, large_step or auto)");
 }
 
 const char* integratorKindName(IntegratorKind k) {
@@ -59,9 +60,7 @@ const char* periodRuleName(PeriodRule r) { return r == PeriodRule::Element ? "el
 World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& sim, const DomainSettings& domain,
              std::vector<ManipulatorSettings> manipulators)
     : model_(model ? std::move(model) : throw std::invalid_argument("World: no model")),
-      stageRest_(std::make_unique<const ElementStageRest>(*model_)),
-      sim_(sim),
-      domain_(domain),
+      stageRest_(std::make_unique<const ElementStageRest>(*model_)), sim_(sim), domain_(domain),
       scratch_(std::make_unique<StepScratch>()) {
   validate(sim_);
   validate(domain_, model_->dim);
@@ -91,7 +90,8 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   const RestModel& m = *model_;
   adviseHugePages(state_.positions), adviseHugePages(state_.velocities), adviseHugePages(m.restPositions);
   adviseHugePages(state_.rotations), adviseHugePages(scratch_->frames), adviseHugePages(m.invMass);
-  adviseHugePages(m.elemVerts), adviseHugePages(m.restOffsets), adviseHugePages(m.elemStart), adviseHugePages(m.stiffness);
+  adviseHugePages(m.elemVerts), adviseHugePages(m.restOffsets), adviseHugePages(m.elemStart),
+      adviseHugePages(m.stiffness);
   adviseHugePages(stageRest_->vertexElements), adviseHugePages(stageRest_->vertexStart);
   adviseHugePages(stageRest_->elements), adviseHugePages(stageRest_->pairs);
 
@@ -151,8 +151,8 @@ void World::stageElementFrames(size_t begin, size_t end) {
 // bound cannot touch anything: resolveVertexContacts would leave it unchanged, so it is skipped
 // (the results are bit for bit those of resolving every vertex).
 struct World::ContactBounds {
-  std::vector<simd::d4> lo, hi;           ///< Per manipulator: swept bounds grown by its radius.
-  simd::d4 wallLo, wallHi;                ///< Inside the walls (infinite without walls).
+  std::vector<simd::d4> lo, hi;  ///< Per manipulator: swept bounds grown by its radius.
+  simd::d4 wallLo, wallHi;       ///< Inside the walls (infinite without walls).
 };
 
 World::ContactBounds World::contactBounds() const {
@@ -206,8 +206,10 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
         const d4 a = force * invMass[i] + g;
         const d4 x0 = loadVec3(positions[i]), v0 = loadVec3(velocities[i]);
         d4 x = x0, v = v0;
-        if constexpr (forward()) forwardEulerStep(x, v, a, dt, damp);  // integration.h
-        else symplecticEulerStep(x, v, a, dt, damp);
+        if constexpr (forward())
+          forwardEulerStep(x, v, a, dt, damp);  // integration.h
+        else
+          symplecticEulerStep(x, v, a, dt, damp);
         storeVec3(positions[i], x), storeVec3(velocities[i], v);
         if constexpr (contacts()) {
           start[i - b] = x0, startVelocity[i - b] = v0;
@@ -263,9 +265,8 @@ Real World::resolveVertexContacts(const Vec3& previous, const Vec3& previousVelo
 // Contacts of every vertex from scratch_->previousPositions (the implicit step).
 void World::stageContacts(size_t begin, size_t end) {
   for (size_t i = begin; i < end; ++i)
-    scratch_->contactDepth[i] =
-        resolveVertexContacts(scratch_->previousPositions[i], scratch_->previousVelocities[i], state_.positions[i],
-                              state_.velocities[i]);
+    scratch_->contactDepth[i] = resolveVertexContacts(scratch_->previousPositions[i], scratch_->previousVelocities[i],
+                                                      state_.positions[i], state_.velocities[i]);
 }
 
 void World::moveManipulators(Real tNext) {
@@ -298,7 +299,8 @@ inline size_t splitPoint(const std::vector<uint32_t>& prefix, uint64_t itemCost,
 // Each member's first share of the chunks of `chunk` items, as chunk indices (members + 1).
 std::vector<size_t> chunkSplit(const std::vector<uint32_t>& prefix, uint64_t itemCost, int members, size_t chunk) {
   std::vector<size_t> split(size_t(members) + 1);
-  for (int t = 0; t <= members; ++t) split[size_t(t)] = (splitPoint(prefix, itemCost, t, members, chunk) + chunk - 1) / chunk;
+  for (int t = 0; t <= members; ++t)
+    split[size_t(t)] = (splitPoint(prefix, itemCost, t, members, chunk) + chunk - 1) / chunk;
   return split;
 }
 // Measured costs in pairs (instruction counts, callgrind): an element's moments set-up, rotation
@@ -420,8 +422,8 @@ void World::applyPins(Real t) {
 // The end of an implicit or large step: deepest contact, manipulators' sweep start, time, pins.
 void World::finishFrameStep(Real tNext) {
   scratch_->maxContactDepth = scratch_->contactDepth.empty()
-                                 ? 0
-                                 : *std::max_element(scratch_->contactDepth.begin(), scratch_->contactDepth.end());
+                                  ? 0
+                                  : *std::max_element(scratch_->contactDepth.begin(), scratch_->contactDepth.end());
   for (Manipulator& m : manipulators_) m.previousPosition = m.position;
   state_.time = tNext;
   if (!pinSet_.empty()) applyPins(state_.time);
@@ -456,8 +458,8 @@ void World::stepImplicit(bool sweep) {
       if (scratch_->contactDepth[i] > 0) held.push_back(i), heldAt.push_back(state_.positions[i]);
     if (!held.empty()) {
       state_.positions = x0, state_.velocities = v0, state_.rotations = q0;
-      projective_->step(state_.positions, state_.velocities, state_.rotations, g, sim_.damping,
-                        sim_.implicitIterations, targets, sim_.rotationIterations, held, heldAt);
+      projective_->step(state_.positions, state_.velocities, state_.rotations, g, sim_.damping, sim_.implicitIterations,
+                        targets, sim_.rotationIterations, held, heldAt);
       if (sweep) sweepManipulatorPaths(tNext - dt_);
       stageContacts(0, model_->numVertices());
     }
@@ -540,8 +542,9 @@ void World::sweepManipulatorPaths(Real t0) {
   for (const Manipulator& mp : manipulators_) {
     const Path& path = mp.settings.path;
     if (path.keys.empty()) continue;
-    const Real size = mp.settings.shape == ManipulatorShape::Cylinder ? std::min(mp.settings.radius, mp.settings.halfLength)
-                                                                     : mp.settings.radius;
+    const Real size = mp.settings.shape == ManipulatorShape::Cylinder
+                          ? std::min(mp.settings.radius, mp.settings.halfLength)
+                          : mp.settings.radius;
     constexpr int kProbe = 16, kMaxSub = 256;
     Real length = 0;
     for (int k = 1; k <= kProbe; ++k)
@@ -562,7 +565,8 @@ void World::sweepManipulatorPaths(Real t0) {
       Vec3 x = xs, v = scratch_->previousVelocities[i];
       Real depth = 0;
       for (int k = 1; k <= K; ++k) {
-        sub.previousPosition = centre[size_t(k) - 1], sub.position = centre[size_t(k)], sub.velocity = velocity[size_t(k)];
+        sub.previousPosition = centre[size_t(k) - 1], sub.position = centre[size_t(k)],
+        sub.velocity = velocity[size_t(k)];
         Vec3 xk = depth > 0 ? Vec3(x + h * v) : Vec3(xs + (xe - xs) * (Real(k) / K));
         Vec3 vk = depth > 0 ? v : state_.velocities[i];
         const StepStart start{v, h};
@@ -606,7 +610,8 @@ std::vector<Real> World::vertexStress(const std::vector<Real>& elementStress) co
   std::vector<Real> sum(m.numVertices(), 0.0);
   std::vector<uint32_t> count(m.numVertices(), 0);
   for (size_t e = 0; e < m.numElements(); ++e)
-    for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) sum[m.elemVerts[p]] += elementStress[e], ++count[m.elemVerts[p]];
+    for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p)
+      sum[m.elemVerts[p]] += elementStress[e], ++count[m.elemVerts[p]];
   for (size_t i = 0; i < sum.size(); ++i) sum[i] = count[i] ? sum[i] / count[i] : 0;
   return sum;
 }
@@ -633,8 +638,8 @@ Metrics World::metrics(std::vector<Real>* elementStress) const {
     const Real stress = std::sqrt(er.sumSqDisp / n) / m.size[e];
     if (elementStress) (*elementStress)[e] = stress;
     r.maxStress = std::max(r.maxStress, stress);
-    r.minElementDet = std::min(r.minElementDet,
-                               elementDeterminant(m.dim, state_.positions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n)));
+    r.minElementDet = std::min(r.minElementDet, elementDeterminant(m.dim, state_.positions.data(), &m.elemVerts[b],
+                                                                   &m.restOffsets[b], int(n)));
   }
 
   // Symplectic Euler's stored velocity belongs half a step before its positions (it is the

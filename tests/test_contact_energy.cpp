@@ -74,9 +74,9 @@ TEST(ContactEnergy, RestingContactDoesNotBounce) {
   m.settings.radius = 1.0;
   m.settings.restitution = 1.0;
   const Real dt = 1e-3;
-  const Vec3 xPrev(0, 1.0, 0);                     // on the surface
-  const StepStart start{Vec3(0.2, 0, 0), dt};        // sliding, no normal speed
-  Vec3 v(0.2, -0.03, 0);                             // a = -30 m/s^2 gained this step
+  const Vec3 xPrev(0, 1.0, 0);                 // on the surface
+  const StepStart start{Vec3(0.2, 0, 0), dt};  // sliding, no normal speed
+  Vec3 v(0.2, -0.03, 0);                       // a = -30 m/s^2 gained this step
   Vec3 x = xPrev + dt * v;
   resolveManipulator(m, xPrev, x, v, 3, true, &start);
   EXPECT_GE(m.signedDistance(x, nullptr), 0.0);
@@ -169,7 +169,8 @@ void energyNeverRises() {
   const Real h = 0.01 * size;  // body edge [m]; the body spans [0, h]^3
   SimulationSettings sim;
   sim.damping = *rc::gen::inRange(1, 51) * 0.1;  // (0, 5] 1/s
-  sim.gravity = *rc::gen::element(0, 1) && !std::getenv("GRADEL_PROPERTY_NO_GRAVITY") ? Vec3(0, -9.81, 0) : Vec3::Zero();
+  sim.gravity =
+      *rc::gen::element(0, 1) && !std::getenv("GRADEL_PROPERTY_NO_GRAVITY") ? Vec3(0, -9.81, 0) : Vec3::Zero();
   auto unit = [] { return *rc::gen::inRange(0, 101) * 0.01; };  // [0, 1]
   std::vector<ManipulatorSettings> obstacles;
   const int count = *rc::gen::inRange(1, 3);

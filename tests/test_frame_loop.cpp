@@ -41,7 +41,7 @@ TEST(FrameLoop, Schedule) {
 
 // The loop takes the same steps as advancing to the end at once, writes a frame at each frame
 // time (on a step), skips a last frame time no step reaches, and stops when a check throws.
-TEST(FrameLoop, SameStepsAsAdvanceTo_framesOnDistinctSteps) {
+TEST(FrameLoop, SameStepsAsAdvanceToFramesOnDistinctSteps) {
   const Real dt = 1.0 / 1024;
   World a = smallWorld(dt), b = smallWorld(dt);
   // 100 steps every 5 steps is 20 frames after frame 0; the end 100.3 steps is 0.3 steps past
@@ -52,10 +52,13 @@ TEST(FrameLoop, SameStepsAsAdvanceTo_framesOnDistinctSteps) {
   int chunks = 0;
   FrameLoopChecks checks;
   checks.afterChunk = [&] { ++chunks; };
-  const size_t written = runFrames(a, s, [&](size_t index) {
-    EXPECT_EQ(index, times.size());
-    times.push_back(a.time());
-  }, checks);
+  const size_t written = runFrames(
+      a, s,
+      [&](size_t index) {
+        EXPECT_EQ(index, times.size());
+        times.push_back(a.time());
+      },
+      checks);
   EXPECT_EQ(written, 21u);
   ASSERT_EQ(times.size(), 21u);
   for (size_t f = 0; f < times.size(); ++f) EXPECT_NEAR(times[f], Real(5 * f) * dt, 1e-12);
@@ -67,6 +70,8 @@ TEST(FrameLoop, SameStepsAsAdvanceTo_framesOnDistinctSteps) {
   // A check that throws stops the run within the frame (chunks of at most 32 steps).
   World c = smallWorld(dt);
   checks.afterChunk = [&] { throw std::runtime_error("stop"); };
-  EXPECT_THROW(runFrames(c, frameSchedule(0, 1.0, 0.5, dt), [](size_t) {}, checks), std::runtime_error);
+  EXPECT_THROW(runFrames(
+                   c, frameSchedule(0, 1.0, 0.5, dt), [](size_t) {}, checks),
+               std::runtime_error);
   EXPECT_NEAR(c.time(), 32 * dt, 1e-12);
 }

@@ -21,7 +21,7 @@ SimulationSettings largeStep(Real dt = 1.0 / 60.0) {
   return s;
 }
 
-TEST(LargeStep, parseRoundTripsAndDtAutoIsOneFrame) {
+TEST(LargeStep, ParseRoundTripsAndDtAutoIsOneFrame) {
   EXPECT_EQ(parseIntegratorKind("large_step"), IntegratorKind::LargeStep);
   EXPECT_STREQ(integratorKindName(IntegratorKind::LargeStep), "large_step");
   test::Body b = test::makeBody("sphere", 6, 3, LayoutKind::Gradational);
@@ -29,7 +29,7 @@ TEST(LargeStep, parseRoundTripsAndDtAutoIsOneFrame) {
   EXPECT_DOUBLE_EQ(w.dt(), 1.0 / 60.0);
 }
 
-TEST(LargeStep, freeFall_isExactAndUndeformed) {
+TEST(LargeStep, FreeFallIsExactAndUndeformed) {
   test::Body b = test::makeBody("sphere", 6, 3, LayoutKind::Gradational);
   World w(b.model, largeStep(), {}, {});
   const int n = 30;
@@ -52,7 +52,7 @@ void spin(World& w, const Vec3& omega) {
   for (size_t i = 0; i < m.numVertices(); ++i) w.state().velocities[i] = omega.cross(m.restPositions[i] - c);
 }
 
-TEST(LargeStep, freeSpin_keepsAngularMomentumAndEnergyFor10s) {
+TEST(LargeStep, FreeSpinKeepsAngularMomentumAndEnergyFor10s) {
   test::Body b = test::makeBody("sphere", 8, 3, LayoutKind::Gradational);
   for (IntegratorKind kind : {IntegratorKind::LargeStep, IntegratorKind::Implicit}) {
     SimulationSettings s = largeStep();
@@ -70,7 +70,8 @@ TEST(LargeStep, freeSpin_keepsAngularMomentumAndEnergyFor10s) {
       if (kind == IntegratorKind::Implicit && i == 50) break;  // 0.83 s
     }
     const Real L0 = m0.angularMomentum.norm(), K0 = m0.kineticEnergy;
-    std::printf("%s: L %.4f..%.4f  K %.4f..%.4f\n", integratorKindName(kind), minL / L0, maxL / L0, minK / K0, maxK / K0);
+    std::printf("%s: L %.4f..%.4f  K %.4f..%.4f\n", integratorKindName(kind), minL / L0, maxL / L0, minK / K0,
+                maxK / K0);
     if (kind == IntegratorKind::LargeStep) {
       EXPECT_GT(minL, 0.99 * L0);
       EXPECT_LT(maxL, 1.01 * L0);
@@ -123,7 +124,7 @@ TipSignal vibrateBar(const SimulationSettings& s, Real duration) {
   return r;
 }
 
-TEST(LargeStep, bendingMode_keepsItsAmplitudeAndFrequencyAtOneFrame) {
+TEST(LargeStep, BendingModeKeepsItsAmplitudeAndFrequencyAtOneFrame) {
   SimulationSettings ex;
   ex.damping = 0;
   const TipSignal ref = vibrateBar(ex, 0.5);
@@ -143,7 +144,7 @@ TEST(LargeStep, bendingMode_keepsItsAmplitudeAndFrequencyAtOneFrame) {
   EXPECT_NEAR(off.frequency, ref.frequency, 0.10 * ref.frequency);
 }
 
-TEST(LargeStep, clampedBar_settlesOnTheExplicitStaticSag) {
+TEST(LargeStep, ClampedBarSettlesOnTheExplicitStaticSag) {
   BarSpec bar = testBar();
   bar.along = 8;
   bar.material.youngsModulus = 1e6;
@@ -162,7 +163,7 @@ TEST(LargeStep, clampedBar_settlesOnTheExplicitStaticSag) {
   EXPECT_NEAR(sag, ref.sag, 0.005 * ref.sag);
 }
 
-TEST(LargeStep, undampedBar_neverGainsEnergyIn1e4Steps) {
+TEST(LargeStep, UndampedBarNeverGainsEnergyIn1e4Steps) {
   BarSpec bar = testBar();
   bar.along = 8;
   BuiltScene b = buildScene(barScene(bar, largeStep()));
@@ -190,17 +191,17 @@ std::unique_ptr<BuiltScene> runStiff(const std::string& file, Real duration) {
   return test::runStiffScene(file, duration, IntegratorKind::LargeStep, 100, 1.0 / 60.0);
 }
 using test::centroid;
-TEST(LargeStep, strikeScene_E100_dt60_isStableAndSendsTheBallAway) {
+TEST(LargeStep, StrikeSceneE100Dt60IsStableAndSendsTheBallAway) {
   auto b = runStiff("strike.json", 0.5);
   EXPECT_GT(centroid(*b->world).x(), 0.15);  // starts at 0.06
 }
-TEST(LargeStep, graspTwoScene_E100_dt60_isStableAndLifts) {
+TEST(LargeStep, GraspTwoSceneE100Dt60IsStableAndLifts) {
   auto b = runStiff("grasp-two.json", 1.5);
   EXPECT_GT(centroid(*b->world).y(), 0.065);  // rests at 0.06
 }
-TEST(LargeStep, graspWallScene_E100_dt60_isStable) { runStiff("grasp-wall.json", 1.5); }
+TEST(LargeStep, GraspWallSceneE100Dt60IsStable) { runStiff("grasp-wall.json", 1.5); }
 
-TEST(LargeStep, sameStateAtOneAndTwoThreads) {
+TEST(LargeStep, SameStateAtOneAndTwoThreads) {
   Scene scene = loadScene(std::string(GRADEL_SOURCE_DIR) + "/scenes/strike.json");
   scene.simulation.integrator = IntegratorKind::LargeStep;
   scene.simulation.dt = 1.0 / 60.0;
@@ -217,7 +218,7 @@ TEST(LargeStep, sameStateAtOneAndTwoThreads) {
 // A manipulator that crosses the ball within one step (the strike scene at 100 and 1000 m/s,
 // dt = 1/60 s) still hits it: the ball leaves faster after the faster strike, and no vertex is
 // left inside anything (before the sweep both ended in the same state).
-TEST(LargeStep, strikeWithinOneStep_hitsTheBallAtItsSpeed) {
+TEST(LargeStep, StrikeWithinOneStepHitsTheBallAtItsSpeed) {
   Real momentum[2];
   uint64_t hash[2];
   for (int k = 0; k < 2; ++k) {
@@ -241,7 +242,7 @@ TEST(LargeStep, strikeWithinOneStep_hitsTheBallAtItsSpeed) {
   EXPECT_GT(momentum[1], 2 * momentum[0]);
 }
 
-TEST(LargeStep, autoIntegrator_explicitWhileRealTimeElseLargeStep) {
+TEST(LargeStep, AutoIntegratorExplicitWhileRealTimeElseLargeStep) {
   SimulationSettings s;
   s.integrator = IntegratorKind::Auto;
   test::Body small = test::makeBody("sphere", 6, 3, LayoutKind::Gradational);

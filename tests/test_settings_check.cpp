@@ -51,6 +51,7 @@ TEST(SettingsCheck, CoreErrorsNameTheFieldInTheCoresWords) {
     const std::string e = errorOf(f);
     EXPECT_EQ(e.rfind(field + ":", 0), 0u) << "expected \"" << field << ": ...\", got \"" << e << "\"";
     EXPECT_EQ(e.find("--"), std::string::npos) << e;
-    for (const char* path : {"simulation.", "material.", "body.", "domain."}) EXPECT_EQ(e.find(path), std::string::npos) << e;
+    for (const char* path : {"simulation.", "material.", "body.", "domain."})
+      EXPECT_EQ(e.find(path), std::string::npos) << e;
   }
 }

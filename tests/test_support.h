@@ -21,8 +21,8 @@ struct Body {
   std::shared_ptr<const RestModel> model;
 };
 
-inline Body makeBody(const std::string& shape, int size, int dim, LayoutKind kind,
-                     MaterialSettings material = {}, Real voxelSize = 0.01, Vec3 origin = Vec3::Zero()) {
+inline Body makeBody(const std::string& shape, int size, int dim, LayoutKind kind, MaterialSettings material = {},
+                     Real voxelSize = 0.01, Vec3 origin = Vec3::Zero()) {
   Body b;
   b.volume = rasterize(presetShape(shape, size, dim, voxelSize));
   b.layout = buildLayout(b.volume, kind);
@@ -93,8 +93,8 @@ inline Vec3 centroid(const World& w) {
 /// vertex inside anything, no energy from nowhere (a 0.9 kg ball moved at manipulator speeds,
 /// ~1 m/s, holds well under 2 J), and no inverted element at the end. Returns the world for
 /// scene-specific outcome checks.
-inline std::unique_ptr<BuiltScene> runStiffScene(const std::string& file, Real duration, IntegratorKind kind, Real eScale,
-                                                 Real dt) {
+inline std::unique_ptr<BuiltScene> runStiffScene(const std::string& file, Real duration, IntegratorKind kind,
+                                                 Real eScale, Real dt) {
   Scene scene = loadScene(std::string(GRADEL_SOURCE_DIR) + "/scenes/" + file);
   scene.body.material.youngsModulus *= eScale;
   scene.simulation.integrator = kind;

@@ -49,9 +49,9 @@
 namespace gradel {
 
 struct LargeStepReport {
-  int passes = 0;            ///< Conjugate-gradient iterations run.
+  int passes = 0;             ///< Conjugate-gradient iterations run.
   bool momentumKept = false;  ///< The angular-momentum guard ran.
-  Real energyRemoved = 0;    ///< [J] taken out by the energy guard.
+  Real energyRemoved = 0;     ///< [J] taken out by the energy guard.
 };
 
 class LargeStepSolver {
@@ -80,10 +80,10 @@ class LargeStepSolver {
   const RestModel* model_;
   Real dt_;
   std::vector<uint32_t> pinned_;
-  ProjectiveSolver half_;            ///< Backward Euler at h = dt / 2.
-  std::vector<Vec3> acceleration_;   ///< [m/s^2] last step's, the warm start.
+  ProjectiveSolver half_;           ///< Backward Euler at h = dt / 2.
+  std::vector<Vec3> acceleration_;  ///< [m/s^2] last step's, the warm start.
   bool budgetValid_ = false;
-  Real budget_ = 0;                  ///< [J]
+  Real budget_ = 0;  ///< [J]
 };
 
 }  // namespace gradel

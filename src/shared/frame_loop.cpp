@@ -21,7 +21,8 @@ FrameSchedule frameSchedule(Real start, Real duration, Real interval, Real dt, s
   s.interval = interval;
   if (interval < dt) s.interval = dt, s.intervalRaisedToDt = true;
   if (frames) {
-    if (*frames < 1 || *frames > kMaxFrames) throw InputError("frames: must be in [1, 1000000] (got " + std::to_string(*frames) + ")");
+    if (*frames < 1 || *frames > kMaxFrames)
+      throw InputError("frames: must be in [1, 1000000] (got " + std::to_string(*frames) + ")");
     s.frames = size_t(*frames);
     s.end = std::numeric_limits<Real>::infinity();
     return s;

@@ -12,8 +12,9 @@ RunEstimate estimateRun(double duration, double dt, size_t vertices, IntegratorK
   RunEstimate e;
   e.steps = std::ceil(duration / dt - 1e-9);
   e.vertexSteps = e.steps * double(vertices);
-  e.wallSeconds = e.vertexSteps * (integrator == IntegratorKind::Implicit || integrator == IntegratorKind::LargeStep ? kImplicitSecondsPerVertexStep
-                                                                           : kExplicitSecondsPerVertexStep);
+  e.wallSeconds = e.vertexSteps * (integrator == IntegratorKind::Implicit || integrator == IntegratorKind::LargeStep
+                                       ? kImplicitSecondsPerVertexStep
+                                       : kExplicitSecondsPerVertexStep);
   return e;
 }
 
@@ -33,7 +34,8 @@ std::string formatSeconds(double s) {
 }
 
 void checkRunBudget(const RunEstimate& e, double dt, double duration, std::optional<double> maxSteps) {
-  const bool over = maxSteps ? e.steps > *maxSteps : e.steps > kDefaultMaxSteps || e.vertexSteps > kDefaultMaxVertexSteps;
+  const bool over =
+      maxSteps ? e.steps > *maxSteps : e.steps > kDefaultMaxSteps || e.vertexSteps > kDefaultMaxVertexSteps;
   if (!over) return;
   char buf[512];
   std::snprintf(buf, sizeof buf,

@@ -15,10 +15,10 @@ namespace gradel {
 /// frame f at start + f interval, the last one exactly at start + duration when the duration is
 /// not a whole number of intervals. At most one frame per step: an interval below dt becomes dt.
 struct FrameSchedule {
-  Real start = 0;       ///< [s] time of frame 0.
-  Real end = 0;         ///< [s] no frame after this time (start + duration).
-  Real interval = 0;    ///< [s] between frames (>= dt).
-  size_t frames = 1;    ///< Frames including frame 0.
+  Real start = 0;                   ///< [s] time of frame 0.
+  Real end = 0;                     ///< [s] no frame after this time (start + duration).
+  Real interval = 0;                ///< [s] between frames (>= dt).
+  size_t frames = 1;                ///< Frames including frame 0.
   bool intervalRaisedToDt = false;  ///< The interval asked for was below dt (callers may say so).
   /// Time of frame f [s].
   Real time(size_t f) const { return std::min(start + Real(f) * interval, end); }
