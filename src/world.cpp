@@ -15,7 +15,6 @@
 #include "gradel/element.h"
 #include "gradel/integration.h"
 #include "gradel/rotation_fit.h"
-#include "gradel/run_budget.h"
 #include "gradel/settings_check.h"
 #include "huge_pages.h"
 #include "simd.h"

@@ -7,7 +7,7 @@
 #include <cmath>
 
 #include "gradel/scene.h"
-#include "gradel/validation.h"
+#include "gradel/shared/validation.h"
 #include "test_support.h"
 
 namespace gradel {

@@ -39,6 +39,12 @@ const char* periodRuleName(PeriodRule r);
 /// are identical at any count and the step's thread team never waits by spinning for long.
 inline int hardwareThreads() { return int(std::clamp(std::thread::hardware_concurrency(), 1u, 1024u)); }
 
+/// Wall time of one vertex-step [s], rounded up: explicit (measured 11-30 ns, docs/speed.md) and
+/// implicit (~4 us on the 12^3 strike scene, projective.h) integrators. Used by `auto` to pick an
+/// integrator and by the run budget to estimate a run's time.
+inline constexpr double kExplicitSecondsPerVertexStep = 30e-9;
+inline constexpr double kImplicitSecondsPerVertexStep = 4e-6;
+
 struct SimulationSettings {
   IntegratorKind integrator = IntegratorKind::SymplecticEuler;
   Real dt = 0;                               ///< [s] time step; 0 = auto: dtFraction of the smallest element's period.

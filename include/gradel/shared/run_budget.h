@@ -15,10 +15,6 @@ namespace gradel {
 /// explicit integrators' ~30 ns per vertex-step).
 inline constexpr double kDefaultMaxSteps = 1e7;
 inline constexpr double kDefaultMaxVertexSteps = 1e11;
-/// Wall time of one vertex-step [s]: explicit (measured 11-30 ns, README "speed") and implicit
-/// (~4 us on the 12^3 strike scene, projective.h) integrators, rounded up.
-inline constexpr double kExplicitSecondsPerVertexStep = 30e-9;
-inline constexpr double kImplicitSecondsPerVertexStep = 4e-6;
 
 struct RunEstimate {
   double steps = 0;        ///< ceil(duration / dt)
