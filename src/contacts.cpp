@@ -253,7 +253,7 @@ ContactResult resolveManipulator(const Manipulator& m, const Vec3& xPrev, Vec3& 
     const Vec3 pe = p0 + tEntry * (p1 - p0);
     Vec3 ne;
     frameDistance(m, pe, &ne);
-    if (d1 < 0 && n1.dot(ne) > 0) {  // ordinary contact: nearest surface point
+    if (d1 < 0 && n1.dot(ne) > -1e-9) {  // ordinary contact: nearest surface point
       target = p1 - (d1 - skin) * n1;
       n = n1;
       res.depth = -d1;
@@ -261,11 +261,14 @@ ContactResult resolveManipulator(const Manipulator& m, const Vec3& xPrev, Vec3& 
     } else {
       if (d1 >= 0) {
         // Ends outside. It went right through the manipulator only if it left on the far side
-        // (entry and exit normals opposed); a short chord near the surface (a vertex sliding
-        // along a curved side) or a clipped corner is no contact.
+        // (entry and exit normals opposed, more than 120 degrees apart: the chord crossed the
+        // middle); a short chord near the surface (a vertex sliding along a curved side) or a
+        // clipped corner (a vertex leaving a cylinder's rim: cap and side normals about 90
+        // degrees apart) is no contact. Issue 15: the rim case, taken for a pass-through, put the
+        // vertex back every step while its velocity grew (0.04 J -> 4 J).
         Vec3 nx;
         frameDistance(m, p0 + tExit * (p1 - p0), &nx);
-        if (ne.dot(nx) >= 0) return res;
+        if (ne.dot(nx) > -0.5) return res;
       }
       // Passed through, or crossed the middle: back to where it entered.
       target = pe + skin * ne;

@@ -6,6 +6,7 @@
 #include <rapidcheck/gtest.h>
 
 #include <cstdlib>
+#include <iomanip>
 #include <sstream>
 
 #include "gradel/contacts.h"
@@ -162,6 +163,37 @@ long propertySteps() {
 // the pumping seen (x2 to x1000).
 const Real kTolerance = 1e-4;
 
+// The largest energy of a run over `steps` steps relative to the reference: the energy once the
+// vertices placed inside an obstacle or beyond a wall are out (the deepest within 1 % of a
+// voxel). Pushing them out legitimately stores elastic energy, and a vertex pinched between a
+// wall and an obstacle (placed inside both) takes a few steps.
+struct Rise {
+  long start = 0;
+  Real e0 = 0, peak = 0, last = 0, elastic = 0;
+  // Rounding: the energy is a sum over ~10^3 terms of size up to E, each with relative error
+  // ~1e-16, and the symplectic energy measure itself (v + a dt / 2) has an O((omega dt)^2)
+  // swing: kTolerance of the larger of E and the elastic energy scale is far above the first and
+  // below any pumping (x2 to x1000).
+  bool holds() const { return peak <= e0 + kTolerance * std::max(std::abs(e0), elastic) + 1e-12; }
+};
+
+Rise rise(World& w, long steps) {
+  Rise r;
+  do {
+    w.step();
+  } while (++r.start < 100 && w.metrics().maxPenetration > 1e-4);
+  r.e0 = r.peak = totalEnergy(w);
+  for (long s = r.start; s < steps; ++s) {
+    w.step();
+    if (s % 25 == 0) r.peak = std::max(r.peak, totalEnergy(w));
+  }
+  const Metrics m = w.metrics();
+  r.last = m.kineticEnergy + m.elasticEnergy + m.gravityEnergy;
+  r.elastic = m.elasticEnergy;
+  r.peak = std::max(r.peak, r.last);
+  return r;
+}
+
 void energyNeverRises() {
   const std::string shape = *rc::gen::element<std::string>("sphere", "box");
   const int size = *rc::gen::inRange(6, 11);
@@ -191,25 +223,20 @@ void energyNeverRises() {
     walls.restitution = unit();
     walls.friction = unit();
   }
+  for (const ManipulatorSettings& o : obstacles)
+    RC_LOG() << std::setprecision(17) << manipulatorShapeName(o.shape) << " at " << o.path.keys[0].position.transpose() << " r " << o.radius
+             << " half " << o.halfLength << " axis " << o.axis.transpose() << " e " << o.restitution << " mu "
+             << o.friction << "\n";
+  if (walls.enabled)
+    RC_LOG() << std::setprecision(17) << "walls min " << walls.min.transpose() << " max " << walls.max.transpose() << " e " << walls.restitution
+             << " mu " << walls.friction << "\n";
   World w(body.model, sim, walls, obstacles);
-  const long steps = propertySteps();
-  w.step();  // pushes the vertices out of the obstacles: the reference energy after it
-  const Real e0 = totalEnergy(w);
-  Real peak = e0;
-  for (long s = 1; s < steps; ++s) {
-    w.step();
-    if (s % 25 == 0) peak = std::max(peak, totalEnergy(w));
-  }
-  // Rounding: the energy is a sum over ~10^3 terms of size up to E, each with relative error
-  // ~1e-16, and the symplectic energy measure itself (v + a dt / 2) has an O((omega dt)^2)
-  // swing that the first steps' re-balancing can show: 1e-6 of the larger of E and the elastic
-  // energy scale is far above the first and below any pumping (which was x5 to x30).
-  const Metrics m = w.metrics();
-  RC_ASSERT(std::isfinite(peak));
+  const Rise r = rise(w, propertySteps());
+  RC_ASSERT(std::isfinite(r.peak));
   RC_LOG() << shape << " " << size << ", damping " << sim.damping << ", " << obstacles.size() << " obstacles, walls "
-           << walls.enabled << ": E after the first step " << e0 << " J, peak " << peak << " J, now "
-           << m.kineticEnergy + m.elasticEnergy + m.gravityEnergy << " J\n";
-  RC_ASSERT(peak <= e0 + kTolerance * std::max(std::abs(e0), m.elasticEnergy) + 1e-12);
+           << walls.enabled << ": E once out of the obstacles (step " << r.start << ") " << r.e0 << " J, peak " << r.peak
+           << " J, now " << r.last << " J\n";
+  RC_ASSERT(r.holds());
 }
 
 }  // namespace
@@ -232,4 +259,27 @@ TEST(ContactEnergy, DISABLED_NeverRisesWithMotionlessObstaclesAndWalls) {
     rc::detail::printResultMessage(result, ss);
     FAIL() << ss.str();
   }
+}
+
+// The property's counterexamples, as regular tests (3000 steps each).
+
+// A thin capped cylinder through the corner of a falling sphere (no walls, restitution and
+// friction 0): a vertex on the cylinder's rim, pulled across it, was taken for one that passed
+// through the middle (cap and side normals orthogonal, their dot product -1e-16) and put back
+// every step (energy +0.3 %, and a frictionless rim holding a vertex); leaving the rim along the
+// side it was taken for a pass-through (a corner clipped by 1e-8 m) and put back while its
+// velocity grew: 0.040 J -> 4.3 J once the first was fixed alone.
+TEST(ContactEnergy, CylinderRimNeitherHoldsNorPumpsAVertex) {
+  const Body body = makeBody("sphere", 6, 3, LayoutKind::Gradational);
+  SimulationSettings sim;
+  sim.damping = 0.1;
+  sim.gravity = Vec3(0, -9.81, 0);
+  ManipulatorSettings m = obstacle(ManipulatorShape::Cylinder, 0.006, Vec3(0, 0, 0), 0, 0);
+  m.halfLength = 0.0138;
+  m.axis = Vec3(-0.5, -0.47, -0.499);
+  World w(body.model, sim, {}, {m});
+  const Rise r = rise(w, 3000);
+  std::printf("cylinder rim: E %.4g J (step %ld), peak %.4g J, last %.4g J\n", r.e0, r.start, r.peak, r.last);
+  EXPECT_TRUE(r.holds());
+  EXPECT_LT(r.last, r.e0);
 }
