@@ -125,12 +125,14 @@ int runLayout(const LayoutOptions& o) {
     std::snprintf(buf, sizeof buf, "%-10zu (voxel layout %zu, ratio %.3f)", v, b, ratio(v, b));
     return std::string(buf);
   };
-  line("shape", o.shape + " " + std::to_string(o.size) + (o.dim == 3 ? "^3" : "^2") + " (" + std::to_string(o.dim) + "D)");
+  line("shape",
+       o.shape + " " + std::to_string(o.size) + (o.dim == 3 ? "^3" : "^2") + " (" + std::to_string(o.dim) + "D)");
   line("layout", gradel::layoutKindName(kind));
   line("voxels", std::to_string(s.voxels));
   line("elements", withRatio(s.elements, base.elements));
   for (size_t l = 0; l < s.elementsPerLevel.size(); ++l)
-    line("  level " + std::to_string(l) + " (edge " + std::to_string(kind == gradel::LayoutKind::Voxel ? 1u : 2u << l) + ")",
+    line("  level " + std::to_string(l) + " (edge " + std::to_string(kind == gradel::LayoutKind::Voxel ? 1u : 2u << l) +
+             ")",
          std::to_string(s.elementsPerLevel[l]));
   line("unique vertices", withRatio(s.uniqueVertices, base.uniqueVertices));
   line("element-vertex pairs", withRatio(s.pairs, base.pairs));
@@ -201,12 +203,15 @@ std::string likelyCause(const gradel::Scene& scene, double dt) {
     return "the likely cause is the forward_euler integrator, which gains energy at any dt (use \"symplectic\" or "
            "\"implicit\", or a much smaller dt)";
   if (s.dt > 0) {
-    std::snprintf(buf, sizeof buf, "the likely cause is simulation.dt = %.3g s, too large for this body: try a smaller dt or \"auto\"", dt);
-  } else {
     std::snprintf(buf, sizeof buf,
-                  "the likely cause is simulation.dt_fraction = %.3g (dt = %.3g s), too large: try a smaller dt_fraction "
-                  "(stable up to 0.3; the default is 0.1)",
-                  s.dtFraction, dt);
+                  "the likely cause is simulation.dt = %.3g s, too large for this body: try a smaller dt or \"auto\"",
+                  dt);
+  } else {
+    std::snprintf(
+        buf, sizeof buf,
+        "the likely cause is simulation.dt_fraction = %.3g (dt = %.3g s), too large: try a smaller dt_fraction "
+        "(stable up to 0.3; the default is 0.1)",
+        s.dtFraction, dt);
   }
   return buf;
 }
@@ -253,8 +258,10 @@ int runScene(const RunOptions& o) {
   }
   // Frames land on distinct steps: at most one per step.
   if (interval < dt) {
-    std::fprintf(stderr, "gradel: %s: simulation.frame_interval %.3g s is shorter than dt = %.3g s; writing one frame per step\n",
-                 o.scene.c_str(), interval, dt);
+    std::fprintf(
+        stderr,
+        "gradel: %s: simulation.frame_interval %.3g s is shorter than dt = %.3g s; writing one frame per step\n",
+        o.scene.c_str(), interval, dt);
     interval = dt;
   }
   // Frames after t = 0; the last one lands exactly on `duration`.
@@ -303,7 +310,6 @@ int runScene(const RunOptions& o) {
     pvd.push_back({world.time(), name});
   };
 
-
   // Advance in chunks of a few steps so that divergence, Ctrl-C and the progress bar are
   // noticed within a frame; the sequence of steps is the same as one advanceTo per frame.
   constexpr Real kChunkSteps = 32;
@@ -318,11 +324,15 @@ int runScene(const RunOptions& o) {
       if (world.time() == before) world.step();  // never spin without progress
       if (!finiteState(world.state())) {
         char msg[160];
-        std::snprintf(msg, sizeof msg, "simulation diverged at t=%.6g s (dt = %.3g s): non-finite numbers; ", world.time(), dt);
+        std::snprintf(msg, sizeof msg, "simulation diverged at t=%.6g s (dt = %.3g s): non-finite numbers; ",
+                      world.time(), dt);
         throw Diverged(msg + cause);
       }
       if (const int sig = gSignal)
-        throw Interrupted(sig, std::string("interrupted by ") + (sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "SIGHUP") +
+        throw Interrupted(sig, std::string("interrupted by ") +
+                                   (sig == SIGINT    ? "SIGINT"
+                                    : sig == SIGTERM ? "SIGTERM"
+                                                     : "SIGHUP") +
                                    "; nothing written");
       progress.update(world.time() / duration);
     }
@@ -366,7 +376,8 @@ int main(int argc, char** argv) {
   LayoutOptions lo;
   CLI::App* layout = app.add_subcommand("layout", "Build an element layout from a preset shape and print its counts");
   layout->add_option("--shape", lo.shape, "box | sphere | cylinder (3D only)")->capture_default_str();
-  layout->add_option("--size", lo.size, "Grid edge [voxels]; the shape is inscribed in size^dim voxels")->capture_default_str();
+  layout->add_option("--size", lo.size, "Grid edge [voxels]; the shape is inscribed in size^dim voxels")
+      ->capture_default_str();
   layout->add_option("--dim", lo.dim, "2 or 3")->capture_default_str();
   layout->add_option("--layout", lo.layout, "gradational | uniform | voxel")->capture_default_str();
   layout->add_flag("--json", lo.json, "Print one JSON object instead of text");

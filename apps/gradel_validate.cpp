@@ -53,9 +53,9 @@ std::string pct(double ratio) {
 }
 
 struct Vibration {
-  Real frequency = 0;     ///< [Hz] dominant frequency of the tip.
+  Real frequency = 0;       ///< [Hz] dominant frequency of the tip.
   Real decayPerPeriod = 0;  ///< [-] amplitude ratio lost per period (0 = undamped), from the first and last thirds.
-  Real energyDrift = 0;   ///< [-] max |E(t) - E(0)| / max elastic energy (total mechanical energy).
+  Real energyDrift = 0;     ///< [-] max |E(t) - E(0)| / max elastic energy (total mechanical energy).
   Real nsPerStep = 0;
   Real dt = 0;
   size_t steps = 0;
@@ -130,7 +130,8 @@ void writeSeries(const fs::path& file, const std::vector<std::pair<std::string, 
 // size: vertices present in both models (same rest position), compared at several times.
 struct FieldDiff {
   Real time = 0, maxDiff = 0, rmsDiff = 0, maxDisp = 0;
-  Real maxDefDiff = 0, rmsDefDiff = 0, maxDef = 0;  ///< The same with each body's mean displacement removed (deformation only).
+  Real maxDefDiff = 0, rmsDefDiff = 0,
+       maxDef = 0;  ///< The same with each body's mean displacement removed (deformation only).
   size_t common = 0;
 };
 std::vector<FieldDiff> strikeFieldDiff(const std::string& sceneFile, Scaling scaling, std::vector<Real> times) {
@@ -149,7 +150,8 @@ std::vector<FieldDiff> strikeFieldDiff(const std::string& sceneFile, Scaling sca
   std::vector<std::pair<uint32_t, uint32_t>> pairs;
   for (size_t i = 0; i < bg.model->numVertices(); ++i)
     if (bg.model->onSurface[i])
-      if (auto it = uniformAt.find(key(bg.model->restPositions[i])); it != uniformAt.end()) pairs.emplace_back(uint32_t(i), it->second);
+      if (auto it = uniformAt.find(key(bg.model->restPositions[i])); it != uniformAt.end())
+        pairs.emplace_back(uint32_t(i), it->second);
   std::vector<FieldDiff> out;
   for (Real t : times) {
     bg.world->advanceTo(t);
@@ -213,7 +215,10 @@ Cost measureCost(const std::string& sceneFile, IntegratorKind kind, Real eScale,
     if (++steps % every == 0) {
       const Metrics m = w.metrics();
       const Real e = m.kineticEnergy + m.elasticEnergy;
-      if (!std::isfinite(e)) { c.finite = false; break; }
+      if (!std::isfinite(e)) {
+        c.finite = false;
+        break;
+      }
       c.maxEnergy = std::max(c.maxEnergy, e);
     }
   }
@@ -259,7 +264,13 @@ int main(int argc, char** argv) {
 
   // ---- 2. static sag vs Euler-Bernoulli ----
   std::cerr << "sag...\n";
-  struct SagRow { Scaling s; LayoutKind l; int n; SagResult r; Real theoryCal, theoryNominal, massRatio; };
+  struct SagRow {
+    Scaling s;
+    LayoutKind l;
+    int n;
+    SagResult r;
+    Real theoryCal, theoryNominal, massRatio;
+  };
   std::vector<SagRow> sags;
   {
     std::ofstream csv(dir / "sag.csv");
@@ -279,9 +290,9 @@ int main(int argc, char** argv) {
           row.theoryCal = beamTipSag(bar.length(), kWidth, kRho * row.massRatio, Ecal);
           row.theoryNominal = beamTipSag(bar.length(), kWidth, kRho, kE);
           sags.push_back(row);
-          csv << scalingName(s) << ',' << layoutKindName(l) << ',' << n << ',' << row.r.elements << ',' << row.r.vertices
-              << ',' << row.r.sag << ',' << row.theoryCal << ',' << row.theoryNominal << ',' << row.massRatio << ','
-              << row.r.steps << '\n';
+          csv << scalingName(s) << ',' << layoutKindName(l) << ',' << n << ',' << row.r.elements << ','
+              << row.r.vertices << ',' << row.r.sag << ',' << row.theoryCal << ',' << row.theoryNominal << ','
+              << row.massRatio << ',' << row.r.steps << '\n';
           std::cerr << "  " << scalingName(s) << ' ' << layoutKindName(l) << ' ' << n << ": " << row.r.sag << " (EB "
                     << row.theoryNominal << ", " << row.r.steps << " steps)\n";
         }
@@ -291,7 +302,13 @@ int main(int argc, char** argv) {
   std::cerr << "frequency...\n";
   const Real fTheory = beamFrequency(kAspect * kWidth, kWidth, kRho, kE);
   const Real periods = quick ? 4 : 6;
-  struct FreqRow { Scaling s; LayoutKind l; int n; Vibration v; Real theoryCal; };
+  struct FreqRow {
+    Scaling s;
+    LayoutKind l;
+    int n;
+    Vibration v;
+    Real theoryCal;
+  };
   std::vector<FreqRow> freqs;
   std::vector<Vibration> keep;
   {
@@ -326,8 +343,9 @@ int main(int argc, char** argv) {
   const Vibration vi60 = vibrate(bar, IntegratorKind::Implicit, 1.0 / 60, 2.0, false);
   const Vibration vi600 = vibrate(bar, IntegratorKind::Implicit, 1.0 / 600, 6 / fBar, false);
   const Vibration vi2400 = vibrate(bar, IntegratorKind::Implicit, 1.0 / 2400, 6 / fBar, false);
-  writeSeries(dir / "tip.csv", {{"explicit", &vx}, {"implicit dt=1/60", &vi60}, {"implicit dt=1/600", &vi600},
-                                {"implicit dt=1/2400", &vi2400}});
+  writeSeries(
+      dir / "tip.csv",
+      {{"explicit", &vx}, {"implicit dt=1/60", &vi60}, {"implicit dt=1/600", &vi600}, {"implicit dt=1/2400", &vi2400}});
   SimulationSettings simI;
   simI.integrator = IntegratorKind::Implicit;
   simI.dt = 1.0 / 60;
@@ -417,16 +435,19 @@ fig.tight_layout(); fig.savefig(os.path.join(d, "tip_explicit_implicit.png"), dp
   for (int n : resolutions) md << n << (n == finest ? "" : ", ");
   md << " voxels across (L = 8x that along). Euler-Bernoulli with E = " << fmt(kE) << " Pa: tip sag "
      << fmt(sagEB * 1000) << " mm, first frequency " << fmt(fTheory) << " Hz. The element model is a Poisson-ratio-0 "
-     << "corotational material, so beam theory (which has no Poisson effect in bending either) is the right reference.\n\n";
+     << "corotational material, so beam theory (which has no Poisson effect in bending either) is the right "
+        "reference.\n\n";
 
   // ---- targets (issue 5), read off the measurements below ----
   {
     auto sagAt = [&](Scaling sc, LayoutKind l, int n) {
-      for (const SagRow& r : sags) if (r.s == sc && r.l == l && r.n == n) return r.r.sag;
+      for (const SagRow& r : sags)
+        if (r.s == sc && r.l == l && r.n == n) return r.r.sag;
       return 0.0;
     };
     auto freqAt = [&](Scaling sc, LayoutKind l, int n) {
-      for (const FreqRow& r : freqs) if (r.s == sc && r.l == l && r.n == n) return r.v.frequency;
+      for (const FreqRow& r : freqs)
+        if (r.s == sc && r.l == l && r.n == n) return r.v.frequency;
       return 0.0;
     };
     auto ratioRow = [&](const std::string& target, Real ratio, Real tolerance, const std::string& detail) {
@@ -471,8 +492,8 @@ fig.tight_layout(); fig.savefig(os.path.join(d, "tip_explicit_implicit.png"), dp
       if (!stiff || !ref) continue;
       const bool met = stiff->finite && std::isfinite(stiff->maxEnergy) && stiff->maxEnergy <= 1000 * ref->maxEnergy;
       md << "| " << scene << ": no NaN, energy bounded (max <= 1000x the explicit run at E x1) | "
-         << (stiff->finite ? "finite" : "**NaN**") << ", max energy " << fmt(stiff->maxEnergy, 3) << " J (explicit, E x1: "
-         << fmt(ref->maxEnergy, 3) << " J) | " << (met ? "yes" : "**no**") << " |\n";
+         << (stiff->finite ? "finite" : "**NaN**") << ", max energy " << fmt(stiff->maxEnergy, 3)
+         << " J (explicit, E x1: " << fmt(ref->maxEnergy, 3) << " J) | " << (met ? "yes" : "**no**") << " |\n";
     }
     md << "\n";
   }
@@ -496,13 +517,15 @@ fig.tight_layout(); fig.savefig(os.path.join(d, "tip_explicit_implicit.png"), dp
 
   md << "## 2. Cantilever tip sag under gravity (static) vs Euler-Bernoulli\n\n"
      << "Static equilibrium of the clamped bar by dynamic relaxation (validation.h `staticTipSag`: explicit steps, "
-     << "velocities zeroed at every kinetic-energy peak, until the sag changes by < 1e-6 relative). Ratios to Euler-Bernoulli with the nominal E and density "
+     << "velocities zeroed at every kinetic-energy peak, until the sag changes by < 1e-6 relative). Ratios to "
+        "Euler-Bernoulli with the nominal E and density "
      << "(`EB`), and to Euler-Bernoulli with the modulus the uniform layout of that scaling measures in section 1 "
      << "and the model's real mass (`EB cal`).\n\n"
      << "| scaling | layout | n | elements | vertices | sag [mm] | / EB | / EB cal | mass / rho V | / uniform |\n"
      << "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
   auto sagOf = [&](Scaling s, LayoutKind l, int n) {
-    for (const SagRow& r : sags) if (r.s == s && r.l == l && r.n == n) return r.r.sag;
+    for (const SagRow& r : sags)
+      if (r.s == s && r.l == l && r.n == n) return r.r.sag;
     return 0.0;
   };
   for (const SagRow& r : sags)
@@ -521,12 +544,13 @@ fig.tight_layout(); fig.savefig(os.path.join(d, "tip_explicit_implicit.png"), dp
      << "| scaling | layout | n | f [Hz] | / EB | / EB cal | / uniform | dt [s] | steps | us/step | energy drift |\n"
      << "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
   auto fOf = [&](Scaling s, LayoutKind l, int n) {
-    for (const FreqRow& r : freqs) if (r.s == s && r.l == l && r.n == n) return r.v.frequency;
+    for (const FreqRow& r : freqs)
+      if (r.s == s && r.l == l && r.n == n) return r.v.frequency;
     return 0.0;
   };
   for (const FreqRow& r : freqs)
-    md << "| " << scalingName(r.s) << " | " << layoutKindName(r.l) << " | " << r.n << " | " << fmt(r.v.frequency) << " | "
-       << fmt(r.v.frequency / fTheory, 3) << " | " << fmt(r.v.frequency / r.theoryCal, 3) << " | "
+    md << "| " << scalingName(r.s) << " | " << layoutKindName(r.l) << " | " << r.n << " | " << fmt(r.v.frequency)
+       << " | " << fmt(r.v.frequency / fTheory, 3) << " | " << fmt(r.v.frequency / r.theoryCal, 3) << " | "
        << fmt(r.v.frequency / fOf(r.s, LayoutKind::Uniform, r.n), 3) << " | " << fmt(r.v.dt, 3) << " | " << r.v.steps
        << " | " << fmt(r.v.nsPerStep / 1000, 3) << " | " << fmt(r.v.energyDrift, 2) << " |\n";
   if (plots) md << "\n![frequency convergence](frequency_convergence.png)\n";
@@ -537,7 +561,8 @@ fig.tight_layout(); fig.savefig(os.path.join(d, "tip_explicit_implicit.png"), dp
      << "in both models, compared at several times (the manipulator touches the ball at about 0.1 s). "
      << "`deformation`: the same with each body's mean displacement removed (the two balls fly off at "
      << "slightly different speeds, which dominates the raw difference later on).\n\n"
-     << "| scaling | t [s] | common surface vertices | max displacement (uniform) [mm] | max difference [mm] | RMS difference [mm] | max deformation (uniform) [mm] | deformation max diff [mm] | deformation RMS diff [mm] |\n"
+     << "| scaling | t [s] | common surface vertices | max displacement (uniform) [mm] | max difference [mm] | RMS "
+        "difference [mm] | max deformation (uniform) [mm] | deformation max diff [mm] | deformation RMS diff [mm] |\n"
      << "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
   for (const auto& [s, rows] : fields)
     for (const FieldDiff& d : rows)
@@ -551,16 +576,17 @@ fig.tight_layout(); fig.savefig(os.path.join(d, "tip_explicit_implicit.png"), dp
      << "| run | dt [s] | f [Hz] | amplitude lost per period | us/step |\n| --- | ---: | ---: | ---: | ---: |\n";
   for (const auto& [name, v] : std::vector<std::pair<std::string, const Vibration*>>{
            {"explicit (symplectic)", &vx}, {"implicit", &vi60}, {"implicit", &vi600}, {"implicit", &vi2400}})
-    md << "| " << name << " | " << fmt(v->dt, 3) << " | " << fmt(v->frequency) << " | " << fmt(100 * v->decayPerPeriod, 3)
-       << " % | " << fmt(v->nsPerStep / 1000, 3) << " |\n";
+    md << "| " << name << " | " << fmt(v->dt, 3) << " | " << fmt(v->frequency) << " | "
+       << fmt(100 * v->decayPerPeriod, 3) << " % | " << fmt(v->nsPerStep / 1000, 3) << " |\n";
   md << "\nExplicit energy drift (undamped symplectic, total mechanical energy): " << fmt(vx.energyDrift, 2)
      << " of the largest elastic energy. Static sag: " << fmt(staticSag.sag * 1000)
-     << " mm (dynamic relaxation); implicit dynamics at dt = 1/60 s with damping 2/s after 3 s: " << fmt(implicitSag * 1000) << " mm ("
-     << pct(implicitSag / staticSag.sag) << ").\n";
+     << " mm (dynamic relaxation); implicit dynamics at dt = 1/60 s with damping 2/s after 3 s: "
+     << fmt(implicitSag * 1000) << " mm (" << pct(implicitSag / staticSag.sag) << ").\n";
   if (plots) md << "\n![tip](tip_explicit_implicit.png)\n";
   md << "\nCost per step and stability (one thread). `E x100` multiplies the scene's Young's modulus by 100; the "
      << "explicit integrator's dt = auto shrinks by 10x with it, the implicit one stays at 1/60 s.\n\n"
-     << "| scene | integrator | E | elements | vertices | dt [s] | us/step | real-time factor | max KE+elastic [J] | finite |\n"
+     << "| scene | integrator | E | elements | vertices | dt [s] | us/step | real-time factor | max KE+elastic [J] | "
+        "finite |\n"
      << "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |\n";
   for (const Cost& c : costs)
     md << "| " << c.scene << " | " << c.integrator << " | x" << c.eScale << " | " << c.elements << " | " << c.vertices

@@ -6,9 +6,9 @@
 // The simulation runs as many steps per frame as real time needs, within a time budget, and says
 // so on screen when it cannot keep up.
 #include <GLFW/glfw3.h>
-#include <imgui.h>
 #include <backends/imgui_impl_glfw.h>
 #include <backends/imgui_impl_opengl3.h>
+#include <imgui.h>
 
 #include <algorithm>
 #include <chrono>
@@ -64,7 +64,7 @@ struct Options {
   std::string scene;
   std::string size = "1280x800";
   std::string screenshot;
-  double runFor = 0;  // [s] wall; 0 = until the window closes
+  double runFor = 0;             // [s] wall; 0 = until the window closes
   double screenshotTime = 0.15;  // [s] simulated before the screenshot
 };
 
@@ -172,7 +172,8 @@ class Viewer {
     ImGui::Text("%.0f fps   %.0f steps/s   real time x%.2f", rates_.fps(), rates_.stepsPerSecond(), realTime_);
     if (behind_) ImGui::TextColored(ImVec4(0.9f, 0.1f, 0.1f, 1), "cannot keep up: simulation slower than real time");
     ImGui::Text("t = %.3f s  dt = %.3g s", w.time(), w.dt());
-    ImGui::Text("%zu elements  %zu vertices  %zu pairs", w.model().numElements(), w.model().numVertices(), w.model().numPairs());
+    ImGui::Text("%zu elements  %zu vertices  %zu pairs", w.model().numElements(), w.model().numVertices(),
+                w.model().numPairs());
     const std::vector<Real> es = w.elementStress();
     ImGui::Text("max stress %.4f", es.empty() ? 0.0 : *std::max_element(es.begin(), es.end()));
     if (!status_.empty()) ImGui::TextColored(ImVec4(0.8f, 0.3f, 0.0f, 1), "%s", status_.c_str());
@@ -231,9 +232,11 @@ class Viewer {
     float E = float(scene_.body.material.youngsModulus), rho = float(scene_.body.material.density);
     if (ImGui::SliderFloat("E [Pa]", &E, 1e3f, 1e7f, "%.3g", ImGuiSliderFlags_Logarithmic))
       scene_.body.material.youngsModulus = E, changed = true;
-    if (ImGui::SliderFloat("density", &rho, 100.f, 5000.f, "%.0f kg/m3")) scene_.body.material.density = rho, changed = true;
+    if (ImGui::SliderFloat("density", &rho, 100.f, 5000.f, "%.0f kg/m3"))
+      scene_.body.material.density = rho, changed = true;
     float damping = float(scene_.simulation.damping);
-    if (ImGui::SliderFloat("damping [1/s]", &damping, 0.f, 20.f, "%.2f")) scene_.simulation.damping = damping, changed = true;
+    if (ImGui::SliderFloat("damping [1/s]", &damping, 0.f, 20.f, "%.2f"))
+      scene_.simulation.damping = damping, changed = true;
     float friction = float(scene_.domain.friction);
     if (ImGui::SliderFloat("friction", &friction, 0.f, 2.f, "%.2f")) {
       scene_.domain.friction = friction;
@@ -254,11 +257,13 @@ class Viewer {
         scene_.simulation.dt = dt * 1e-3, changed = true;
     }
     float g = float(-scene_.simulation.gravity.y());
-    if (ImGui::SliderFloat("gravity [m/s2]", &g, 0.f, 20.f, "%.2f")) scene_.simulation.gravity = Vec3(0, -g, 0), changed = true;
+    if (ImGui::SliderFloat("gravity [m/s2]", &g, 0.f, 20.f, "%.2f"))
+      scene_.simulation.gravity = Vec3(0, -g, 0), changed = true;
 
     // ---- manipulators ----
     section("Manipulators");
-    if (ImGui::Button(scene_.dim == 3 ? "+ sphere" : "+ circle")) addManipulator(ManipulatorShape::Sphere), changed = true;
+    if (ImGui::Button(scene_.dim == 3 ? "+ sphere" : "+ circle"))
+      addManipulator(ManipulatorShape::Sphere), changed = true;
     if (scene_.dim == 3) {
       ImGui::SameLine();
       if (ImGui::Button("+ cylinder")) addManipulator(ManipulatorShape::Cylinder), changed = true;
@@ -366,9 +371,9 @@ class Viewer {
   enum class Mode { None, Orbit, Pan, Drag };
   struct Drag {
     size_t index;
-    Vec3 from, to;       // [m] manipulator centre at the start of this frame / wanted now
-    Vec3 planePoint;     // [m] where the drag plane passes
-    Vec3 grabOffset;     // [m] grab point minus centre
+    Vec3 from, to;    // [m] manipulator centre at the start of this frame / wanted now
+    Vec3 planePoint;  // [m] where the drag plane passes
+    Vec3 grabOffset;  // [m] grab point minus centre
   };
 
   static bool finite(const World& w) {
@@ -422,7 +427,8 @@ class Viewer {
     const Vec3 n = camera_.flat ? Vec3(0, 0, 1) : (camera_.eye() - camera_.target).normalized();
     const Real t = std::abs(d.dot(n)) < 1e-9 ? 0 : (m.position - o).dot(n) / d.dot(n);
     const Vec3 hit = o + t * d;
-    drag_ = Drag{i, m.position, m.position, m.position, camera_.flat ? Vec3(hit - m.position).cwiseProduct(Vec3(1, 1, 0)) : Vec3(hit - m.position)};
+    drag_ = Drag{i, m.position, m.position, m.position,
+                 camera_.flat ? Vec3(hit - m.position).cwiseProduct(Vec3(1, 1, 0)) : Vec3(hit - m.position)};
   }
 
   // Moves the dragged manipulator a fraction of the way through this frame's motion, with the
@@ -438,7 +444,8 @@ class Viewer {
   void keepPoses() {
     const auto& ms = built_.world->manipulators();
     for (size_t i = 0; i < ms.size() && i < scene_.manipulators.size(); ++i)
-      if (ms[i].settings.path.keys.empty()) scene_.manipulators[i].path.keys = {Keyframe{0, ms[i].position, std::nullopt}};
+      if (ms[i].settings.path.keys.empty())
+        scene_.manipulators[i].path.keys = {Keyframe{0, ms[i].position, std::nullopt}};
   }
 
   void addManipulator(ManipulatorShape shape) {
@@ -486,9 +493,7 @@ void onMouseButton(GLFWwindow* w, int button, int action, int mods) {
   ImGui_ImplGlfw_MouseButtonCallback(w, button, action, mods);
   gViewer->mouseButton(button, action, mods);
 }
-void onCursor(GLFWwindow*, double x, double y) {
-  gViewer->cursor(x, y);
-}
+void onCursor(GLFWwindow*, double x, double y) { gViewer->cursor(x, y); }
 void onScroll(GLFWwindow* w, double dx, double dy) {
   ImGui_ImplGlfw_ScrollCallback(w, dx, dy);
   gViewer->scroll(dy);
@@ -500,7 +505,8 @@ int run(const Options& o) {
   Scene scene = o.scene.empty() ? parseScene(kPlayScene, "play") : loadScene(o.scene);
   if (!(o.runFor >= 0) || !std::isfinite(o.runFor)) throw InputError("--run-for: must be >= 0 seconds");
 
-  glfwSetErrorCallback([](int code, const char* text) { std::cerr << "gradel-view: GLFW error " << code << ": " << text << "\n"; });
+  glfwSetErrorCallback(
+      [](int code, const char* text) { std::cerr << "gradel-view: GLFW error " << code << ": " << text << "\n"; });
   if (!glfwInit()) {
     std::cerr << "gradel-view: cannot open a window (no display? set DISPLAY, or use `gradel render` headless)\n";
     return 4;
@@ -571,7 +577,9 @@ int run(const Options& o) {
 
       if (!o.screenshot.empty() && viewer.world().time() >= o.screenshotTime) {
         writePng(o.screenshot, readPixels(fbw, fbh));
-        std::cout << nlohmann::json{{"screenshot", o.screenshot}, {"size", {fbw, fbh}}, {"t", viewer.world().time()}}.dump() << "\n";
+        std::cout
+            << nlohmann::json{{"screenshot", o.screenshot}, {"size", {fbw, fbh}}, {"t", viewer.world().time()}}.dump()
+            << "\n";
         break;
       }
       glfwSwapBuffers(window);
@@ -607,7 +615,8 @@ int main(int argc, char** argv) {
   app.add_option("scene", o.scene, "Scene file (default: a sphere and a free manipulator)");
   app.add_option("--size", o.size, "Window size WxH [pixels]")->capture_default_str();
   app.add_option("--screenshot", o.screenshot, "Simulate briefly, save one picture of the window (PNG) and exit");
-  app.add_option("--screenshot-time", o.screenshotTime, "Simulated time [s] before the screenshot")->capture_default_str();
+  app.add_option("--screenshot-time", o.screenshotTime, "Simulated time [s] before the screenshot")
+      ->capture_default_str();
   app.add_option("--run-for", o.runFor, "Run for S wall seconds, print frame and simulation rates (JSON), exit");
   try {
     app.parse(argc, argv);

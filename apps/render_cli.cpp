@@ -8,9 +8,10 @@ CLI::App* addRenderCommand(CLI::App& app, RenderCommandOptions& o) {
   r->add_option("--out", o.out, "Result directory (default: out/<scene name>-render)");
   r->add_option("--frames", o.frames, "Number of frames at the scene's frame interval (default: the whole duration)");
   r->add_option("--size", o.size, "Picture size WxH [pixels]")->capture_default_str();
-  r->add_option("--surface", o.surface,
-                "auto | smooth | voxel | embedded | none (auto: the body's own mesh, embedded, when it comes from a mesh "
-                "file; else smooth)")
+  r->add_option(
+       "--surface", o.surface,
+       "auto | smooth | voxel | embedded | none (auto: the body's own mesh, embedded, when it comes from a mesh "
+       "file; else smooth)")
       ->capture_default_str();
   r->add_flag("--stress", o.stress, "Colour the surface by stress (darker = higher), with a legend");
   r->add_flag("--wireframe", o.wireframe, "Draw the element outlines coloured by level");
@@ -21,9 +22,10 @@ CLI::App* addRenderCommand(CLI::App& app, RenderCommandOptions& o) {
   r->add_option("--pitch", o.pitch, "Camera pitch above the horizon [rad]");
   r->add_option("--zoom", o.zoom, "Camera zoom factor (> 1 = closer)")->capture_default_str();
   r->add_option("--stress-scale", o.stressScale, "Stress drawn darkest [-]")->capture_default_str();
-  r->add_option("--export", o.exportFormat,
-                "Also write the drawn surface per frame (the embedded mesh when it is drawn, else the display surface): "
-                "none | obj | ply")
+  r->add_option(
+       "--export", o.exportFormat,
+       "Also write the drawn surface per frame (the embedded mesh when it is drawn, else the display surface): "
+       "none | obj | ply")
       ->capture_default_str();
   r->add_flag("--no-pictures", o.noPictures, "Write no PNGs (export only; needs no OpenGL)");
   r->add_flag("--no-video", o.noVideo, "Do not make render.mp4 even if ffmpeg is present");

@@ -17,10 +17,10 @@
 // vertices; load = 1 when --load ran one busy process beside the benchmark; state_hash = hash
 // of positions and velocities after exactly 20 (paper) or 200 (real, scene) steps: identical at
 // any thread count.
-#include <CLI/CLI.hpp>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -144,8 +144,9 @@ Row measureScene(const Scene& scene, const std::string& set, int threads, int re
 }
 
 void printHeader() {
-  std::printf("set,shape,n,layout,youngs_modulus_pa,threads,load,elements,unique_vertices,pairs,ns_per_vertex_step,"
-              "ns_per_pair_step,steps_per_second,dt_s,real_time_factor,bytes_per_vertex,state_hash\n");
+  std::printf(
+      "set,shape,n,layout,youngs_modulus_pa,threads,load,elements,unique_vertices,pairs,ns_per_vertex_step,"
+      "ns_per_pair_step,steps_per_second,dt_s,real_time_factor,bytes_per_vertex,state_hash\n");
 }
 
 void printRow(const Row& r) {
@@ -163,8 +164,8 @@ void findRealtime(int threads, int reps, double minTime) {
   Row best;
   auto ok = [&](int n) {
     const Row r = measure("sphere", n, LayoutKind::Gradational, threads, reps, minTime);
-    std::fprintf(stderr, "  sphere %d: %zu elements, %zu vertices, real-time factor %.3f\n", n, r.elements,
-                 r.vertices, r.rtf);
+    std::fprintf(stderr, "  sphere %d: %zu elements, %zu vertices, real-time factor %.3f\n", n, r.elements, r.vertices,
+                 r.rtf);
     std::printf("# search: sphere %d, %zu elements, %zu unique vertices, real-time factor %.4f\n", n, r.elements,
                 r.vertices, r.rtf);
     if (r.rtf >= 1 && r.elements > best.elements) best = r;
@@ -180,9 +181,10 @@ void findRealtime(int threads, int reps, double minTime) {
     const int mid = (lo + hi) / 2;
     (ok(mid) ? lo : hi) = mid;
   }
-  std::printf("# largest real-time gradational sphere at %d threads: n = %d, %zu elements, %zu unique vertices, "
-              "real-time factor %.3f (n = %d is not real time)\n",
-              threads, best.n, best.elements, best.vertices, best.rtf, hi);
+  std::printf(
+      "# largest real-time gradational sphere at %d threads: n = %d, %zu elements, %zu unique vertices, "
+      "real-time factor %.3f (n = %d is not real time)\n",
+      threads, best.n, best.elements, best.vertices, best.rtf, hi);
   printRow(best);
 }
 
@@ -195,18 +197,21 @@ int main(int argc, char** argv) {
   int reps = 5;
   double minTime = 0.2, maxPairs = 4.0e7;
   bool findRt = false, load = false;
-  app.add_option("--sets", sets, "Comma-separated: real (SI scenes with gravity, walls, contact, pins, metrics), paper");
+  app.add_option("--sets", sets,
+                 "Comma-separated: real (SI scenes with gravity, walls, contact, pins, metrics), paper");
   app.add_option("--shapes", shapes, "paper set: comma-separated shapes (sphere, box); the real set is a sphere");
   app.add_option("--sizes", sizes, "Comma-separated grid sizes n (voxels)");
   app.add_option("--layouts", layouts, "Comma-separated: gradational, uniform, voxel");
   app.add_option("--moduli", moduli, "real set: comma-separated Young's moduli [Pa]");
   app.add_option("--threads", threads, "Comma-separated thread counts");
-  app.add_option("--scene", sceneFile, "Also time this scene file (frames computed at its frame_interval, not written)");
+  app.add_option("--scene", sceneFile,
+                 "Also time this scene file (frames computed at its frame_interval, not written)");
   app.add_flag("--load", load, "Run one busy process beside the benchmark (a machine with other work on it)");
   app.add_option("--reps", reps, "Repetitions (the median is reported)")->check(CLI::Range(1, 1000));
   app.add_option("--min-time", minTime, "Seconds per repetition")->check(CLI::Range(0.001, 100.0));
   app.add_option("--max-pairs", maxPairs, "Skip configurations with more element-vertex pairs (memory)");
-  app.add_flag("--find-realtime", findRt, "Also search the largest real-time gradational sphere (paper setting) at the largest thread count");
+  app.add_flag("--find-realtime", findRt,
+               "Also search the largest real-time gradational sphere (paper setting) at the largest thread count");
   CLI11_PARSE(app, argc, argv);
   try {
     auto str = [](const std::string& s) { return s; };

@@ -17,9 +17,9 @@
 
 #include "gradel/io/volume_data_source.h"
 #include "gradel/io/volume_file.h"
+#include "gradel/isosurface.h"
 #include "gradel/scene.h"
 #include "gradel/settings_check.h"
-#include "gradel/isosurface.h"
 #include "gradel/surface.h"
 
 namespace py = pybind11;
@@ -33,8 +33,8 @@ py::array vec3Array(std::vector<Vec3>&& v) {
   static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 is three packed doubles");
   auto* owner = new std::vector<Vec3>(std::move(v));
   py::capsule base(owner, [](void* p) { delete static_cast<std::vector<Vec3>*>(p); });
-  return py::array_t<double>({py::ssize_t(owner->size()), py::ssize_t(3)}, {py::ssize_t(sizeof(Vec3)), py::ssize_t(sizeof(double))},
-                             owner->data()->data(), base);
+  return py::array_t<double>({py::ssize_t(owner->size()), py::ssize_t(3)},
+                             {py::ssize_t(sizeof(Vec3)), py::ssize_t(sizeof(double))}, owner->data()->data(), base);
 }
 
 py::array realArray(std::vector<Real>&& v) {
@@ -65,11 +65,14 @@ struct Body {
 
 Body bodyFromArray(const py::array& input, Real voxelSize) {
   const py::array_t<bool, py::array::forcecast> a(input);  // any dtype: non-zero is filled
-  if (a.ndim() != 2 && a.ndim() != 3) throw InputError("array: expected 2 or 3 dimensions, got " + std::to_string(a.ndim()));
+  if (a.ndim() != 2 && a.ndim() != 3)
+    throw InputError("array: expected 2 or 3 dimensions, got " + std::to_string(a.ndim()));
   const int dim = int(a.ndim());
   std::array<py::ssize_t, 3> n{a.shape(0), a.shape(1), dim == 3 ? a.shape(2) : 1};
   for (py::ssize_t s : n)
-    if (s < 1 || s > 4096) throw InputError("array: every size must be in [1, 4096], got shape " + std::string(py::str(input.attr("shape"))));
+    if (s < 1 || s > 4096)
+      throw InputError("array: every size must be in [1, 4096], got shape " +
+                       std::string(py::str(input.attr("shape"))));
   auto v = std::make_shared<VoxelVolume>(dim, int(n[0]), int(n[1]), int(n[2]), voxelSize);
   uint8_t* out = v->data().data();
   const bool* in = a.data();
@@ -78,7 +81,8 @@ Body bodyFromArray(const py::array& input, Real voxelSize) {
     for (py::ssize_t j = 0; j < n[1]; ++j)
       for (py::ssize_t i = 0; i < n[0]; ++i) {
         const py::ssize_t off = i * st[0] + j * st[1] + (dim == 3 ? k * st[2] : 0);
-        out[v->index(int(i), int(j), int(k))] = *reinterpret_cast<const bool*>(reinterpret_cast<const char*>(in) + off) ? 1 : 0;
+        out[v->index(int(i), int(j), int(k))] =
+            *reinterpret_cast<const bool*>(reinterpret_cast<const char*>(in) + off) ? 1 : 0;
       }
   if (v->countFilled() == 0) throw InputError("array: the volume is empty (no true voxel)");
   return {v, "numpy array"};
@@ -139,7 +143,8 @@ std::unique_ptr<Simulation> makeSimulation(Scene scene) {
 
 Vec3 vec(const std::vector<double>& v, const char* what, int dim) {
   if (int(v.size()) != dim && v.size() != 3)
-    throw InputError(std::string(what) + ": expected " + std::to_string(dim) + " numbers, got " + std::to_string(v.size()));
+    throw InputError(std::string(what) + ": expected " + std::to_string(dim) + " numbers, got " +
+                     std::to_string(v.size()));
   Vec3 out(0, 0, 0);
   for (size_t i = 0; i < v.size(); ++i) out[int(i)] = v[i];
   if (!out.allFinite()) throw InputError(std::string(what) + ": not finite");
@@ -160,9 +165,11 @@ void requireFiniteState(const World& w) {
   const State& st = w.state();
   for (size_t i = 0; i < st.positions.size(); ++i) {
     if (!st.positions[i].allFinite())
-      throw InputError("positions: vertex " + std::to_string(i) + " is not finite (NaN or inf written into positions?)");
+      throw InputError("positions: vertex " + std::to_string(i) +
+                       " is not finite (NaN or inf written into positions?)");
     if (!st.velocities[i].allFinite())
-      throw InputError("velocities: vertex " + std::to_string(i) + " is not finite (NaN or inf written into velocities?)");
+      throw InputError("velocities: vertex " + std::to_string(i) +
+                       " is not finite (NaN or inf written into velocities?)");
   }
 }
 
@@ -201,7 +208,8 @@ void runSteps(Simulation& s, More more) {
 }
 
 /// Copies an (N, 3) array into one of the world's per-vertex arrays, refusing NaN / inf.
-void assignState(Simulation& s, std::vector<Vec3>& dst, const py::array_t<double, py::array::forcecast>& a, const char* what) {
+void assignState(Simulation& s, std::vector<Vec3>& dst, const py::array_t<double, py::array::forcecast>& a,
+                 const char* what) {
   if (a.ndim() != 2 || size_t(a.shape(0)) != dst.size() || a.shape(1) != 3)
     throw InputError(std::string(what) + ": expected shape (" + std::to_string(dst.size()) + ", 3)");
   auto r = a.unchecked<2>();
@@ -209,7 +217,8 @@ void assignState(Simulation& s, std::vector<Vec3>& dst, const py::array_t<double
   for (size_t i = 0; i < v.size(); ++i) {
     v[i] = Vec3(r(i, 0), r(i, 1), r(i, 2));
     if (!v[i].allFinite()) throw InputError(std::string(what) + ": row " + std::to_string(i) + " is not finite");
-    if (s.scene.dim == 2 && v[i].z() != 0) throw InputError(std::string(what) + ": row " + std::to_string(i) + " has z != 0 in 2D");
+    if (s.scene.dim == 2 && v[i].z() != 0)
+      throw InputError(std::string(what) + ": row " + std::to_string(i) + " has z != 0 in 2D");
   }
   WorldLock lock(s);
   dst = std::move(v);
@@ -218,8 +227,8 @@ void assignState(Simulation& s, std::vector<Vec3>& dst, const py::array_t<double
 // A view of one of the world's per-vertex vector arrays (positions, velocities), kept alive by
 // the Simulation object that owns the world.
 py::array stateView(py::object self, std::vector<Vec3>& v) {
-  return py::array_t<double>({py::ssize_t(v.size()), py::ssize_t(3)}, {py::ssize_t(sizeof(Vec3)), py::ssize_t(sizeof(double))},
-                             v.data()->data(), self);
+  return py::array_t<double>({py::ssize_t(v.size()), py::ssize_t(3)},
+                             {py::ssize_t(sizeof(Vec3)), py::ssize_t(sizeof(double))}, v.data()->data(), self);
 }
 
 }  // namespace
@@ -233,7 +242,8 @@ PYBIND11_MODULE(gradel, m) {
       [](const std::string& path, std::optional<std::string> format, std::optional<double> threshold,
          std::optional<std::pair<double, double>> range, int resolution, std::optional<std::array<int64_t, 3>> dims,
          std::optional<std::string> type, const std::string& endian, uint64_t headerBytes, int model) {
-        const io::VolumeFileSpec s = fileSpec(path, format, threshold, range, resolution, dims, type, endian, headerBytes, model, 0.01, 3);
+        const io::VolumeFileSpec s =
+            fileSpec(path, format, threshold, range, resolution, dims, type, endian, headerBytes, model, 0.01, 3);
         std::shared_ptr<const VoxelVolume> v;
         {
           py::gil_scoped_release release;
@@ -242,8 +252,8 @@ PYBIND11_MODULE(gradel, m) {
         return volumeArray(std::move(v));
       },
       py::arg("path"), py::kw_only(), py::arg("format") = py::none(), py::arg("threshold") = py::none(),
-      py::arg("range") = py::none(), py::arg("resolution") = 64, py::arg("dims") = py::none(), py::arg("type") = py::none(),
-      py::arg("endian") = "little", py::arg("header_bytes") = 0, py::arg("model") = 0,
+      py::arg("range") = py::none(), py::arg("resolution") = 64, py::arg("dims") = py::none(),
+      py::arg("type") = py::none(), py::arg("endian") = "little", py::arg("header_bytes") = 0, py::arg("model") = 0,
       "Reads a volume or mesh file (binvox, vox, nrrd, nifti, raw, obj, stl, ply) into a read-only boolean array "
       "[i, j, k] without copying it.");
 
@@ -254,15 +264,17 @@ PYBIND11_MODULE(gradel, m) {
           "from_file",
           [](const std::string& path, std::optional<std::string> format, std::optional<double> threshold,
              std::optional<std::pair<double, double>> range, int resolution, std::optional<std::array<int64_t, 3>> dims,
-             std::optional<std::string> type, const std::string& endian, uint64_t headerBytes, int model, Real voxelSize, int dim) {
-            const io::VolumeFileSpec s =
-                fileSpec(path, format, threshold, range, resolution, dims, type, endian, headerBytes, model, voxelSize, dim);
+             std::optional<std::string> type, const std::string& endian, uint64_t headerBytes, int model,
+             Real voxelSize, int dim) {
+            const io::VolumeFileSpec s = fileSpec(path, format, threshold, range, resolution, dims, type, endian,
+                                                  headerBytes, model, voxelSize, dim);
             return Body{std::make_shared<VoxelVolume>(io::readVolumeFile(s)), path};
           },
           py::arg("path"), py::kw_only(), py::arg("format") = py::none(), py::arg("threshold") = py::none(),
-          py::arg("range") = py::none(), py::arg("resolution") = 64, py::arg("dims") = py::none(), py::arg("type") = py::none(),
-          py::arg("endian") = "little", py::arg("header_bytes") = 0, py::arg("model") = 0, py::arg("voxel_size") = 0.01,
-          py::arg("dim") = 3, "From a file; the options are those of a scene's body.source (docs/scenes.md).")
+          py::arg("range") = py::none(), py::arg("resolution") = 64, py::arg("dims") = py::none(),
+          py::arg("type") = py::none(), py::arg("endian") = "little", py::arg("header_bytes") = 0, py::arg("model") = 0,
+          py::arg("voxel_size") = 0.01, py::arg("dim") = 3,
+          "From a file; the options are those of a scene's body.source (docs/scenes.md).")
       .def_static(
           "from_shape",
           [](const std::string& shape, int size, int dim, Real voxelSize) {
@@ -270,14 +282,15 @@ PYBIND11_MODULE(gradel, m) {
           },
           py::arg("shape"), py::arg("size"), py::kw_only(), py::arg("dim") = 3, py::arg("voxel_size") = 0.01,
           "A preset shape ('box', 'sphere', 'cylinder') inscribed in a size^dim grid.")
-      .def_property_readonly("voxels", [](const Body& b) { return volumeArray(b.volume); }, "Read-only boolean view [i, j, k].")
+      .def_property_readonly(
+          "voxels", [](const Body& b) { return volumeArray(b.volume); }, "Read-only boolean view [i, j, k].")
       .def_property_readonly("dim", [](const Body& b) { return b.volume->dim(); })
       .def_property_readonly("voxel_size", [](const Body& b) { return b.volume->voxelSize(); })
       .def_property_readonly("filled", [](const Body& b) { return b.volume->countFilled(); })
       .def("__repr__", [](const Body& b) {
         const auto& d = b.volume->dims();
-        return "<gradel.Body " + b.name + " " + std::to_string(d[0]) + "x" + std::to_string(d[1]) + "x" + std::to_string(d[2]) +
-               ", " + std::to_string(b.volume->countFilled()) + " voxels>";
+        return "<gradel.Body " + b.name + " " + std::to_string(d[0]) + "x" + std::to_string(d[1]) + "x" +
+               std::to_string(d[2]) + ", " + std::to_string(b.volume->countFilled()) + " voxels>";
       });
 
   py::class_<Simulation>(m, "Simulation", "A body built into a gradational layout and simulated (World).")
@@ -319,8 +332,9 @@ PYBIND11_MODULE(gradel, m) {
              return makeSimulation(std::move(s));
            }),
            py::arg("body"), py::kw_only(), py::arg("layout") = "gradational", py::arg("scaling") = "consistent",
-           py::arg("youngs_modulus") = MaterialSettings{}.youngsModulus, py::arg("density") = MaterialSettings{}.density,
-           py::arg("k") = MaterialSettings{}.paperK, py::arg("integrator") = "symplectic", py::arg("dt") = py::none(),
+           py::arg("youngs_modulus") = MaterialSettings{}.youngsModulus,
+           py::arg("density") = MaterialSettings{}.density, py::arg("k") = MaterialSettings{}.paperK,
+           py::arg("integrator") = "symplectic", py::arg("dt") = py::none(),
            py::arg("dt_fraction") = SimulationSettings{}.dtFraction, py::arg("damping") = SimulationSettings{}.damping,
            py::arg("gravity") = std::vector<double>{0, -9.81, 0}, py::arg("threads") = 1,
            py::arg("position") = std::vector<double>{0, 0, 0}, py::arg("velocity") = std::vector<double>{0, 0, 0},
@@ -328,8 +342,9 @@ PYBIND11_MODULE(gradel, m) {
            py::arg("restitution") = DomainSettings{}.restitution, py::arg("friction") = DomainSettings{}.friction,
            "Builds layout, rest model and world. Units: SI (m, s, kg, Pa). Material, layout and integrator are fixed "
            "for the simulation's life (the rest model is immutable): make a new Simulation to change them.")
-      .def_static("from_scene", [](const std::string& path) { return makeSimulation(loadScene(path)); }, py::arg("path"),
-                  "Builds the simulation of a JSON scene file (docs/scenes.md), manipulators and all.")
+      .def_static(
+          "from_scene", [](const std::string& path) { return makeSimulation(loadScene(path)); }, py::arg("path"),
+          "Builds the simulation of a JSON scene file (docs/scenes.md), manipulators and all.")
       .def(
           "add_manipulator",
           [](Simulation& s, const std::string& type, Real radius, std::vector<double> position, Real halfLength,
@@ -350,9 +365,10 @@ PYBIND11_MODULE(gradel, m) {
             WorldLock lock(s);
             return s.world().addManipulator(std::move(mp), at);
           },
-          py::arg("type") = "sphere", py::kw_only(), py::arg("radius") = 0.02, py::arg("position") = std::vector<double>{0, 0, 0},
-          py::arg("half_length") = 0.05, py::arg("axis") = std::vector<double>{0, 0, 1}, py::arg("restitution") = 1.0,
-          py::arg("friction") = 0.0, "Adds a kinematic manipulator ('sphere', 'cylinder'; 'circle' in 2D); returns its index.")
+          py::arg("type") = "sphere", py::kw_only(), py::arg("radius") = 0.02,
+          py::arg("position") = std::vector<double>{0, 0, 0}, py::arg("half_length") = 0.05,
+          py::arg("axis") = std::vector<double>{0, 0, 1}, py::arg("restitution") = 1.0, py::arg("friction") = 0.0,
+          "Adds a kinematic manipulator ('sphere', 'cylinder'; 'circle' in 2D); returns its index.")
       .def(
           "move_manipulator",
           [](Simulation& s, size_t i, std::vector<double> position, std::vector<double> velocity) {
@@ -392,8 +408,8 @@ PYBIND11_MODULE(gradel, m) {
                 if (steps > maxSteps) {
                   py::gil_scoped_acquire acquire;
                   throw InputError("t: advancing from " + num(w.time()) + " s to " + num(t) + " s takes about " +
-                                   num(steps) + " steps of dt = " + num(w.dt()) + " s, more than max_steps = " +
-                                   num(maxSteps) + " (pass max_steps= to allow it)");
+                                   num(steps) + " steps of dt = " + num(w.dt()) +
+                                   " s, more than max_steps = " + num(maxSteps) + " (pass max_steps= to allow it)");
                 }
               }
               if (!(w.time() + 0.5 * w.dt() < t)) return false;
@@ -412,39 +428,62 @@ PYBIND11_MODULE(gradel, m) {
       .def_property_readonly("num_vertices", [](Simulation& s) { return s.world().model().numVertices(); })
       .def_property_readonly("num_elements", [](Simulation& s) { return s.world().model().numElements(); })
       .def_property(
-          "positions", [](py::object self) { return stateView(self, self.cast<Simulation&>().world().state().positions); },
-          [](Simulation& s, const py::array_t<double, py::array::forcecast>& a) { assignState(s, s.world().state().positions, a, "positions"); },
+          "positions",
+          [](py::object self) { return stateView(self, self.cast<Simulation&>().world().state().positions); },
+          [](Simulation& s, const py::array_t<double, py::array::forcecast>& a) {
+            assignState(s, s.world().state().positions, a, "positions");
+          },
           "(N, 3) float64 view of the vertex positions [m] (no copy, writable; not locked: see the thread-safety "
           "contract). Assigning `sim.positions = array` copies under the lock and refuses NaN / inf (ValueError); "
           "a NaN written into the view is refused by the next step.")
       .def_property(
-          "velocities", [](py::object self) { return stateView(self, self.cast<Simulation&>().world().state().velocities); },
-          [](Simulation& s, const py::array_t<double, py::array::forcecast>& a) { assignState(s, s.world().state().velocities, a, "velocities"); },
+          "velocities",
+          [](py::object self) { return stateView(self, self.cast<Simulation&>().world().state().velocities); },
+          [](Simulation& s, const py::array_t<double, py::array::forcecast>& a) {
+            assignState(s, s.world().state().velocities, a, "velocities");
+          },
           "(N, 3) float64 view of the vertex velocities [m/s] (as positions).")
-      .def_property_readonly("rest_positions", [](Simulation& s) { return vec3Array(std::vector<Vec3>(s.world().model().restPositions)); })
-      .def_property_readonly("masses", [](Simulation& s) { return realArray(std::vector<Real>(s.world().model().mass)); })
-      .def_property_readonly("stress", [](Simulation& s) { WorldLock lock(s); return realArray(s.world().vertexStress()); },
-                             "Per-vertex stress [-] (mean of its elements' stress).")
-      .def_property_readonly("element_stress", [](Simulation& s) { WorldLock lock(s); return realArray(s.world().elementStress()); })
-      .def_property_readonly("state_hash", [](Simulation& s) { WorldLock lock(s); return s.world().stateHash(); })
-      .def_property_readonly("voxels", [](Simulation& s) {
-        return volumeArray(std::make_shared<const VoxelVolume>(s.built.volume));
-      })
+      .def_property_readonly(
+          "rest_positions", [](Simulation& s) { return vec3Array(std::vector<Vec3>(s.world().model().restPositions)); })
+      .def_property_readonly("masses",
+                             [](Simulation& s) { return realArray(std::vector<Real>(s.world().model().mass)); })
+      .def_property_readonly(
+          "stress",
+          [](Simulation& s) {
+            WorldLock lock(s);
+            return realArray(s.world().vertexStress());
+          },
+          "Per-vertex stress [-] (mean of its elements' stress).")
+      .def_property_readonly("element_stress",
+                             [](Simulation& s) {
+                               WorldLock lock(s);
+                               return realArray(s.world().elementStress());
+                             })
+      .def_property_readonly("state_hash",
+                             [](Simulation& s) {
+                               WorldLock lock(s);
+                               return s.world().stateHash();
+                             })
+      .def_property_readonly(
+          "voxels", [](Simulation& s) { return volumeArray(std::make_shared<const VoxelVolume>(s.built.volume)); })
       .def("metrics",
            [](Simulation& s) {
              WorldLock lock(s);
              Metrics x = s.world().metrics();
              if (!finiteState(s.world())) {  // NaN spreads honestly: no min/max over NaN that hides it
                const Real nan = std::numeric_limits<Real>::quiet_NaN();
-               x.kineticEnergy = x.elasticEnergy = x.gravityEnergy = x.maxStress = x.maxPenetration = x.minElementDet = nan;
+               x.kineticEnergy = x.elasticEnergy = x.gravityEnergy = x.maxStress = x.maxPenetration = x.minElementDet =
+                   nan;
              }
              py::dict d;
              d["time"] = x.time;
              d["kinetic_energy"] = x.kineticEnergy;
              d["elastic_energy"] = x.elasticEnergy;
              d["gravity_energy"] = x.gravityEnergy;
-             d["linear_momentum"] = std::vector<double>{x.linearMomentum.x(), x.linearMomentum.y(), x.linearMomentum.z()};
-             d["angular_momentum"] = std::vector<double>{x.angularMomentum.x(), x.angularMomentum.y(), x.angularMomentum.z()};
+             d["linear_momentum"] =
+                 std::vector<double>{x.linearMomentum.x(), x.linearMomentum.y(), x.linearMomentum.z()};
+             d["angular_momentum"] =
+                 std::vector<double>{x.angularMomentum.x(), x.angularMomentum.y(), x.angularMomentum.z()};
              d["max_stress"] = x.maxStress;
              d["max_penetration"] = x.maxPenetration;
              d["min_element_det"] = x.minElementDet;
@@ -472,18 +511,21 @@ PYBIND11_MODULE(gradel, m) {
             } else {
               const SurfaceKind k = parseSurfaceKind(kind);
               auto it = s.surfaces.find(k);
-              if (it == s.surfaces.end()) it = s.surfaces.emplace(k, buildDisplaySurface(s.built.layout, s.built.volume, k)).first;
+              if (it == s.surfaces.end())
+                it = s.surfaces.emplace(k, buildDisplaySurface(s.built.layout, s.built.volume, k)).first;
               mesh = surfaceMesh(it->second, s.world().state().positions);
             }
             auto tris = std::move(mesh.triangles);
             auto* owner = new std::vector<std::array<uint32_t, 3>>(std::move(tris));
             py::capsule base(owner, [](void* p) { delete static_cast<std::vector<std::array<uint32_t, 3>>*>(p); });
-            py::array triangles = py::array_t<uint32_t>({py::ssize_t(owner->size()), py::ssize_t(3)},
-                                                        {py::ssize_t(sizeof(std::array<uint32_t, 3>)), py::ssize_t(sizeof(uint32_t))},
-                                                        owner->data()->data(), base);
+            py::array triangles =
+                py::array_t<uint32_t>({py::ssize_t(owner->size()), py::ssize_t(3)},
+                                      {py::ssize_t(sizeof(std::array<uint32_t, 3>)), py::ssize_t(sizeof(uint32_t))},
+                                      owner->data()->data(), base);
             return py::make_tuple(vec3Array(std::move(mesh.vertices)), triangles, vec3Array(std::move(mesh.normals)));
           },
           py::arg("kind") = "smooth",
-          "The display surface now: (vertices (V, 3) [m], triangles (T, 3) uint32, normals (V, 3)); kind 'smooth', 'voxel' "
+          "The display surface now: (vertices (V, 3) [m], triangles (T, 3) uint32, normals (V, 3)); kind 'smooth', "
+          "'voxel' "
           "or 'embedded' (the body's mesh file carried by the elements; for a volume, its isosurface).");
 }

@@ -48,8 +48,8 @@ Vec3 Path::position(Real t) const {
   if (a.velocity && b.velocity) {
     // Cubic Hermite: matches positions and velocities at both keys.
     const Real u2 = u * u, u3 = u2 * u;
-    return (2 * u3 - 3 * u2 + 1) * a.position + (u3 - 2 * u2 + u) * h * *a.velocity +
-           (-2 * u3 + 3 * u2) * b.position + (u3 - u2) * h * *b.velocity;
+    return (2 * u3 - 3 * u2 + 1) * a.position + (u3 - 2 * u2 + u) * h * *a.velocity + (-2 * u3 + 3 * u2) * b.position +
+           (u3 - u2) * h * *b.velocity;
   }
   return (1 - u) * a.position + u * b.position;
 }
@@ -68,8 +68,8 @@ Vec3 Path::velocity(Real t) const {
   const Real u = (t - a.time) / h;
   if (a.velocity && b.velocity) {
     const Real u2 = u * u;
-    return ((6 * u2 - 6 * u) * a.position + (3 * u2 - 4 * u + 1) * h * *a.velocity +
-            (-6 * u2 + 6 * u) * b.position + (3 * u2 - 2 * u) * h * *b.velocity) /
+    return ((6 * u2 - 6 * u) * a.position + (3 * u2 - 4 * u + 1) * h * *a.velocity + (-6 * u2 + 6 * u) * b.position +
+            (3 * u2 - 2 * u) * h * *b.velocity) /
            h;
   }
   return (b.position - a.position) / h;
@@ -93,7 +93,7 @@ Real shapeDistance(const ManipulatorSettings& settings, const Vec3& d, Vec3* nor
   const Vec3 radial = d - h * a;
   const Real rr = radial.norm();
   const Vec3 radialDir = rr > 0 ? Vec3(radial / rr) : a.unitOrthogonal();
-  const Real dr = rr - settings.radius;  // > 0 outside the side
+  const Real dr = rr - settings.radius;               // > 0 outside the side
   const Real dh = std::abs(h) - settings.halfLength;  // > 0 beyond a cap
   const Vec3 capDir = h >= 0 ? a : Vec3(-a);
   if (dr <= 0 && dh <= 0) {  // inside: nearest of side and cap
@@ -123,9 +123,7 @@ Real Manipulator::signedDistance(const Vec3& p, Vec3* normal) const {
 namespace {
 
 // Relative signed distance at a point given in the manipulator's frame (centre at origin).
-Real frameDistance(const Manipulator& m, const Vec3& pFrame, Vec3* n) {
-  return shapeDistance(m.settings, pFrame, n);
-}
+Real frameDistance(const Manipulator& m, const Vec3& pFrame, Vec3* n) { return shapeDistance(m.settings, pFrame, n); }
 
 // The signed distance of a convex set is a convex function, so along a segment it has one
 // minimum (golden-section search) and the first entry point lies between the start and that
@@ -153,9 +151,12 @@ bool segmentCrossing(const Manipulator& m, const Vec3& p0, const Vec3& p1, Real 
         a = c, c = d, fc = fd, d = a + g * (b - a), fd = f(d);
       }
     }
-    if (fc < 0) tMin = c;
-    else if (fd < 0) tMin = d;
-    else return false;
+    if (fc < 0)
+      tMin = c;
+    else if (fd < 0)
+      tMin = d;
+    else
+      return false;
   }
   Real lo = 0, hi = tMin;  // f(lo) >= 0 > f(hi)
   for (int i = 0; i < 60; ++i) {
@@ -228,7 +229,8 @@ void reflectVelocity(Vec3& v, const Vec3& surfaceVelocity, const Vec3& n, Real r
       v = surfaceVelocity + rel;
       return;
     }
-    Real out = restitution > 0 ? restitution * std::min(crossingSpeed(vn, s0, surfaceVelocity, n, start), -wn) : Real(0);
+    Real out =
+        restitution > 0 ? restitution * std::min(crossingSpeed(vn, s0, surfaceVelocity, n, start), -wn) : Real(0);
     Vec3 vt = rel - vn * n;
     const Real vtLen = vt.norm();
     // Coulomb: the tangential impulse is at most friction times the normal impulse |wn| + out.
@@ -236,7 +238,7 @@ void reflectVelocity(Vec3& v, const Vec3& surfaceVelocity, const Vec3& n, Real r
     vt = vtLen > drop ? Vec3(vt * (1 - drop / vtLen)) : Vec3::Zero();
     if (start && lift > 0) {
       const Real an = (vn - (start->velocity - surfaceVelocity).dot(n)) / start->dt;  // < 0: pressed in
-      Real stored = std::max(Real(0), -an) * lift;  // [J/kg]
+      Real stored = std::max(Real(0), -an) * lift;                                    // [J/kg]
       const Real fromBounce = std::min(stored, Real(0.5) * out * out);
       out = std::sqrt(std::max(Real(0), out * out - 2 * fromBounce));
       stored -= fromBounce;
@@ -310,8 +312,10 @@ ContactResult resolveDomain(const DomainSettings& d, const Vec3& xPrev, Vec3& x,
   if (!d.enabled) return res;
   for (int a = 0; a < dim; ++a) {
     Real side = 0, depth = 0;
-    if (x[a] < d.min[a]) side = 1, depth = d.min[a] - x[a], x[a] = d.min[a];
-    else if (x[a] > d.max[a]) side = -1, depth = x[a] - d.max[a], x[a] = d.max[a];
+    if (x[a] < d.min[a])
+      side = 1, depth = d.min[a] - x[a], x[a] = d.min[a];
+    else if (x[a] > d.max[a])
+      side = -1, depth = x[a] - d.max[a], x[a] = d.max[a];
     if (side != 0) {
       Vec3 n = Vec3::Zero();
       n[a] = side;

@@ -39,7 +39,8 @@ EnergyBudget energyBudget(const World& world, double duration) {
   EnergyBudget b;
   b.initial = world.metrics();
   for (Real m : world.model().mass) b.mass += m;
-  for (const Manipulator& m : world.manipulators()) b.drivenSpeed = std::max(b.drivenSpeed, maxPathSpeed(m.settings.path, duration));
+  for (const Manipulator& m : world.manipulators())
+    b.drivenSpeed = std::max(b.drivenSpeed, maxPathSpeed(m.settings.path, duration));
   for (const PinSettings& p : world.pins())
     for (const Keyframe& k : p.path.keys)
       if (k.position.norm() > 0 || (k.velocity && k.velocity->norm() > 0)) b.unbounded = true;

@@ -12,9 +12,9 @@
 //     four 4-wide additions per pair, in a fixed order (the vertex's elements in id order).
 // Each vertex is one 4-wide register (x, y, z, 0), so a pair of pass 1 costs a load, three
 // broadcasts and four fused multiply-adds; pass 1 prefetches the vertices of the elements two
-// batches ahead, since large bodies are bound by these indirect gathers. Every sum is formed in an order that does not depend
-// on how ranges are split, so the result is the same at any thread count; it equals element.h's
-// reference kernel to rounding (tested).
+// batches ahead, since large bodies are bound by these indirect gathers. Every sum is formed in an order that does not
+// depend on how ranges are split, so the result is the same at any thread count; it equals element.h's reference kernel
+// to rounding (tested).
 #pragma once
 
 #include <vector>
@@ -32,9 +32,9 @@ struct alignas(32) ElementFrame {
 
 /// Rest data of the two passes, derived once from the RestModel.
 struct ElementStageRest {
-  std::vector<Vec3> sumRestOffsets;    ///< Per element: sum_i R0_i (a rounding residue, ~1e-16).
-  std::vector<Vec3> restCentroids;     ///< Per element: C_e [m], the mean rest position of its vertices.
-  std::vector<uint32_t> vertexStart;   ///< Per vertex + 1: its range in vertexElements.
+  std::vector<Vec3> sumRestOffsets;      ///< Per element: sum_i R0_i (a rounding residue, ~1e-16).
+  std::vector<Vec3> restCentroids;       ///< Per element: C_e [m], the mean rest position of its vertices.
+  std::vector<uint32_t> vertexStart;     ///< Per vertex + 1: its range in vertexElements.
   std::vector<uint32_t> vertexElements;  ///< The elements of each vertex, ascending.
 
   explicit ElementStageRest(const RestModel& model);

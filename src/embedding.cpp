@@ -24,7 +24,8 @@ std::vector<int32_t> voxelOwners(const Layout& layout) {
       for (int32_t z = lo.z(); z < lo.z() + cz; ++z)
         for (int32_t y = lo.y(); y < lo.y() + c; ++y)
           for (int32_t x = lo.x(); x < lo.x() + c; ++x)
-            if (x < n[0] && y < n[1] && z < n[2]) owner[size_t(x) + size_t(n[0]) * (size_t(y) + size_t(n[1]) * size_t(z))] = int32_t(e);
+            if (x < n[0] && y < n[1] && z < n[2])
+              owner[size_t(x) + size_t(n[0]) * (size_t(y) + size_t(n[1]) * size_t(z))] = int32_t(e);
     }
   }
   return owner;
@@ -49,7 +50,9 @@ Real boxDistance2(const Vec3& q, int i, int j, int k, int dim) {
 int32_t nearestOwner(const Layout& layout, const std::vector<int32_t>& owner, const Vec3& q, const Int3& cell) {
   const auto& n = layout.dims;
   const int dim = layout.dim;
-  auto at = [&](int i, int j, int k) { return owner[size_t(i) + size_t(n[0]) * (size_t(j) + size_t(n[1]) * size_t(k))]; };
+  auto at = [&](int i, int j, int k) {
+    return owner[size_t(i) + size_t(n[0]) * (size_t(j) + size_t(n[1]) * size_t(k))];
+  };
   Real best = std::numeric_limits<Real>::infinity();
   int32_t e = -1;
   constexpr int kMaxShell = 8;
@@ -60,7 +63,8 @@ int32_t nearestOwner(const Layout& layout, const std::vector<int32_t>& owner, co
     for (int k = k0; k <= k1; ++k)
       for (int j = j0; j <= j1; ++j)
         for (int i = i0; i <= i1; ++i) {
-          const int cheb = std::max({std::abs(i - cell.x()), std::abs(j - cell.y()), dim == 3 ? std::abs(k - cell.z()) : 0});
+          const int cheb =
+              std::max({std::abs(i - cell.x()), std::abs(j - cell.y()), dim == 3 ? std::abs(k - cell.z()) : 0});
           if (cheb != r) continue;  // inner shells are done
           const int32_t o = at(i, j, k);
           if (o < 0) continue;
@@ -85,10 +89,12 @@ Vec3 restMean(const RestModel& m, size_t e) {
 }  // namespace
 
 EmbeddedMesh embedMesh(const TriangleMesh& restMesh, const Layout& layout, const RestModel& model) {
-  if (restMesh.vertices.empty() || restMesh.triangles.empty()) throw InputError("embedded mesh: no vertices or no triangles");
+  if (restMesh.vertices.empty() || restMesh.triangles.empty())
+    throw InputError("embedded mesh: no vertices or no triangles");
   for (const auto& t : restMesh.triangles)
     for (uint32_t v : t)
-      if (v >= restMesh.vertices.size()) throw InputError("embedded mesh: triangle index " + std::to_string(v) + " out of range");
+      if (v >= restMesh.vertices.size())
+        throw InputError("embedded mesh: triangle index " + std::to_string(v) + " out of range");
   for (const Vec3& p : restMesh.vertices)
     if (!p.allFinite()) throw InputError("embedded mesh: non-finite vertex coordinate");
 

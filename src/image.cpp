@@ -1,8 +1,8 @@
 #include "gradel/image.h"
 
-#include <algorithm>
 #include <stb_image.h>
 #include <stb_image_write.h>
+#include <algorithm>
 
 #include "gradel/types.h"
 
@@ -18,7 +18,8 @@ void writePng(const std::string& path, const Image& image) {
 Image readPng(const std::string& path) {
   int w = 0, h = 0, channels = 0;
   unsigned char* data = stbi_load(path.c_str(), &w, &h, &channels, 3);
-  if (!data) throw InputError(path + ": cannot read image: " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown"));
+  if (!data)
+    throw InputError(path + ": cannot read image: " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown"));
   Image img;
   img.width = w;
   img.height = h;
@@ -30,7 +31,8 @@ Image readPng(const std::string& path) {
 void flipRows(Image& image) {
   const size_t row = size_t(image.width) * 3;
   for (int y = 0; y < image.height / 2; ++y)
-    std::swap_ranges(image.rgb.begin() + std::ptrdiff_t(row * size_t(y)), image.rgb.begin() + std::ptrdiff_t(row * size_t(y + 1)),
+    std::swap_ranges(image.rgb.begin() + std::ptrdiff_t(row * size_t(y)),
+                     image.rgb.begin() + std::ptrdiff_t(row * size_t(y + 1)),
                      image.rgb.begin() + std::ptrdiff_t(row * size_t(image.height - 1 - y)));
 }
 

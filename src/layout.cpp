@@ -57,8 +57,8 @@ int cellCoord(int c, int axis) { return (c >> axis) & 1; }
 /// Decisions read the level's volume as it was at the start of the scan, so they do not depend
 /// on scan order; the groups that got elements are "emptied" (step 2) by writing 0 into the next
 /// level (step 3), where a cell is 1 iff its group was full and got no element.
-std::vector<uint8_t> scanLevel(const GridView& g, int dim, int level, LayoutKind kind,
-                               std::vector<Placed>& out, std::array<int, 3>& nextDims) {
+std::vector<uint8_t> scanLevel(const GridView& g, int dim, int level, LayoutKind kind, std::vector<Placed>& out,
+                               std::array<int, 3>& nextDims) {
   const int groupsZ = dim == 3 ? (g.n[2] + 1) / 2 : 1;
   nextDims = {(g.n[0] + 1) / 2, (g.n[1] + 1) / 2, groupsZ};
   std::vector<uint8_t> next(size_t(nextDims[0]) * size_t(nextDims[1]) * size_t(nextDims[2]), 0);
@@ -152,7 +152,8 @@ class VertexSet {
       if (uint64_t(count) + uint64_t(std::popcount(bits_[w])) > UINT32_MAX)
         throw InputError("layout: more than 2^32 vertices");
       count += uint32_t(std::popcount(bits_[w]));
-      for (uint64_t m = bits_[w]; m; m &= m - 1) points.push_back(point(uint64_t(w) * 64 + uint64_t(std::countr_zero(m))));
+      for (uint64_t m = bits_[w]; m; m &= m - 1)
+        points.push_back(point(uint64_t(w) * 64 + uint64_t(std::countr_zero(m))));
     }
     return points;
   }
@@ -203,7 +204,7 @@ void forEachBoundaryFace(const Placed& e, int dim, F&& f) {
 /// the filled cells (incomplete element)?
 bool isOwnCorner(const Int3& p, const Placed& e, int dim) {
   const int shift = std::countr_zero(unsigned(e.cellSize));  // cellSize is a power of two
-  Int3 a(0, 0, 0);  // corner index within the block, 0..2 per axis
+  Int3 a(0, 0, 0);                                           // corner index within the block, 0..2 per axis
   for (int b = 0; b < dim; ++b) {
     const int rel = p[b] - e.origin[b];
     if (rel & (e.cellSize - 1)) return false;
@@ -260,7 +261,8 @@ VertexSet voxelCorners(const VoxelVolume& volume) {
       for (int i = 0; i < volume.nx(); ++i)
         if (volume.at(i, j, k))
           for (int corner = 0; corner < cellCount(dim); ++corner)
-            set.insert(set.key(i + cellCoord(corner, 0), j + cellCoord(corner, 1), dim == 3 ? k + cellCoord(corner, 2) : 0));
+            set.insert(
+                set.key(i + cellCoord(corner, 0), j + cellCoord(corner, 1), dim == 3 ? k + cellCoord(corner, 2) : 0));
   return set;
 }
 }  // namespace

@@ -25,7 +25,8 @@ uint64_t packLattice(const Int3& p) {
 }
 
 void checkPositive(Real v, const char* field) {
-  if (!(v > 0) || !std::isfinite(v)) throw InputError(std::string("material.") + field + " must be a positive finite number");
+  if (!(v > 0) || !std::isfinite(v))
+    throw InputError(std::string("material.") + field + " must be a positive finite number");
 }
 
 }  // namespace
@@ -33,8 +34,10 @@ void checkPositive(Real v, const char* field) {
 RestModel buildRestModel(const Layout& layout, const VoxelVolume& volume, const MaterialSettings& material,
                          const Vec3& origin) {
   checkPositive(material.density, "density");
-  if (material.scaling == Scaling::Consistent) checkPositive(material.youngsModulus, "youngs_modulus");
-  else checkPositive(material.paperK, "k");
+  if (material.scaling == Scaling::Consistent)
+    checkPositive(material.youngsModulus, "youngs_modulus");
+  else
+    checkPositive(material.paperK, "k");
   if (!origin.allFinite()) throw InputError("body.position must be finite");
 
   RestModel m;
@@ -74,7 +77,8 @@ RestModel buildRestModel(const Layout& layout, const VoxelVolume& volume, const 
       const int cells = D == 3 ? 8 : 4;
       for (int c = 0; c < (full ? 1 : cells); ++c) {
         if (!full && !(layout.cellMask[e] >> c & 1)) continue;
-        const Int3 lo = layout.origin[e] + (full ? Int3(0, 0, 0) : Int3(c & 1, (c >> 1) & 1, (c >> 2) & 1) * layout.cellSize[e]);
+        const Int3 lo =
+            layout.origin[e] + (full ? Int3(0, 0, 0) : Int3(c & 1, (c >> 1) & 1, (c >> 2) & 1) * layout.cellSize[e]);
         for (int k = 0; k < corners; ++k) {
           const Int3 p = lo + Int3(k & 1, (k >> 1) & 1, D == 3 ? (k >> 2) & 1 : 0) * cs;
           const uint32_t id = idOf(p);
@@ -118,10 +122,11 @@ RestModel buildRestModel(const Layout& layout, const VoxelVolume& volume, const 
       // S = sum R0_i R0_i^T. A complete element's S is isotropic and this is D E V_e / tr S.
       Mat3 S = Mat3::Zero();
       for (uint32_t p = b; p < b + n; ++p) S.noalias() += m.restOffsets[p] * m.restOffsets[p].transpose();
-      const Real lambdaMax = D == 3 ? Eigen::SelfAdjointEigenSolver<Mat3>(S, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff()
-                                    : Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(S.topLeftCorner<2, 2>(), Eigen::EigenvaluesOnly)
-                                          .eigenvalues()
-                                          .maxCoeff();
+      const Real lambdaMax =
+          D == 3 ? Eigen::SelfAdjointEigenSolver<Mat3>(S, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff()
+                 : Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(S.topLeftCorner<2, 2>(), Eigen::EigenvaluesOnly)
+                       .eigenvalues()
+                       .maxCoeff();
       const Real regionVolume = Real(layout.regionVoxels(e)) * voxelVolume;
       m.stiffness[e] = material.youngsModulus * regionVolume / lambdaMax;
     }
@@ -159,8 +164,10 @@ RestModel buildRestModel(const Layout& layout, const VoxelVolume& volume, const 
               for (int w = 0; w < (D == 3 ? 2 : 1); ++w) {
                 Int3 p(i, j, k);
                 p[a] += s > 0 ? 1 : 0;
-                if (D == 3) p[b0] += u, p[b1] += w;
-                else p[a == 0 ? 1 : 0] += u;
+                if (D == 3)
+                  p[b0] += u, p[b1] += w;
+                else
+                  p[a == 0 ? 1 : 0] += u;
                 const uint32_t id = idOf(p);
                 if (id != UINT32_MAX) m.onSurface[id] = 1;
               }

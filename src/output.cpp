@@ -1,10 +1,10 @@
 #include "gradel/output.h"
 
-#include <stdlib.h>  // mkdtemp (POSIX)
 #include <fcntl.h>     // open
 #include <signal.h>    // kill (POSIX)
+#include <stdlib.h>    // mkdtemp (POSIX)
 #include <sys/file.h>  // flock
-#include <unistd.h>  // rmdir, getpid
+#include <unistd.h>    // rmdir, getpid
 
 #include <algorithm>
 #include <bit>
@@ -159,7 +159,8 @@ void writeVtu(const fs::path& file, const RestModel& model, const State& state, 
     if (model.dim == 2) {
       // restOffsets are relative to the rest centroid, so their angles order the outline.
       ring.clear();
-      for (uint32_t p = b; p < end; ++p) ring.emplace_back(std::atan2(model.restOffsets[p].y(), model.restOffsets[p].x()), p);
+      for (uint32_t p = b; p < end; ++p)
+        ring.emplace_back(std::atan2(model.restOffsets[p].y(), model.restOffsets[p].x()), p);
       std::stable_sort(ring.begin(), ring.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
       for (const auto& r : ring) connectivity.push_back(model.elemVerts[r.second]);
     } else {
@@ -178,13 +179,15 @@ void writeVtu(const fs::path& file, const RestModel& model, const State& state, 
   out += vertexStress.empty() ? "      <PointData Vectors=\"velocity\">\n"
                               : "      <PointData Scalars=\"stress\" Vectors=\"velocity\">\n";
   appendDataArray(out, "velocity", 3, velocity, encoding);
-  if (!vertexStress.empty()) appendDataArray(out, "stress", 1, std::vector<double>(vertexStress.begin(), vertexStress.end()), encoding);
+  if (!vertexStress.empty())
+    appendDataArray(out, "stress", 1, std::vector<double>(vertexStress.begin(), vertexStress.end()), encoding);
   out += "      </PointData>\n";
   out += "      <CellData Scalars=\"level\">\n";
   appendDataArray(out, "level", 1, model.level, encoding);
   appendDataArray(out, "element_id", 1, elementId, encoding);
   if (!elementStress.empty())
-    appendDataArray(out, "element_stress", 1, std::vector<double>(elementStress.begin(), elementStress.end()), encoding);
+    appendDataArray(out, "element_stress", 1, std::vector<double>(elementStress.begin(), elementStress.end()),
+                    encoding);
   out += "      </CellData>\n";
   out += "      <Points>\n";
   appendDataArray(out, "position", 3, points, encoding);
@@ -315,7 +318,8 @@ size_t removeStaleTemporaries(const fs::path& target) {
     if (pid == long(::getpid())) continue;
     if (::kill(pid_t(pid), 0) == 0 || errno != ESRCH) continue;  // alive (or not ours to ask about)
     std::error_code st;
-    if (fs::is_directory(fs::symlink_status(it->path(), st)) && !lockedByALiveRun(it->path())) stale.push_back(it->path());
+    if (fs::is_directory(fs::symlink_status(it->path(), st)) && !lockedByALiveRun(it->path()))
+      stale.push_back(it->path());
   }
   size_t removed = 0;
   for (const fs::path& p : stale) {

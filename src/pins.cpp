@@ -94,7 +94,8 @@ PinSet selectPins(const std::vector<PinSettings>& pins, const std::vector<Vec3>&
   }
   for (size_t p = 0; p < pins.size(); ++p)
     if (held[p] == 0)
-      throw InputError("pins[" + std::to_string(p) + "]: the " + (masks[p] ? "mask" : "box") + " holds no vertex of the body");
+      throw InputError("pins[" + std::to_string(p) + "]: the " + (masks[p] ? "mask" : "box") +
+                       " holds no vertex of the body");
   return s;
 }
 

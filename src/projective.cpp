@@ -14,11 +14,11 @@ using Rhs = Eigen::Matrix<Real, Eigen::Dynamic, 3>;
 
 struct ProjectiveSolver::Impl {
   const RestModel* model = nullptr;
-  Real dt = 0;                       ///< [s]; 0 = static solver (no inertia term).
-  std::vector<int32_t> freeIndex;    ///< Per vertex: row in the reduced system, -1 if pinned.
-  std::vector<uint32_t> pinned;      ///< Pinned vertex ids (ascending).
+  Real dt = 0;                        ///< [s]; 0 = static solver (no inertia term).
+  std::vector<int32_t> freeIndex;     ///< Per vertex: row in the reduced system, -1 if pinned.
+  std::vector<uint32_t> pinned;       ///< Pinned vertex ids (ascending).
   Eigen::SimplicialLDLT<SpMat> ldlt;  ///< Factor of the reduced global matrix.
-  Rhs rhs, sol;                      ///< Scratch, numFree x 3.
+  Rhs rhs, sol;                       ///< Scratch, numFree x 3.
 
   // Local step for every element, and the right-hand side sum_e k_e G_e^T (M_e R0) plus the
   // pinned vertices' coupling k_e/n sum_{pinned b in e} x_b (the -A_fp x_p term), added into rhs.
@@ -30,8 +30,10 @@ struct ProjectiveSolver::Impl {
       const uint32_t* verts = &m.elemVerts[b];
       const Vec3* R0 = &m.restOffsets[b];
       const Mat3 A = elementCovariance(x.data(), verts, R0, int(n));
-      if (m.dim == 2) q[e] = Quat(Eigen::AngleAxisd(fitRotation2(A), Vec3::UnitZ()));
-      else fitRotation3(A, q[e], rotationIterations, 1e-12);
+      if (m.dim == 2)
+        q[e] = Quat(Eigen::AngleAxisd(fitRotation2(A), Vec3::UnitZ()));
+      else
+        fitRotation3(A, q[e], rotationIterations, 1e-12);
       const Mat3 M = q[e].toRotationMatrix();
       const Real k = m.stiffness[e];
       p.resize(n);
@@ -66,7 +68,8 @@ struct ProjectiveSolver::Impl {
     Eigen::MatrixXd E = Eigen::MatrixXd::Zero(n, c);
     heldTargets.resize(c, 3);
     for (Eigen::Index j = 0, k = 0; j < Eigen::Index(held.size()); ++j)
-      if (freeIndex[held[size_t(j)]] >= 0) E(heldRows[size_t(k)], k) = 1, heldTargets.row(k++) = targets[size_t(j)].transpose();
+      if (freeIndex[held[size_t(j)]] >= 0)
+        E(heldRows[size_t(k)], k) = 1, heldTargets.row(k++) = targets[size_t(j)].transpose();
     Z = ldlt.solve(E);
     Eigen::MatrixXd Sm(c, c);
     for (Eigen::Index k = 0; k < c; ++k) Sm.row(k) = Z.row(heldRows[size_t(k)]);
@@ -78,7 +81,8 @@ struct ProjectiveSolver::Impl {
     if (!heldRows.empty()) {
       // x = A^-1 b + Z lambda with S lambda = p - x_held: the held rows land exactly on p.
       Rhs r(Eigen::Index(heldRows.size()), 3);
-      for (size_t k = 0; k < heldRows.size(); ++k) r.row(Eigen::Index(k)) = heldTargets.row(Eigen::Index(k)) - sol.row(heldRows[k]);
+      for (size_t k = 0; k < heldRows.size(); ++k)
+        r.row(Eigen::Index(k)) = heldTargets.row(Eigen::Index(k)) - sol.row(heldRows[k]);
       sol += Z * Rhs(S.solve(r));
     }
     for (size_t i = 0; i < freeIndex.size(); ++i)
@@ -121,7 +125,8 @@ ProjectiveSolver::ProjectiveSolver(const RestModel& model, Real dt, const std::v
   A.setFromTriplets(t.begin(), t.end());
   s.ldlt.compute(A);
   if (s.ldlt.info() != Eigen::Success)
-    throw InputError("implicit integrator: the global matrix could not be factored (a body without pins in a static solve?)");
+    throw InputError(
+        "implicit integrator: the global matrix could not be factored (a body without pins in a static solve?)");
   s.rhs.resize(nFree, 3);
 }
 

@@ -56,7 +56,7 @@ int fitRotation3(const Mat3& A, Quat& q, int maxIterations, Real tolerance) {
     }
     Real angle2 = w0 * w0 + w1 * w1 + w2 * w2;
     if (!(angle2 >= tolerance * tolerance)) break;  // converged (also stops on NaN)
-    if (angle2 > 1.0) {  // a trust region: at most one radian a step
+    if (angle2 > 1.0) {                             // a trust region: at most one radian a step
       const Real s = 1 / std::sqrt(angle2);
       w0 *= s, w1 *= s, w2 *= s, angle2 = 1;
     }
@@ -109,7 +109,6 @@ Real fitRotation2(const Mat3& A) {
   return std::atan2(s, c);
 }
 
-
 // ---- four fits at once ----------------------------------------------------------------------
 // One lane per element (simd.h).
 void fitRotation3Batch(RotationBatch& b, int maxIterations, Real tolerance) {
@@ -159,10 +158,16 @@ void fitRotation3Batch(RotationBatch& b, int maxIterations, Real tolerance) {
     // to h^14 (the next terms are below 1e-18).
     const d4 u = 0.25 * angle2;  // h^2
     const d4 cw =
-        1 + u * (-1.0 / 2 + u * (1.0 / 24 + u * (-1.0 / 720 + u * (1.0 / 40320 + u * (-1.0 / 3628800 +
-        u * (1.0 / 479001600 + u * (-1.0 / 87178291200.0)))))));
-    const d4 sw = 0.5 * (1 + u * (-1.0 / 6 + u * (1.0 / 120 + u * (-1.0 / 5040 + u * (1.0 / 362880 +
-                  u * (-1.0 / 39916800 + u * (1.0 / 6227020800.0 + u * (-1.0 / 1307674368000.0))))))));
+        1 + u * (-1.0 / 2 +
+                 u * (1.0 / 24 +
+                      u * (-1.0 / 720 + u * (1.0 / 40320 + u * (-1.0 / 3628800 +
+                                                                u * (1.0 / 479001600 + u * (-1.0 / 87178291200.0)))))));
+    const d4 sw =
+        0.5 *
+        (1 + u * (-1.0 / 6 +
+                  u * (1.0 / 120 + u * (-1.0 / 5040 + u * (1.0 / 362880 + u * (-1.0 / 39916800 +
+                                                                               u * (1.0 / 6227020800.0 +
+                                                                                    u * (-1.0 / 1307674368000.0))))))));
     const d4 dx = sw * w0, dy = sw * w1, dz = sw * w2;
     const d4 nw = qw * cw - qx * dx - qy * dy - qz * dz;
     const d4 nx = qw * dx + qx * cw + qy * dz - qz * dy;

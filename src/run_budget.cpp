@@ -13,7 +13,7 @@ RunEstimate estimateRun(double duration, double dt, size_t vertices, IntegratorK
   e.steps = std::ceil(duration / dt - 1e-9);
   e.vertexSteps = e.steps * double(vertices);
   e.wallSeconds = e.vertexSteps * (integrator == IntegratorKind::Implicit ? kImplicitSecondsPerVertexStep
-                                                                           : kExplicitSecondsPerVertexStep);
+                                                                          : kExplicitSecondsPerVertexStep);
   return e;
 }
 
@@ -33,7 +33,8 @@ std::string formatSeconds(double s) {
 }
 
 void checkRunBudget(const RunEstimate& e, double dt, double duration, std::optional<double> maxSteps) {
-  const bool over = maxSteps ? e.steps > *maxSteps : e.steps > kDefaultMaxSteps || e.vertexSteps > kDefaultMaxVertexSteps;
+  const bool over =
+      maxSteps ? e.steps > *maxSteps : e.steps > kDefaultMaxSteps || e.vertexSteps > kDefaultMaxVertexSteps;
   if (!over) return;
   char buf[512];
   std::snprintf(buf, sizeof buf,

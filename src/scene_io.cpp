@@ -5,8 +5,8 @@
 // so a typo never silently falls back to a default. All checks go through one reader class,
 // `Fields`, so that every key is validated the same way and unknown keys are always caught.
 #include <algorithm>
-#include <charconv>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -87,7 +87,8 @@ size_t editDistance(std::string_view a, std::string_view b) {
   for (size_t i = 1; i <= a.size(); ++i)
     for (size_t j = 1; j <= b.size(); ++j) {
       d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1])
+        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
     }
   return d[a.size()][b.size()];
 }
@@ -113,9 +114,7 @@ struct Bound {
   bool loOpen = false;
   bool hiOpen = false;
 
-  bool contains(Real x) const {
-    return std::isfinite(x) && (loOpen ? x > lo : x >= lo) && (hiOpen ? x < hi : x <= hi);
-  }
+  bool contains(Real x) const { return std::isfinite(x) && (loOpen ? x > lo : x >= lo) && (hiOpen ? x < hi : x <= hi); }
   std::string text() const {
     const bool hasLo = std::isfinite(lo), hasHi = std::isfinite(hi);
     const auto num = numberText;
@@ -130,7 +129,7 @@ struct Bound {
 const Bound kAny{};
 const Bound kPositive{0, std::numeric_limits<Real>::infinity(), true, false};
 const Bound kNonNegative{0, std::numeric_limits<Real>::infinity(), false, false};
-const Bound kUnit{0, 1, false, false};         // [0, 1]
+const Bound kUnit{0, 1, false, false};  // [0, 1]
 
 std::string expectNumber(const Bound& b, const char* unit) {
   std::string s = "a number";
@@ -166,11 +165,10 @@ struct Context {
 // reports the first key nobody asked for. Accessors throw InputError naming FILE and PATH.key.
 class Fields {
  public:
-  Fields(const json& object, std::string path, const Context& ctx) : obj_(&object), path_(std::move(path)), ctx_(&ctx) {}
+  Fields(const json& object, std::string path, const Context& ctx)
+      : obj_(&object), path_(std::move(path)), ctx_(&ctx) {}
 
-  std::string keyPath(std::string_view key) const {
-    return path_.empty() ? shown(key) : path_ + "." + shown(key);
-  }
+  std::string keyPath(std::string_view key) const { return path_.empty() ? shown(key) : path_ + "." + shown(key); }
   [[noreturn]] void fail(std::string_view key, const std::string& what) const { failAt(*ctx_, keyPath(key), what); }
   [[noreturn]] void failWrongType(std::string_view key, const json& v, const std::string& expected) const {
     fail(key, "got " + describeValue(v) + " (expected " + expected + ")");
@@ -311,7 +309,8 @@ class Fields {
       if (known_.count(it.key())) continue;
       std::string best;
       for (const std::string& k : known_)
-        if (isNearMiss(it.key(), k) && (best.empty() || editDistance(it.key(), k) < editDistance(it.key(), best))) best = k;
+        if (isNearMiss(it.key(), k) && (best.empty() || editDistance(it.key(), k) < editDistance(it.key(), best)))
+          best = k;
       std::string what = "unknown key";
       if (!best.empty()) {
         what += " (did you mean \"" + best + "\"?)";
@@ -331,7 +330,8 @@ class Fields {
     const Real x = v.get<Real>();
     // JSON has no NaN; an overflowing literal such as 1e999 parses as infinity.
     if (!std::isfinite(x)) failAt(*ctx_, path, "not a finite number (expected " + expectNumber(b, unit) + ")");
-    if (!b.contains(x)) failAt(*ctx_, path, shown(v.dump()) + " is out of range (expected " + expectNumber(b, unit) + ")");
+    if (!b.contains(x))
+      failAt(*ctx_, path, shown(v.dump()) + " is out of range (expected " + expectNumber(b, unit) + ")");
     return x;
   }
   static std::string rangeText(int lo, int hi) {
@@ -343,7 +343,8 @@ class Fields {
     const std::string expected = integerText(lo, hi);
     if (v.is_number_unsigned()) {
       const uint64_t x = v.get<uint64_t>();
-      if (x > uint64_t(hi) || int64_t(x) < lo) failAt(*ctx_, path, v.dump() + " is out of range (expected " + expected + ")");
+      if (x > uint64_t(hi) || int64_t(x) < lo)
+        failAt(*ctx_, path, v.dump() + " is out of range (expected " + expected + ")");
       return int(x);
     }
     if (!v.is_number_integer()) failAt(*ctx_, path, "got " + describeValue(v) + " (expected " + expected + ")");
@@ -495,8 +496,8 @@ std::string defaultName(const std::string& sourceName) {
 void checkMaxAboveMin(const Fields& f, const Vec3& min, const Vec3& max) {
   for (int i = 0; i < f.context().dim; ++i)
     if (!(max[i] > min[i]))
-      f.fail("max", "max[" + std::to_string(i) + "] = " + numberText(max[i]) + " is not above min[" + std::to_string(i) +
-                        "] = " + numberText(min[i]) + " (expected max > min on every axis)");
+      f.fail("max", "max[" + std::to_string(i) + "] = " + numberText(max[i]) + " is not above min[" +
+                        std::to_string(i) + "] = " + numberText(min[i]) + " (expected max > min on every axis)");
 }
 
 Primitive readPrimitive(Fields& f) {
@@ -545,7 +546,8 @@ std::shared_ptr<const VolumeSource> readSource(Fields f, int dim, Real voxelSize
   spec.path = path.lexically_normal().string();
   std::error_code ec;
   if (!std::filesystem::is_regular_file(spec.path, ec))
-    f.fail("file", "\"" + shown(file.get<std::string>()) + "\" is not a readable file (looked for " + shown(spec.path) + ")");
+    f.fail("file",
+           "\"" + shown(file.get<std::string>()) + "\" is not a readable file (looked for " + shown(spec.path) + ")");
   if (f.take("format")) {
     spec.format = f.enumeration("format", io::VolumeFormat::Binvox, &io::parseVolumeFormat);
   } else {
@@ -557,9 +559,11 @@ std::shared_ptr<const VolumeSource> readSource(Fields f, int dim, Real voxelSize
   }
   const io::VolumeFormat format = *spec.format;
   const std::string name = io::volumeFormatName(format);
-  const bool grey = format == io::VolumeFormat::Nrrd || format == io::VolumeFormat::Nifti || format == io::VolumeFormat::Raw;
+  const bool grey =
+      format == io::VolumeFormat::Nrrd || format == io::VolumeFormat::Nifti || format == io::VolumeFormat::Raw;
   const bool mesh = io::isMeshFormat(format);
-  const std::string greyOnly = "only grey-level formats (nrrd, nifti, raw) take it; " + name + " files are binary already";
+  const std::string greyOnly =
+      "only grey-level formats (nrrd, nifti, raw) take it; " + name + " files are binary already";
   if (!grey) {
     f.forbid("threshold", greyOnly);
     f.forbid("range", greyOnly);
@@ -567,9 +571,11 @@ std::shared_ptr<const VolumeSource> readSource(Fields f, int dim, Real voxelSize
   spec.grey.threshold = f.optNumber("threshold", kAny, "");
   if (const json* r = f.take("range")) {
     const std::string expected = "2 numbers [lo, hi] with lo <= hi";
-    if (!r->is_array() || r->size() != 2 || !(*r)[0].is_number() || !(*r)[1].is_number()) f.failWrongType("range", *r, expected);
+    if (!r->is_array() || r->size() != 2 || !(*r)[0].is_number() || !(*r)[1].is_number())
+      f.failWrongType("range", *r, expected);
     const Real lo = (*r)[0].get<Real>(), hi = (*r)[1].get<Real>();
-    if (!std::isfinite(lo) || !std::isfinite(hi) || lo > hi) f.fail("range", r->dump() + " is out of range (expected " + expected + ")");
+    if (!std::isfinite(lo) || !std::isfinite(hi) || lo > hi)
+      f.fail("range", r->dump() + " is out of range (expected " + expected + ")");
     if (spec.grey.threshold) f.fail("range", "not allowed here: give \"threshold\" or \"range\", not both");
     spec.grey.rangeLo = lo;
     spec.grey.rangeHi = hi;
@@ -759,9 +765,12 @@ PinSettings readPin(Fields& f, const Scene& scene) {
     if (dim == 2) origin.z() = 0;
     mask->origin = origin + offset * mask->voxelSize;
     for (Fields& bf : mf->objectArray("boxes", false)) {
-      const std::array<int, 3> lo = bf.requireIntVec("min", 0, kMaxGridEdge), hi = bf.requireIntVec("max", 0, kMaxGridEdge);
+      const std::array<int, 3> lo = bf.requireIntVec("min", 0, kMaxGridEdge),
+                               hi = bf.requireIntVec("max", 0, kMaxGridEdge);
       for (int a = 0; a < dim; ++a)
-        if (hi[a] < lo[a]) bf.fail("max", "is below \"min\" on axis " + std::to_string(a) + " (expected max >= min; both inclusive voxel indices)");
+        if (hi[a] < lo[a])
+          bf.fail("max", "is below \"min\" on axis " + std::to_string(a) +
+                             " (expected max >= min; both inclusive voxel indices)");
       bf.finish();
       mask->boxes.push_back({Int3(lo[0], lo[1], dim == 3 ? lo[2] : 0), Int3(hi[0], hi[1], dim == 3 ? hi[2] : 0)});
     }
@@ -830,7 +839,9 @@ Scene parseScene(const std::string& jsonText, const std::string& sourceName) {
   scene.name = defaultName(sourceName);
   if (auto name = top.optString("name")) {
     if (!isSafeName(*name))
-      top.fail("name", "\"" + shown(*name) + "\" is not usable as a directory name (expected 1-100 of A-Z a-z 0-9 _ - ., not starting with .)");
+      top.fail("name",
+               "\"" + shown(*name) +
+                   "\" is not usable as a directory name (expected 1-100 of A-Z a-z 0-9 _ - ., not starting with .)");
     scene.name = *name;
   }
   top.optString("description");  // free text for people; ignored
@@ -839,7 +850,8 @@ Scene parseScene(const std::string& jsonText, const std::string& sourceName) {
   if (auto m = top.optObject("material")) readMaterial(*m, scene.body.material);
   if (auto s = top.optObject("simulation")) readSimulation(*s, scene);
   if (auto d = top.optObject("domain")) readDomain(*d, scene);
-  for (Fields& mf : top.objectArray("manipulators", false)) scene.manipulators.push_back(readManipulator(mf, scene.dim));
+  for (Fields& mf : top.objectArray("manipulators", false))
+    scene.manipulators.push_back(readManipulator(mf, scene.dim));
   for (Fields& pf : top.objectArray("pins", false)) scene.pins.push_back(readPin(pf, scene));
   top.finish();
 

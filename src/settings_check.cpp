@@ -37,9 +37,10 @@ void validate(const SimulationSettings& s) {
   // Forward Euler multiplies a vibration's energy by (1 + (omega dt)^2) / (1 + damping dt) every
   // step: without damping no dt is stable, so "auto" has nothing to pick (World, docs/scenes.md).
   if (s.integrator == IntegratorKind::ForwardEuler && s.dt == 0 && !(s.damping > 0))
-    throw InputError("integrator: forward_euler is unstable at every dt without damping (each step multiplies a "
-                     "vibration's energy by 1 + (omega dt)^2); give damping > 0 (dt auto is then damping / (2 omega^2)), "
-                     "an explicit dt, or use symplectic");
+    throw InputError(
+        "integrator: forward_euler is unstable at every dt without damping (each step multiplies a "
+        "vibration's energy by 1 + (omega dt)^2); give damping > 0 (dt auto is then damping / (2 omega^2)), "
+        "an explicit dt, or use symplectic");
 }
 
 void validate(const ManipulatorSettings& s) {

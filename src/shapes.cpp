@@ -6,10 +6,8 @@ namespace gradel {
 
 bool Primitive::contains(const Vec3& p) const {
   switch (kind) {
-    case PrimitiveKind::Box:
-      return (p.array() >= min.array()).all() && (p.array() <= max.array()).all();
-    case PrimitiveKind::Sphere:
-      return (p - center).squaredNorm() <= radius * radius;
+    case PrimitiveKind::Box: return (p.array() >= min.array()).all() && (p.array() <= max.array()).all();
+    case PrimitiveKind::Sphere: return (p - center).squaredNorm() <= radius * radius;
     case PrimitiveKind::Cylinder: {
       Vec3 d = p - center;
       if (std::abs(d[axis]) > halfLength) return false;
@@ -24,8 +22,7 @@ VoxelVolume rasterize(const ShapeSpec& spec) {
   if (spec.primitives.empty()) throw InputError("shape: at least one primitive is needed");
   VoxelVolume vol(spec.dim, spec.dims[0], spec.dims[1], spec.dims[2], spec.voxelSize);
   for (const Primitive& p : spec.primitives) {
-    if (p.kind != PrimitiveKind::Box && !(p.radius > 0))
-      throw InputError("shape: radius must be positive");
+    if (p.kind != PrimitiveKind::Box && !(p.radius > 0)) throw InputError("shape: radius must be positive");
     if (p.kind == PrimitiveKind::Cylinder && !(p.halfLength > 0))
       throw InputError("shape: cylinder half_length must be positive");
     if (p.kind == PrimitiveKind::Cylinder && spec.dim == 2)

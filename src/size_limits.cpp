@@ -59,7 +59,8 @@ void checkVolumeSize(const std::array<int, 3>& dims, int dim, const SizeLimits& 
                            (dim == 3 ? " x " + std::to_string(dims[2]) : std::string());
   for (int a = 0; a < dim; ++a)
     if (dims[a] < 1 || dims[a] > kMaxGridEdge)
-      throw InputError(key + ": a grid of " + grid + " voxels (expected edges of 1 to " + std::to_string(kMaxGridEdge) + ")");
+      throw InputError(key + ": a grid of " + grid + " voxels (expected edges of 1 to " + std::to_string(kMaxGridEdge) +
+                       ")");
   const uint64_t voxels = uint64_t(dims[0]) * uint64_t(dims[1]) * uint64_t(dim == 3 ? dims[2] : 1);
   if (voxels > limits.maxVoxels)
     throw InputError(key + ": a grid of " + grid + " = " + std::to_string(voxels) + " voxels is over the limit of " +
@@ -76,10 +77,11 @@ void checkModelSize(const LayoutCounts& c, int dim, LayoutKind kind, const SizeL
   const uint64_t bytes = estimateModelBytes(c, dim);
   const uint64_t maxBytes = limits.maxBytes ? limits.maxBytes : defaultMemoryLimit();
   if (bytes > maxBytes)
-    throw InputError(key + ": the " + layoutKindName(kind) + " layout of this body has " + std::to_string(c.elements) +
-                     " elements and " + std::to_string(c.vertices) + " vertices, which need about " + formatBytes(bytes) +
-                     ", over the memory limit of " + formatBytes(maxBytes) +
-                     " (3/4 of this machine's memory, or GRADEL_MEMORY_LIMIT_MB); use a smaller size or the gradational layout");
+    throw InputError(
+        key + ": the " + layoutKindName(kind) + " layout of this body has " + std::to_string(c.elements) +
+        " elements and " + std::to_string(c.vertices) + " vertices, which need about " + formatBytes(bytes) +
+        ", over the memory limit of " + formatBytes(maxBytes) +
+        " (3/4 of this machine's memory, or GRADEL_MEMORY_LIMIT_MB); use a smaller size or the gradational layout");
 }
 
 void checkLayoutSize(const VoxelVolume& volume, LayoutKind kind, const SizeLimits& limits, const std::string& key) {

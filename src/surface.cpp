@@ -204,7 +204,8 @@ void addRegions2D(const Layout& layout, SurfaceBuilder& b) {
     std::vector<Pt2> squares;
     const int32_t c = layout.cellSize[e];
     for (int k = 0; k < 4; ++k)
-      if (layout.cellMask[e] >> k & 1) squares.push_back({layout.origin[e].x() + (k & 1) * c, layout.origin[e].y() + (k >> 1 & 1) * c});
+      if (layout.cellMask[e] >> k & 1)
+        squares.push_back({layout.origin[e].x() + (k & 1) * c, layout.origin[e].y() + (k >> 1 & 1) * c});
     b.addRegion(squares, c, 2, 0, false);
   }
 }
@@ -335,7 +336,8 @@ DisplaySurface buildDisplaySurface(const Layout& layout, const VoxelVolume& volu
   return s;
 }
 
-std::vector<Vec3> vertexNormals(const std::vector<Vec3>& vertices, const std::vector<std::array<uint32_t, 3>>& triangles) {
+std::vector<Vec3> vertexNormals(const std::vector<Vec3>& vertices,
+                                const std::vector<std::array<uint32_t, 3>>& triangles) {
   std::vector<Vec3> n(vertices.size(), Vec3::Zero());
   // The unnormalised cross product weights each face by its area.
   for (const auto& t : triangles) {

@@ -81,7 +81,8 @@ Real stretchModulus(const BarSpec& bar, Real strain) {
     const uint32_t s = m.elemStart[e], n = m.elemStart[e + 1] - s;
     f.resize(n);
     Quat q = w.state().rotations[e];
-    elementForces(3, w.state().positions.data(), &m.elemVerts[s], &m.restOffsets[s], int(n), m.stiffness[e], q, f.data(), 20);
+    elementForces(3, w.state().positions.data(), &m.elemVerts[s], &m.restOffsets[s], int(n), m.stiffness[e], q,
+                  f.data(), 20);
     for (uint32_t i = 0; i < n; ++i) force[m.elemVerts[s + i]] += f[i];
   }
   Real F = 0;

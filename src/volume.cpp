@@ -8,8 +8,8 @@ VoxelVolume::VoxelVolume(int dim, int nx, int ny, int nz, Real voxelSize)
     : dim_(dim), n_{nx, ny, nz}, voxelSize_(voxelSize) {
   if (dim != 2 && dim != 3) throw InputError("volume: dim must be 2 or 3, got " + std::to_string(dim));
   if (nx <= 0 || ny <= 0 || nz <= 0)
-    throw InputError("volume: dimensions must be positive, got " + std::to_string(nx) + "x" +
-                     std::to_string(ny) + "x" + std::to_string(nz));
+    throw InputError("volume: dimensions must be positive, got " + std::to_string(nx) + "x" + std::to_string(ny) + "x" +
+                     std::to_string(nz));
   if (dim == 2 && nz != 1) throw InputError("volume: a 2D volume must have nz == 1");
   if (!(voxelSize > 0) || !std::isfinite(voxelSize))
     throw InputError("volume: voxel_size must be a positive finite number of metres");

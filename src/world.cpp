@@ -11,9 +11,9 @@
 
 #include "element_stage.h"
 #include "gradel/element.h"
-#include "huge_pages.h"
 #include "gradel/rotation_fit.h"
 #include "gradel/settings_check.h"
+#include "huge_pages.h"
 #include "simd.h"
 #include "thread_team.h"
 
@@ -21,11 +21,11 @@ namespace gradel {
 
 /// Per-step scratch (never read across steps except for output).
 struct World::StepScratch {
-  std::vector<ElementFrame> frames;     ///< Per element: k M and (k e, k), written by the element stage.
-  std::vector<Vec3> previousPositions;  ///< [m] positions at the start of an implicit step (swept contacts).
+  std::vector<ElementFrame> frames;      ///< Per element: k M and (k e, k), written by the element stage.
+  std::vector<Vec3> previousPositions;   ///< [m] positions at the start of an implicit step (swept contacts).
   std::vector<Vec3> previousVelocities;  ///< [m/s] velocities then (the bounce's crossing speed, contacts.h).
-  std::vector<Real> contactDepth;   ///< [m] per vertex, implicit step only: depth before correction.
-  Real maxContactDepth = 0;         ///< [m] deepest vertex found (and corrected) in the last step.
+  std::vector<Real> contactDepth;        ///< [m] per vertex, implicit step only: depth before correction.
+  Real maxContactDepth = 0;              ///< [m] deepest vertex found (and corrected) in the last step.
 };
 
 IntegratorKind parseIntegratorKind(const std::string& name) {
@@ -51,9 +51,7 @@ const char* periodRuleName(PeriodRule r) { return r == PeriodRule::Element ? "el
 World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& sim, const DomainSettings& domain,
              std::vector<ManipulatorSettings> manipulators)
     : model_(model ? std::move(model) : throw std::invalid_argument("World: no model")),
-      stageRest_(std::make_unique<const ElementStageRest>(*model_)),
-      sim_(sim),
-      domain_(domain),
+      stageRest_(std::make_unique<const ElementStageRest>(*model_)), sim_(sim), domain_(domain),
       scratch_(std::make_unique<StepScratch>()) {
   validate(sim_);
   validate(domain_, model_->dim);
@@ -80,7 +78,8 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   const RestModel& m = *model_;
   adviseHugePages(state_.positions), adviseHugePages(state_.velocities), adviseHugePages(m.restPositions);
   adviseHugePages(state_.rotations), adviseHugePages(scratch_->frames), adviseHugePages(m.invMass);
-  adviseHugePages(m.elemVerts), adviseHugePages(m.restOffsets), adviseHugePages(m.elemStart), adviseHugePages(m.stiffness);
+  adviseHugePages(m.elemVerts), adviseHugePages(m.restOffsets), adviseHugePages(m.elemStart),
+      adviseHugePages(m.stiffness);
   adviseHugePages(stageRest_->vertexElements), adviseHugePages(stageRest_->vertexStart);
   adviseHugePages(stageRest_->sumRestOffsets), adviseHugePages(stageRest_->restCentroids);
 
@@ -122,8 +121,8 @@ void World::stageElementFrames(size_t begin, size_t end) {
 // bound cannot touch anything: resolveVertexContacts would leave it unchanged, so it is skipped
 // (the results are bit for bit those of resolving every vertex).
 struct World::ContactBounds {
-  std::vector<simd::d4> lo, hi;           ///< Per manipulator: swept bounds grown by its radius.
-  simd::d4 wallLo, wallHi;                ///< Inside the walls (infinite without walls).
+  std::vector<simd::d4> lo, hi;  ///< Per manipulator: swept bounds grown by its radius.
+  simd::d4 wallLo, wallHi;       ///< Inside the walls (infinite without walls).
 };
 
 World::ContactBounds World::contactBounds() const {
@@ -191,8 +190,7 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
     if (!cb) continue;
     // Broad phase (a NaN position cannot be changed by a contact, so it may be skipped).
     bool touch = !none(lo < cb->wallLo) || !none(hi > cb->wallHi);
-    for (size_t k = 0; !touch && k < cb->lo.size(); ++k)
-      touch = none(hi < cb->lo[k]) && none(lo > cb->hi[k]);
+    for (size_t k = 0; !touch && k < cb->lo.size(); ++k) touch = none(hi < cb->lo[k]) && none(lo > cb->hi[k]);
     if (!touch) continue;
     for (size_t i = b; i < be; ++i) {
       Vec3 previous, previousVelocity;
@@ -230,9 +228,8 @@ Real World::resolveVertexContacts(const Vec3& previous, const Vec3& previousVelo
 // Contacts of every vertex from scratch_->previousPositions (the implicit step).
 void World::stageContacts(size_t begin, size_t end) {
   for (size_t i = begin; i < end; ++i)
-    scratch_->contactDepth[i] =
-        resolveVertexContacts(scratch_->previousPositions[i], scratch_->previousVelocities[i], state_.positions[i],
-                              state_.velocities[i]);
+    scratch_->contactDepth[i] = resolveVertexContacts(scratch_->previousPositions[i], scratch_->previousVelocities[i],
+                                                      state_.positions[i], state_.velocities[i]);
 }
 
 void World::moveManipulators(Real tNext) {
@@ -265,7 +262,8 @@ inline size_t splitPoint(const std::vector<uint32_t>& prefix, uint64_t itemCost,
 // Each member's first share of the chunks of `chunk` items, as chunk indices (members + 1).
 std::vector<size_t> chunkSplit(const std::vector<uint32_t>& prefix, uint64_t itemCost, int members, size_t chunk) {
   std::vector<size_t> split(size_t(members) + 1);
-  for (int t = 0; t <= members; ++t) split[size_t(t)] = (splitPoint(prefix, itemCost, t, members, chunk) + chunk - 1) / chunk;
+  for (int t = 0; t <= members; ++t)
+    split[size_t(t)] = (splitPoint(prefix, itemCost, t, members, chunk) + chunk - 1) / chunk;
   return split;
 }
 // Measured costs in pairs (instruction counts, callgrind): an element's moments, rotation fit
@@ -412,14 +410,14 @@ void World::stepImplicit() {
       if (scratch_->contactDepth[i] > 0) held.push_back(i), heldAt.push_back(state_.positions[i]);
     if (!held.empty()) {
       state_.positions = x0, state_.velocities = v0, state_.rotations = q0;
-      projective_->step(state_.positions, state_.velocities, state_.rotations, g, sim_.damping,
-                        sim_.implicitIterations, targets, sim_.rotationIterations, held, heldAt);
+      projective_->step(state_.positions, state_.velocities, state_.rotations, g, sim_.damping, sim_.implicitIterations,
+                        targets, sim_.rotationIterations, held, heldAt);
       stageContacts(0, model_->numVertices());
     }
   }
   scratch_->maxContactDepth = scratch_->contactDepth.empty()
-                                 ? 0
-                                 : *std::max_element(scratch_->contactDepth.begin(), scratch_->contactDepth.end());
+                                  ? 0
+                                  : *std::max_element(scratch_->contactDepth.begin(), scratch_->contactDepth.end());
   for (Manipulator& m : manipulators_) m.previousPosition = m.position;
   state_.time = tNext;
   if (!pinSet_.empty()) applyPins(state_.time);
@@ -452,7 +450,8 @@ std::vector<Real> World::vertexStress(const std::vector<Real>& elementStress) co
   std::vector<Real> sum(m.numVertices(), 0.0);
   std::vector<uint32_t> count(m.numVertices(), 0);
   for (size_t e = 0; e < m.numElements(); ++e)
-    for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) sum[m.elemVerts[p]] += elementStress[e], ++count[m.elemVerts[p]];
+    for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p)
+      sum[m.elemVerts[p]] += elementStress[e], ++count[m.elemVerts[p]];
   for (size_t i = 0; i < sum.size(); ++i) sum[i] = count[i] ? sum[i] / count[i] : 0;
   return sum;
 }
@@ -480,8 +479,8 @@ Metrics World::metrics(std::vector<Real>* elementStress) const {
     const Real stress = std::sqrt(er.sumSqDisp / n) / m.size[e];
     if (elementStress) (*elementStress)[e] = stress;
     r.maxStress = std::max(r.maxStress, stress);
-    r.minElementDet = std::min(r.minElementDet,
-                               elementDeterminant(m.dim, state_.positions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n)));
+    r.minElementDet = std::min(r.minElementDet, elementDeterminant(m.dim, state_.positions.data(), &m.elemVerts[b],
+                                                                   &m.restOffsets[b], int(n)));
   }
 
   // Symplectic Euler's stored velocity belongs half a step before its positions (it is the

@@ -23,7 +23,8 @@ void resolveAll(const std::vector<Manipulator>& ms, const DomainSettings& d, int
   const size_t surfaces = ms.size() + (d.enabled ? 1 : 0);
   for (int pass = 0; pass < 4; ++pass) {
     Real depth = 0;
-    for (const Manipulator& m : ms) depth = std::max(depth, resolveManipulator(m, previous, x, v, dim, pass == 0, &start).depth);
+    for (const Manipulator& m : ms)
+      depth = std::max(depth, resolveManipulator(m, previous, x, v, dim, pass == 0, &start).depth);
     depth = std::max(depth, resolveDomain(d, previous, x, v, dim, pass == 0, &start).depth);
     if (depth == 0 || surfaces < 2) break;
   }
@@ -33,8 +34,8 @@ bool sameBits(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(Vec3)) == 0;
 }
 
-void checkBroadPhaseExact(const Body& b, int threads, const DomainSettings& d, const std::vector<ManipulatorSettings>& ms,
-                          int steps) {
+void checkBroadPhaseExact(const Body& b, int threads, const DomainSettings& d,
+                          const std::vector<ManipulatorSettings>& ms, int steps) {
   SimulationSettings s;
   s.threads = threads;
   s.damping = 0.5;
@@ -58,8 +59,9 @@ void checkBroadPhaseExact(const Body& b, int threads, const DomainSettings& d, c
     State& r = ref.state();
     for (size_t i = 0; i < r.positions.size(); ++i) {
       const Vec3 before = r.positions[i];
-      resolveAll(poses, d, b.model->dim, previous[i], StepStart{previousVelocity[i], w.dt(), w.settings().integrator == IntegratorKind::SymplecticEuler}, r.positions[i],
-                 r.velocities[i]);
+      resolveAll(poses, d, b.model->dim, previous[i],
+                 StepStart{previousVelocity[i], w.dt(), w.settings().integrator == IntegratorKind::SymplecticEuler},
+                 r.positions[i], r.velocities[i]);
       touched += r.positions[i] != before;
     }
     ASSERT_TRUE(sameBits(w.state().positions, r.positions)) << "positions differ at step " << k;

@@ -20,7 +20,7 @@ BarSpec bar(LayoutKind layout, int across) {
   return b;
 }
 
-TEST(Cantilever, stretchModulus_consistentScaling_isTheMaterialsE) {
+TEST(Cantilever, StretchModulusConsistentScalingIsTheMaterialsE) {
   EXPECT_NEAR(stretchModulus(bar(LayoutKind::Uniform, 4)) / 1e7, 1.0, 0.02);
   EXPECT_NEAR(stretchModulus(bar(LayoutKind::Gradational, 4)) / 1e7, 1.0, 0.02);
 }
@@ -29,7 +29,7 @@ TEST(Cantilever, stretchModulus_consistentScaling_isTheMaterialsE) {
 // cells form lines and plates along the bar. With k_e = E V_e / lambda_max(S_e) (material.h) they
 // are exact along the bar: measured 1.000 E at 8 across and 0.962 E at 16 (the former
 // trace rule, k_e = 3 E V_e / tr S_e, measured 1.152 and 1.205). Never stiffer than E.
-TEST(Cantilever, stretchModulus_gradationalBar_isWithin5PercentOfE) {
+TEST(Cantilever, StretchModulusGradationalBarIsWithin5PercentOfE) {
   const Real e8 = stretchModulus(bar(LayoutKind::Gradational, 8)) / 1e7;
   const Real e16 = stretchModulus(bar(LayoutKind::Gradational, 16)) / 1e7;
   EXPECT_NEAR(e8, 1.0, 0.01);
@@ -39,7 +39,7 @@ TEST(Cantilever, stretchModulus_gradationalBar_isWithin5PercentOfE) {
 
 // Measured 0.677 of Euler-Bernoulli at 4 voxels (2 elements) across; it converges from below
 // (0.90 at 8, 0.98 at 16: docs/validation/report.md). A change here changes the physics.
-TEST(Cantilever, staticTipSag_uniform4_matchesItsReference) {
+TEST(Cantilever, StaticTipSagUniform4MatchesItsReference) {
   const BarSpec b = bar(LayoutKind::Uniform, 4);
   const Real eb = beamTipSag(b.length(), b.width, 1000, 1e7);
   const SagResult r = staticTipSag(b);
@@ -48,7 +48,7 @@ TEST(Cantilever, staticTipSag_uniform4_matchesItsReference) {
 
 // Sag and first frequency of one model obey Euler-Bernoulli's omega1^2 sag = 1.875^4 g / 8
 // whatever its stiffness: the free vibration and the static solve agree with each other.
-TEST(Cantilever, frequencyAndSag_obeyTheBeamRelation) {
+TEST(Cantilever, FrequencyAndSagObeyTheBeamRelation) {
   const BarSpec b = bar(LayoutKind::Uniform, 4);
   SimulationSettings sim;
   sim.damping = 0;
@@ -72,7 +72,7 @@ TEST(Cantilever, frequencyAndSag_obeyTheBeamRelation) {
 
 // Gradational against uniform at the same finest resolution (8 voxels across): the issue's
 // 5 % target; measured 0.3 % less sag (5.0 % less with the former trace rule for k_e).
-TEST(Cantilever, staticTipSag_gradationalNearUniform) {
+TEST(Cantilever, StaticTipSagGradationalNearUniform) {
   const Real g = staticTipSag(bar(LayoutKind::Gradational, 8)).sag;
   const Real u = staticTipSag(bar(LayoutKind::Uniform, 8)).sag;
   EXPECT_NEAR(g / u, 1.0, 0.015);

@@ -44,7 +44,8 @@ class CliTest : public ::testing::Test {
 
   // Runs `gradel ARGS` in dir_, capturing stdout, stderr and the exit code.
   Result run(const std::string& args, const std::string& env = "") {
-    const std::string cmd = "cd '" + dir_.string() + "' && " + env + " '" + std::string(GRADEL_CLI_PATH) + "' " + args + " > stdout.txt 2> stderr.txt";
+    const std::string cmd = "cd '" + dir_.string() + "' && " + env + " '" + std::string(GRADEL_CLI_PATH) + "' " + args +
+                            " > stdout.txt 2> stderr.txt";
     const int status = std::system(cmd.c_str());
     Result r;
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
@@ -82,16 +83,19 @@ const char* kTinyScene = R"({
   "domain": {"min": [-0.1, 0.0, -0.1], "max": [0.1, 0.2, 0.1]}
 })";
 
-TEST_F(CliTest, run_badSceneFiles_exit2OneLineNothingWritten) {
+TEST_F(CliTest, RunBadSceneFilesExit2OneLineNothingWritten) {
   expectRejected("unknown.json", R"({"body": {"shape": "sphere", "size": 4, "radiuss": 3}})", "body.radiuss");
-  expectRejected("nested.json", R"({"body": {"shape": "sphere", "size": 4}, "manipulators": [{"type": "sphere", "raduis": 1}]})",
+  expectRejected("nested.json",
+                 R"({"body": {"shape": "sphere", "size": 4}, "manipulators": [{"type": "sphere", "raduis": 1}]})",
                  "manipulators[0].raduis");
-  expectRejected("malformed.json", "{\"body\": {\"shape\": \"sphere\",\n \"size\": 4,}}", "invalid JSON: parse error at line 2");
+  expectRejected("malformed.json", "{\"body\": {\"shape\": \"sphere\",\n \"size\": 4,}}",
+                 "invalid JSON: parse error at line 2");
   expectRejected("missing.json", R"({"body": {"size": 4}})", "body.shape");
   expectRejected("range.json", R"({"body": {"shape": "sphere", "size": 4, "voxel_size": -1}})", "body.voxel_size");
   expectRejected("enum.json", R"({"body": {"shape": "sphere", "size": 4}, "simulation": {"integrator": "rk4"}})",
                  "simulation.integrator");
-  expectRejected("dim.json", R"({"dim": 2, "body": {"shape": "sphere", "size": 4}, "manipulators": [{"type": "cylinder"}]})",
+  expectRejected("dim.json",
+                 R"({"dim": 2, "body": {"shape": "sphere", "size": 4}, "manipulators": [{"type": "cylinder"}]})",
                  "manipulators[0].type");
   // Valid JSON and schema, but an empty shape: caught when the body is built, still named.
   expectRejected("empty.json", R"({"body": {"shape": "union", "grid": [4, 4, 4],
@@ -99,16 +103,16 @@ TEST_F(CliTest, run_badSceneFiles_exit2OneLineNothingWritten) {
                  "empty");
 }
 
-TEST_F(CliTest, run_missingFile_exit2) {
+TEST_F(CliTest, RunMissingFileExit2) {
   const Result r = run("run nope.json --out result");
   EXPECT_EQ(r.code, 2);
   EXPECT_EQ(r.err, "gradel: nope.json: cannot read: No such file or directory\n");
   EXPECT_FALSE(fs::exists(dir_ / "result"));
 }
 
-TEST_F(CliTest, badArguments_exit2OneLine) {
-  for (const std::string args : {"", "frobnicate", "layout --size abc", "layout --shape cube", "run", "run x.json --threads 0",
-                                 "layout --dim 5", "run x.json --duration -1"}) {
+TEST_F(CliTest, BadArgumentsExit2OneLine) {
+  for (const std::string args : {"", "frobnicate", "layout --size abc", "layout --shape cube", "run",
+                                 "run x.json --threads 0", "layout --dim 5", "run x.json --duration -1"}) {
     SCOPED_TRACE(args);
     write("x.json", kTinyScene);
     const Result r = run(args);
@@ -119,13 +123,13 @@ TEST_F(CliTest, badArguments_exit2OneLine) {
   EXPECT_FALSE(fs::exists(dir_ / "out"));
 }
 
-TEST_F(CliTest, version_printsVersion) {
+TEST_F(CliTest, VersionPrintsVersion) {
   const Result r = run("--version");
   EXPECT_EQ(r.code, 0);
   EXPECT_EQ(r.out.rfind("gradel ", 0), 0u) << r.out;
 }
 
-TEST_F(CliTest, layout_json_hasFewerPairsThanVoxelLayout) {
+TEST_F(CliTest, LayoutJsonHasFewerPairsThanVoxelLayout) {
   const Result r = run("layout --shape sphere --size 12 --json");
   ASSERT_EQ(r.code, 0) << r.err;
   const json j = json::parse(r.out);
@@ -138,7 +142,7 @@ TEST_F(CliTest, layout_json_hasFewerPairsThanVoxelLayout) {
   EXPECT_EQ(perLevel, j.at("elements").get<int>());
 }
 
-TEST_F(CliTest, layout_text_isAlignedTable) {
+TEST_F(CliTest, LayoutTextIsAlignedTable) {
   const Result r = run("layout --shape box --size 8 --dim 2 --layout uniform");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.out.find("elements"), std::string::npos);
@@ -146,7 +150,7 @@ TEST_F(CliTest, layout_text_isAlignedTable) {
   EXPECT_NE(r.out.find("hanging vertices"), std::string::npos);
 }
 
-TEST_F(CliTest, run_writesCompleteResultAndSummary) {
+TEST_F(CliTest, RunWritesCompleteResultAndSummary) {
   write("tiny.json", kTinyScene);
   const Result r = run("run tiny.json --out res --threads 1");
   ASSERT_EQ(r.code, 0) << r.err;
@@ -178,14 +182,14 @@ TEST_F(CliTest, run_writesCompleteResultAndSummary) {
   EXPECT_EQ(json::parse(again.out).at("steps").get<int>() * 2, j.at("steps").get<int>());
 }
 
-TEST_F(CliTest, run_defaultOut_isOutSlashSceneName) {
+TEST_F(CliTest, RunDefaultOutIsOutSlashSceneName) {
   write("tiny.json", R"({"name": "named", "body": {"shape": "box", "size": 2}, "simulation": {"duration": 0.001}})");
   const Result r = run("run tiny.json");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(fs::exists(dir_ / "out" / "named" / "run.pvd"));
 }
 
-TEST_F(CliTest, run_foreignOutDirectory_isRefused) {
+TEST_F(CliTest, RunForeignOutDirectoryIsRefused) {
   write("tiny.json", kTinyScene);
   fs::create_directories(dir_ / "docs");
   std::ofstream(dir_ / "docs" / "thesis.tex") << "keep me";
@@ -195,7 +199,7 @@ TEST_F(CliTest, run_foreignOutDirectory_isRefused) {
   EXPECT_EQ(readFile(dir_ / "docs" / "thesis.tex"), "keep me");
 }
 
-TEST_F(CliTest, run_divergence_exit3NothingWritten) {
+TEST_F(CliTest, RunDivergenceExit3NothingWritten) {
   // dt far above the stability limit (the smallest period here is ~2 ms): the state blows up
   // to inf/NaN within a few hundred steps.
   write("unstable.json", R"({"body": {"shape": "sphere", "size": 6, "velocity": [0, 0, 1]},
@@ -211,13 +215,13 @@ TEST_F(CliTest, run_divergence_exit3NothingWritten) {
     EXPECT_EQ(e.path().filename().string().find("res"), std::string::npos) << "left behind: " << e.path();
 }
 
-
 // ---- issue 15: limits, frames, I/O errors, signals, divergence --------------------------------
 
-TEST_F(CliTest, layout_size_limitsNameTheKeyAndEstimate) {
+TEST_F(CliTest, LayoutSizeLimitsNameTheKeyAndEstimate) {
   Result r = run("layout --shape sphere --size 1588");
   EXPECT_EQ(r.code, 2) << r.err;
-  EXPECT_EQ(r.err.rfind("gradel: --size: a grid of 1588 x 1588 x 1588 = 4004529472 voxels is over the limit", 0), 0u) << r.err;
+  EXPECT_EQ(r.err.rfind("gradel: --size: a grid of 1588 x 1588 x 1588 = 4004529472 voxels is over the limit", 0), 0u)
+      << r.err;
   r = run("layout --shape sphere --size 4097");
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("--size"), std::string::npos) << r.err;
@@ -235,7 +239,7 @@ TEST_F(CliTest, layout_size_limitsNameTheKeyAndEstimate) {
   EXPECT_EQ(j.at("voxel_layout").at("pairs").get<int>(), 8 * 96 * 96 * 96);
 }
 
-TEST_F(CliTest, run_tooManySteps_refusedUnlessMaxStepsAllows) {
+TEST_F(CliTest, RunTooManyStepsRefusedUnlessMaxStepsAllows) {
   // 0.01 s at dt = 1e-12 s: 1e10 steps, which would run for days.
   write("slow.json", R"({"body": {"shape": "sphere", "size": 4},
       "simulation": {"dt": 1e-12, "duration": 0.01, "frame_interval": 0.005}})");
@@ -256,14 +260,15 @@ TEST_F(CliTest, run_tooManySteps_refusedUnlessMaxStepsAllows) {
   EXPECT_EQ(json::parse(r.out).at("steps").get<int>(), 400);
 }
 
-TEST_F(CliTest, run_frameIntervalBelowDt_oneFramePerStepWithWarning) {
+TEST_F(CliTest, RunFrameIntervalBelowDtOneFramePerStepWithWarning) {
   // 25 steps of 1 ms; frames asked every 1 us used to give 10,001 frames, most of them copies.
   // (0.3 ms past the 25th step: the last frame would have repeated the 25th.)
   write("dense.json", R"({"body": {"shape": "sphere", "size": 4},
       "simulation": {"dt": 0.001, "duration": 0.0253, "frame_interval": 1e-6}})");
   const Result r = run("run dense.json --out res");
   ASSERT_EQ(r.code, 0) << r.err;
-  EXPECT_NE(r.err.find("frame_interval 1e-06 s is shorter than dt = 0.001 s; writing one frame per step"), std::string::npos)
+  EXPECT_NE(r.err.find("frame_interval 1e-06 s is shorter than dt = 0.001 s; writing one frame per step"),
+            std::string::npos)
       << r.err;
   const json j = json::parse(r.out);
   EXPECT_EQ(j.at("steps").get<int>(), 25);
@@ -276,7 +281,7 @@ TEST_F(CliTest, run_frameIntervalBelowDt_oneFramePerStepWithWarning) {
   EXPECT_EQ(times.size(), 26u);
 }
 
-TEST_F(CliTest, run_unwritableOutput_exit5NothingWritten) {
+TEST_F(CliTest, RunUnwritableOutputExit5NothingWritten) {
   write("tiny.json", kTinyScene);
   // sysfs refuses new folders even to root (who bypasses chmod): a read-only location.
   const Result r = run("run tiny.json --out /sys/gradel-cli-test/res");
@@ -304,7 +309,8 @@ Stopped runAndSignal(const fs::path& dir, const std::string& scene, int signal) 
   for (int i = 0; i < 200 && !s.sawTemp; ++i) {
     ::usleep(50000);
     for (const auto& e : fs::directory_iterator(dir))
-      if (e.path().filename().string().rfind(prefix, 0) == 0 && fs::exists(e.path() / "frame_00000.vtu")) s.sawTemp = true;
+      if (e.path().filename().string().rfind(prefix, 0) == 0 && fs::exists(e.path() / "frame_00000.vtu"))
+        s.sawTemp = true;
   }
   ::usleep(200000);  // well into the step loop
   ::kill(pid, signal);
@@ -323,7 +329,7 @@ const char* kLongScene = R"({"body": {"shape": "sphere", "size": 4},
   "simulation": {"duration": 600, "frame_interval": 0.01, "damping": 1},
   "domain": {"min": [-0.1, 0.0, -0.1], "max": [0.1, 0.2, 0.1]}})";
 
-TEST_F(CliTest, run_sigtermAndSighup_likeSigint_exit128PlusSignalNothingWritten) {
+TEST_F(CliTest, RunSigtermAndSighupLikeSigintExit128PlusSignalNothingWritten) {
   write("long.json", kLongScene);
   for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
     SCOPED_TRACE(sig);
@@ -331,20 +337,22 @@ TEST_F(CliTest, run_sigtermAndSighup_likeSigint_exit128PlusSignalNothingWritten)
     EXPECT_TRUE(s.sawTemp);
     ASSERT_TRUE(WIFEXITED(s.status)) << "killed by signal " << WTERMSIG(s.status);
     EXPECT_EQ(WEXITSTATUS(s.status), 128 + sig);
-    EXPECT_NE(readFile(dir_ / "stderr.txt").find("nothing written"), std::string::npos) << readFile(dir_ / "stderr.txt");
+    EXPECT_NE(readFile(dir_ / "stderr.txt").find("nothing written"), std::string::npos)
+        << readFile(dir_ / "stderr.txt");
     fs::remove(dir_ / "stdout.txt");
     fs::remove(dir_ / "stderr.txt");
     expectNoResult(dir_);
   }
 }
 
-TEST_F(CliTest, run_afterSigkill_nextRunRemovesTheLeftover) {
+TEST_F(CliTest, RunAfterSigkillNextRunRemovesTheLeftover) {
   write("long.json", kLongScene);
   const Stopped s = runAndSignal(dir_, "long.json", SIGKILL);
   ASSERT_TRUE(s.sawTemp);
   EXPECT_TRUE(WIFSIGNALED(s.status));
   size_t leftovers = 0;
-  for (const auto& e : fs::directory_iterator(dir_)) leftovers += e.path().filename().string().rfind("res.tmp-", 0) == 0;
+  for (const auto& e : fs::directory_iterator(dir_))
+    leftovers += e.path().filename().string().rfind("res.tmp-", 0) == 0;
   EXPECT_EQ(leftovers, 1u);  // SIGKILL cannot be caught: the folder stays ...
   write("tiny.json", kTinyScene);
   const Result r = run("run tiny.json --out res");
@@ -356,7 +364,7 @@ TEST_F(CliTest, run_afterSigkill_nextRunRemovesTheLeftover) {
 
 // A blown-up body keeps finite numbers inside walls: the energy guard stops it (issue 15: drop at
 // dt_fraction 0.5 reached 1.4e5 J from a 2.7 J drop and exited 0).
-TEST_F(CliTest, run_energyBlowUpInsideWalls_exit3NamingTheCause) {
+TEST_F(CliTest, RunEnergyBlowUpInsideWallsExit3NamingTheCause) {
   const std::string drop = readFile(fs::path(GRADEL_SOURCE_DIR) / "scenes" / "drop.json");
   json scene = json::parse(drop);
   scene["simulation"]["dt"] = 0.00117;  // dt_fraction 0.5's step (the reader refuses the fraction itself)

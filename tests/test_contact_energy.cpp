@@ -75,7 +75,7 @@ TEST(ContactEnergy, RestingContactDoesNotBounce) {
   m.settings.radius = 1.0;
   m.settings.restitution = 1.0;
   const Real dt = 1e-3;
-  const Vec3 xPrev(0, 1.0, 0);                     // on the surface
+  const Vec3 xPrev(0, 1.0, 0);                       // on the surface
   const StepStart start{Vec3(0.2, 0, 0), dt, true};  // sliding, no normal speed; symplectic Euler
   Vec3 v(0.2, -0.03, 0);                             // a = -30 m/s^2 gained this step
   Vec3 x = xPrev + dt * v;
@@ -211,7 +211,8 @@ void energyNeverRises() {
   const Real h = 0.01 * size;  // body edge [m]; the body spans [0, h]^3
   SimulationSettings sim;
   sim.damping = *rc::gen::inRange(1, 51) * 0.1;  // (0, 5] 1/s
-  sim.gravity = *rc::gen::element(0, 1) && !std::getenv("GRADEL_PROPERTY_NO_GRAVITY") ? Vec3(0, -9.81, 0) : Vec3::Zero();
+  sim.gravity =
+      *rc::gen::element(0, 1) && !std::getenv("GRADEL_PROPERTY_NO_GRAVITY") ? Vec3(0, -9.81, 0) : Vec3::Zero();
   auto unit = [] { return *rc::gen::inRange(0, 101) * 0.01; };  // [0, 1]
   std::vector<ManipulatorSettings> obstacles;
   const int count = *rc::gen::inRange(1, 3);
@@ -234,18 +235,18 @@ void energyNeverRises() {
     walls.friction = unit();
   }
   for (const ManipulatorSettings& o : obstacles)
-    RC_LOG() << std::setprecision(17) << manipulatorShapeName(o.shape) << " at " << o.path.keys[0].position.transpose() << " r " << o.radius
-             << " half " << o.halfLength << " axis " << o.axis.transpose() << " e " << o.restitution << " mu "
-             << o.friction << "\n";
+    RC_LOG() << std::setprecision(17) << manipulatorShapeName(o.shape) << " at " << o.path.keys[0].position.transpose()
+             << " r " << o.radius << " half " << o.halfLength << " axis " << o.axis.transpose() << " e "
+             << o.restitution << " mu " << o.friction << "\n";
   if (walls.enabled)
-    RC_LOG() << std::setprecision(17) << "walls min " << walls.min.transpose() << " max " << walls.max.transpose() << " e " << walls.restitution
-             << " mu " << walls.friction << "\n";
+    RC_LOG() << std::setprecision(17) << "walls min " << walls.min.transpose() << " max " << walls.max.transpose()
+             << " e " << walls.restitution << " mu " << walls.friction << "\n";
   World w(body.model, sim, walls, obstacles);
   const Rise r = rise(w, propertySteps());
   RC_ASSERT(std::isfinite(r.peak));
   RC_LOG() << shape << " " << size << ", damping " << sim.damping << ", " << obstacles.size() << " obstacles, walls "
-           << walls.enabled << ": E once out of the obstacles (step " << r.start << ") " << r.e0 << " J, peak " << r.peak
-           << " J, now " << r.last << " J\n";
+           << walls.enabled << ": E once out of the obstacles (step " << r.start << ") " << r.e0 << " J, peak "
+           << r.peak << " J, now " << r.last << " J\n";
   RC_ASSERT(r.holds());
 }
 
@@ -309,10 +310,10 @@ TEST(ContactEnergy, FastModeBouncingOnTheFloorTakesEnergyOut) {
   // The property's values to the last bit (the run is chaotic: rounded to 3 digits it stays calm).
   const Real h = 0.01 * 7;
   auto u = [](int k) { return k * 0.01; };
-  const ManipulatorSettings a = obstacle(ManipulatorShape::Sphere, (0.1 + 0.3 * u(40)) * h,
-                                         Vec3(u(65) * h, u(8) * h, u(44) * h), u(21), u(54));
-  const ManipulatorSettings b = obstacle(ManipulatorShape::Sphere, (0.1 + 0.3 * u(20)) * h,
-                                         Vec3(u(39) * h, u(4) * h, u(47) * h), u(27), u(92));
+  const ManipulatorSettings a =
+      obstacle(ManipulatorShape::Sphere, (0.1 + 0.3 * u(40)) * h, Vec3(u(65) * h, u(8) * h, u(44) * h), u(21), u(54));
+  const ManipulatorSettings b =
+      obstacle(ManipulatorShape::Sphere, (0.1 + 0.3 * u(20)) * h, Vec3(u(39) * h, u(4) * h, u(47) * h), u(27), u(92));
   DomainSettings d;
   d.enabled = true;
   d.min = Vec3(-1, u(35) * 0.2 * h, -1);

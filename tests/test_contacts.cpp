@@ -83,7 +83,7 @@ TEST(Contacts, CylinderSignedDistance) {
   EXPECT_NEAR(m.signedDistance(Vec3(0.5, 0, 1.9), &n), -0.1, 1e-12);  // nearest the cap
   EXPECT_NEAR(n.z(), 1.0, 1e-12);
   EXPECT_NEAR(m.signedDistance(Vec3(0.9, 0, 0), &n), -0.1, 1e-12);  // nearest the side
-  EXPECT_NEAR(m.signedDistance(Vec3(4, 0, 6), &n), 5.0, 1e-12);    // nearest the rim
+  EXPECT_NEAR(m.signedDistance(Vec3(4, 0, 6), &n), 5.0, 1e-12);     // nearest the rim
 }
 
 TEST(Contacts, WallsKeepVerticesInsideAndReflect) {

@@ -19,7 +19,7 @@ Metrics at(double t, double kinetic, double elastic = 0, double gravity = 0, dou
   return m;
 }
 
-TEST(Divergence, allowedEnergy_countsInitialGravityDropManipulatorsAndSlack) {
+TEST(Divergence, AllowedEnergyCountsInitialGravityDropManipulatorsAndSlack) {
   EnergyBudget b;
   b.initial = at(0, 1.0, 0.5, 10.0);
   b.mass = 2.0;
@@ -35,7 +35,7 @@ TEST(Divergence, allowedEnergy_countsInitialGravityDropManipulatorsAndSlack) {
   EXPECT_TRUE(std::isinf(allowedEnergy(b, s, at(1, 0))));
 }
 
-TEST(Divergence, guard_energyOverBudget_isDivergedWithTheNumbersAndCause) {
+TEST(Divergence, GuardEnergyOverBudgetIsDivergedWithTheNumbersAndCause) {
   EnergyBudget b;
   b.initial = at(0, 0.0, 0.0, 2.7);
   b.mass = 1.0;
@@ -43,14 +43,15 @@ TEST(Divergence, guard_energyOverBudget_isDivergedWithTheNumbersAndCause) {
   EXPECT_FALSE(g.check(at(0.5, 2.0, 0.5, 0.2), "cause"));  // a fall of 2.5 J turned into motion
   const auto msg = g.check(at(0.6, 1.4e5, 10, 0.2, -5), "the likely cause is X");
   ASSERT_TRUE(msg);
-  EXPECT_NE(msg->find("simulation diverged at t = 0.6 s: kinetic + elastic energy 1.4e+05 J is over 30 J"), std::string::npos)
+  EXPECT_NE(msg->find("simulation diverged at t = 0.6 s: kinetic + elastic energy 1.4e+05 J is over 30 J"),
+            std::string::npos)
       << *msg;
   EXPECT_NE(msg->find("min element det -5"), std::string::npos) << *msg;
   EXPECT_NE(msg->find("the likely cause is X"), std::string::npos) << *msg;
   EXPECT_TRUE(g.check(at(0.7, std::nan(""), 0), "c"));  // NaN energy is never plausible
 }
 
-TEST(Divergence, guard_inversion_onlyWhenPersistent) {
+TEST(Divergence, GuardInversionOnlyWhenPersistent) {
   EnergyBudget b;
   b.mass = 1.0;
   DivergenceSettings s;
@@ -66,13 +67,15 @@ TEST(Divergence, guard_inversion_onlyWhenPersistent) {
   std::optional<std::string> msg;
   for (int f = 10; f < 200 && !msg; ++f) msg = g.check(at(1 + 0.001 * f, 0, 0, 0, -0.1), "c");
   ASSERT_TRUE(msg);
-  EXPECT_NE(msg->find("elements inverted (min element det -0.1) in 101 frames running, from t = 1 to 1.1 s"), std::string::npos)
+  EXPECT_NE(msg->find("elements inverted (min element det -0.1) in 101 frames running, from t = 1 to 1.1 s"),
+            std::string::npos)
       << *msg;
 }
 
-TEST(Divergence, maxPathSpeed_findsTheFastestSegmentAndTheKeptVelocity) {
+TEST(Divergence, MaxPathSpeedFindsTheFastestSegmentAndTheKeptVelocity) {
   Path p;
-  p.keys = {{0.0, Vec3(0, 0, 0), std::nullopt}, {0.1, Vec3(0.2, 0, 0), std::nullopt}, {0.5, Vec3(0.2, 0.1, 0), std::nullopt}};
+  p.keys = {
+      {0.0, Vec3(0, 0, 0), std::nullopt}, {0.1, Vec3(0.2, 0, 0), std::nullopt}, {0.5, Vec3(0.2, 0.1, 0), std::nullopt}};
   EXPECT_NEAR(maxPathSpeed(p, 1.0), 2.0, 1e-12);
   p.keys.back().velocity = Vec3(0, 0, 5);  // kept after the last key
   EXPECT_NEAR(maxPathSpeed(p, 1.0), 5.0, 1e-12);

@@ -12,8 +12,8 @@ using namespace gradel;
 
 namespace {
 struct Element {
-  std::vector<Vec3> rest;      // rest positions
-  std::vector<Vec3> R0;        // offsets from rest centroid
+  std::vector<Vec3> rest;  // rest positions
+  std::vector<Vec3> R0;    // offsets from rest centroid
   std::vector<uint32_t> ids;
 };
 Element makeElement(const std::vector<Vec3>& rest) {

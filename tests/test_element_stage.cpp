@@ -91,9 +91,10 @@ TEST(RotationFitBatch, EachLaneMatchesTheScalarFit) {
     Quat q[kRotationLanes];
     for (int l = 0; l < kRotationLanes; ++l) {
       for (int k = 0; k < 9; ++k) A[l].data()[k] = u(rng);
-      if (trial % 5 == 1) A[l].col(2).setZero();                 // flat element
-      if (trial % 5 == 2) A[l].col(0) *= -1;                     // inverted element
-      if (trial % 5 == 3) A[l] = Quat(Eigen::AngleAxisd(u(rng), Vec3(u(rng), u(rng), 1).normalized())).toRotationMatrix();
+      if (trial % 5 == 1) A[l].col(2).setZero();  // flat element
+      if (trial % 5 == 2) A[l].col(0) *= -1;      // inverted element
+      if (trial % 5 == 3)
+        A[l] = Quat(Eigen::AngleAxisd(u(rng), Vec3(u(rng), u(rng), 1).normalized())).toRotationMatrix();
       q[l] = Quat(Eigen::AngleAxisd(trial % 2 ? 0.01 * u(rng) : 3 * u(rng), Vec3(u(rng), 1, u(rng)).normalized()));
       for (int k = 0; k < 9; ++k) batch.A[k][l] = A[l](k / 3, k % 3);
       batch.q[0][l] = q[l].w(), batch.q[1][l] = q[l].x(), batch.q[2][l] = q[l].y(), batch.q[3][l] = q[l].z();

@@ -21,19 +21,19 @@ SimulationSettings implicitSettings(Real dt = 1.0 / 60.0) {
   return s;
 }
 
-TEST(Implicit, parseIntegratorKind_implicitRoundTrips) {
+TEST(Implicit, ParseIntegratorKindImplicitRoundTrips) {
   EXPECT_EQ(parseIntegratorKind("implicit"), IntegratorKind::Implicit);
   EXPECT_STREQ(integratorKindName(IntegratorKind::Implicit), "implicit");
 }
 
-TEST(Implicit, dtAuto_isOneFrame) {
+TEST(Implicit, DtAutoIsOneFrame) {
   test::Body b = test::makeBody("sphere", 6, 3, LayoutKind::Gradational);
   SimulationSettings s = implicitSettings(0);
   World w(b.model, s, {}, {});
   EXPECT_DOUBLE_EQ(w.dt(), 1.0 / 60.0);
 }
 
-TEST(Implicit, freeFall_isExactAndUndeformed) {
+TEST(Implicit, FreeFallIsExactAndUndeformed) {
   test::Body b = test::makeBody("sphere", 6, 3, LayoutKind::Gradational);
   World w(b.model, implicitSettings(), {}, {});
   for (int i = 0; i < 30; ++i) w.step();
@@ -45,7 +45,7 @@ TEST(Implicit, freeFall_isExactAndUndeformed) {
   }
 }
 
-TEST(Implicit, restWithoutGravity_staysAtRest) {
+TEST(Implicit, RestWithoutGravityStaysAtRest) {
   test::Body b = test::makeBody("sphere", 8, 3, LayoutKind::Gradational);
   World w(b.model, test::isolated(), {}, {});
   SimulationSettings s = implicitSettings();
@@ -56,7 +56,7 @@ TEST(Implicit, restWithoutGravity_staysAtRest) {
     EXPECT_NEAR((wi.state().positions[i] - b.model->restPositions[i]).norm(), 0, 1e-12);
 }
 
-TEST(Implicit, clampedBar_pinsHoldAndSettlesOnTheStaticSag) {
+TEST(Implicit, ClampedBarPinsHoldAndSettlesOnTheStaticSag) {
   BarSpec bar;
   bar.across = 2;
   bar.along = 8;
@@ -105,15 +105,15 @@ Vec3 centroid(const World& w) {
   return c / Real(w.state().positions.size());
 }
 
-TEST(Implicit, strikeScene_stiffAtFrameStep_isStableAndSendsTheBallAway) {
+TEST(Implicit, StrikeSceneStiffAtFrameStepIsStableAndSendsTheBallAway) {
   auto b = runStiff("strike.json", 0.5);
   EXPECT_GT(centroid(*b->world).x(), 0.15);  // starts at 0.06
 }
-TEST(Implicit, graspTwoScene_stiffAtFrameStep_isStableAndLifts) {
+TEST(Implicit, GraspTwoSceneStiffAtFrameStepIsStableAndLifts) {
   auto b = runStiff("grasp-two.json", 1.5);
   EXPECT_GT(centroid(*b->world).y(), 0.065);  // rests at 0.06
 }
-TEST(Implicit, graspWallScene_stiffAtFrameStep_isStable) { runStiff("grasp-wall.json", 1.5); }
+TEST(Implicit, GraspWallSceneStiffAtFrameStepIsStable) { runStiff("grasp-wall.json", 1.5); }
 
 }  // namespace
 }  // namespace gradel

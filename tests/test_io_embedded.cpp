@@ -29,7 +29,7 @@ TriangleMesh readSampleObj() {
   return io::readObj(*in, io::ReadLimits{});
 }
 
-TEST(SourceMesh, torusObjSceneEmbedsTheFileMeshWhereItWasVoxelised) {
+TEST(SourceMesh, TorusObjSceneEmbedsTheFileMeshWhereItWasVoxelised) {
   const Scene scene = loadScene(source("scenes/torus-obj.json"));
   const BuiltScene b = buildScene(scene);
   const TriangleMesh file = readSampleObj();
@@ -69,7 +69,7 @@ TEST(SourceMesh, torusObjSceneEmbedsTheFileMeshWhereItWasVoxelised) {
     EXPECT_LT((moved.vertices[v] - (R * b.sourceMesh->vertices[v] + t)).norm(), 1e-10) << v;
 }
 
-TEST(SourceMesh, onlyMeshSourcesHaveOne) {
+TEST(SourceMesh, OnlyMeshSourcesHaveOne) {
   for (const char* name : {"scenes/torus-binvox.json", "scenes/ct-nrrd.json", "scenes/drop.json"}) {
     const BuiltScene b = buildScene(loadScene(source(name)));
     EXPECT_FALSE(b.sourceMesh) << name;
@@ -95,20 +95,21 @@ std::vector<int32_t> owners(const Layout& layout) {
         for (int32_t z = lo.z(); z < lo.z() + c; ++z)
           for (int32_t y = lo.y(); y < lo.y() + c; ++y)
             for (int32_t x = lo.x(); x < lo.x() + c; ++x)
-              if (x < n[0] && y < n[1] && z < n[2]) owner[size_t(x) + n[0] * (size_t(y) + n[1] * size_t(z))] = int32_t(e);
+              if (x < n[0] && y < n[1] && z < n[2])
+                owner[size_t(x) + n[0] * (size_t(y) + n[1] * size_t(z))] = int32_t(e);
       }
   }
   return owner;
 }
 
-TEST(SourceMesh, verticesOutsideTheBodyBindToTheNearestElement) {
+TEST(SourceMesh, VerticesOutsideTheBodyBindToTheNearestElement) {
   const test::Body b = test::makeBody("sphere", 12, 3, LayoutKind::Gradational);
   const Real h = b.model->voxelSize;
   const Vec3 origin = b.model->restPositions[0] - b.layout.vertices[0].cast<Real>() * h;
   // Points just outside, a few voxels out, far out (past the shell search), inside the grid's
   // empty corner and beyond the grid on every side.
-  const std::vector<Vec3> lattice = {{6, 6, 12.3}, {6.2, -0.4, 6.1}, {-3, 6.5, 6.5}, {0.2, 0.3, 0.1}, {30, 2, 6},
-                                     {6, 6, -40},  {-25, -25, -25}, {12.9, 12.9, 6}, {6.4, 100, 6.6}};
+  const std::vector<Vec3> lattice = {{6, 6, 12.3}, {6.2, -0.4, 6.1}, {-3, 6.5, 6.5},  {0.2, 0.3, 0.1}, {30, 2, 6},
+                                     {6, 6, -40},  {-25, -25, -25},  {12.9, 12.9, 6}, {6.4, 100, 6.6}};
   TriangleMesh mesh;
   for (const Vec3& q : lattice) mesh.vertices.push_back(origin + h * q);
   mesh.triangles = {{0, 1, 2}, {3, 4, 5}, {6, 7, 8}};
@@ -157,7 +158,7 @@ size_t countLines(const std::string& text, const std::string& prefix) {
   return n;
 }
 
-TEST(SourceMesh, cli_renderExportWritesTheUsersMesh) {
+TEST(SourceMesh, CliRenderExportWritesTheUsersMesh) {
 #ifndef GRADEL_WITH_RENDER
   GTEST_SKIP() << "`gradel render` is not built (GRADEL_BUILD_RENDER=OFF)";
 #endif

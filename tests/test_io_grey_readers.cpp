@@ -19,11 +19,15 @@ using test::stream;
 // Values 0, 100, 200, ... of a 4 x 3 x 2 volume, x fastest, as int16.
 Bytes int16Samples(bool bigEndian) {
   Bytes b;
-  for (int i = 0; i < 24; ++i) bigEndian ? test::putBE(b, uint16_t(int16_t(i * 100 - 1000)), 2) : test::putLE(b, uint16_t(int16_t(i * 100 - 1000)), 2);
+  for (int i = 0; i < 24; ++i)
+    bigEndian ? test::putBE(b, uint16_t(int16_t(i * 100 - 1000)), 2)
+              : test::putLE(b, uint16_t(int16_t(i * 100 - 1000)), 2);
   return b;
 }
 
-Bytes nrrd(const std::string& fields, const Bytes& data) { return "NRRD0004\n# test\nkey:=value\n" + fields + "\n" + data; }
+Bytes nrrd(const std::string& fields, const Bytes& data) {
+  return "NRRD0004\n# test\nkey:=value\n" + fields + "\n" + data;
+}
 
 io::GreyRule threshold(double t) {
   io::GreyRule r;
@@ -31,17 +35,18 @@ io::GreyRule threshold(double t) {
   return r;
 }
 
-TEST(Nrrd, readNrrd_rawGzipAsciiAndBothByteOrdersAgree) {
+TEST(Nrrd, ReadNrrdRawGzipAsciiAndBothByteOrdersAgree) {
   const std::string head = "type: short\ndimension: 3\nsizes: 4 3 2\nspacings: 1 1 2\n";
   const Bytes files[] = {
       nrrd(head + "encoding: raw\nendian: little\n", int16Samples(false)),
       nrrd(head + "encoding: raw\nendian: big\n", int16Samples(true)),
       nrrd(head + "encoding: gzip\nendian: little\n", test::gzipped(int16Samples(false))),
-      nrrd(head + "encoding: ascii\n", [] {
-        std::string t;
-        for (int i = 0; i < 24; ++i) t += std::to_string(i * 100 - 1000) + (i % 4 == 3 ? "\n" : " ");
-        return t;
-      }()),
+      nrrd(head + "encoding: ascii\n",
+           [] {
+             std::string t;
+             for (int i = 0; i < 24; ++i) t += std::to_string(i * 100 - 1000) + (i % 4 == 3 ? "\n" : " ");
+             return t;
+           }()),
   };
   for (const Bytes& f : files) {
     auto in = stream(f);
@@ -51,7 +56,7 @@ TEST(Nrrd, readNrrd_rawGzipAsciiAndBothByteOrdersAgree) {
   }
 }
 
-TEST(Nrrd, readNrrd_rangeAndDefaultNonZeroRules) {
+TEST(Nrrd, ReadNrrdRangeAndDefaultNonZeroRules) {
   const Bytes f = nrrd("type: short\ndimension: 3\nsizes: 4 3 2\nencoding: raw\nendian: little\n", int16Samples(false));
   io::GreyRule range;
   range.rangeLo = -200;
@@ -62,7 +67,7 @@ TEST(Nrrd, readNrrd_rangeAndDefaultNonZeroRules) {
   EXPECT_EQ(io::readNrrd(*b, {}, 0.01).countFilled(), 23u);  // all but the 0
 }
 
-TEST(Nrrd, readNrrd_2dImageIsOneSliceAndTypeAliasesWork) {
+TEST(Nrrd, ReadNrrd2dImageIsOneSliceAndTypeAliasesWork) {
   const Bytes f = nrrd("type: unsigned char\ndimension: 2\nsizes: 3 2\nencoding: raw\n", Bytes("\0\1\2\0\5\0", 6));
   auto in = stream(f);
   const VoxelVolume v = io::readNrrd(*in, {}, 0.01);
@@ -70,14 +75,14 @@ TEST(Nrrd, readNrrd_2dImageIsOneSliceAndTypeAliasesWork) {
   EXPECT_EQ(v.countFilled(), 3u);
 }
 
-TEST(Nrrd, readNrrd_emptyResultNamesTheValueRange) {
+TEST(Nrrd, ReadNrrdEmptyResultNamesTheValueRange) {
   const Bytes f = nrrd("type: short\ndimension: 3\nsizes: 4 3 2\nencoding: raw\nendian: little\n", int16Samples(false));
   auto in = stream(f, "ct.nrrd");
   EXPECT_EQ(errorOf([&] { io::readNrrd(*in, threshold(5000), 0.01); }),
             "ct.nrrd: the volume is empty: no voxel passes the threshold 5000 (values range from -1000 to 1300)");
 }
 
-TEST(Nrrd, readNrrd_rejectsMalformedFiles) {
+TEST(Nrrd, ReadNrrdRejectsMalformedFiles) {
   const std::string ok = "type: short\ndimension: 3\nsizes: 4 3 2\nencoding: raw\nendian: little\n";
   const Bytes data = int16Samples(false);
   struct Case {
@@ -91,11 +96,14 @@ TEST(Nrrd, readNrrd_rejectsMalformedFiles) {
       {nrrd("type: short\ndimension: 3\nencoding: raw\nendian: little\n", data), "required field 'sizes' is missing"},
       {nrrd("type: block\ndimension: 3\nsizes: 4 3 2\nencoding: raw\n", data), "unsupported type 'block'"},
       {nrrd("type: short\ndimension: 4\nsizes: 4 3 2 1\nencoding: raw\nendian: little\n", data), "dimension: 4"},
-      {nrrd("type: short\ndimension: 3\nsizes: 4 3\nencoding: raw\nendian: little\n", data), "2 values for dimension 3"},
+      {nrrd("type: short\ndimension: 3\nsizes: 4 3\nencoding: raw\nendian: little\n", data),
+       "2 values for dimension 3"},
       {nrrd("type: short\ndimension: 3\nsizes: 4 -3 2\nencoding: raw\nendian: little\n", data), "4 x -3 x 2"},
-      {nrrd("type: short\ndimension: 3\nsizes: 4096 4096 4096\nencoding: raw\nendian: little\n", data), "more than the limit"},
+      {nrrd("type: short\ndimension: 3\nsizes: 4096 4096 4096\nencoding: raw\nendian: little\n", data),
+       "more than the limit"},
       {nrrd("type: short\ndimension: 3\nsizes: 4 3 2\nencoding: raw\n", data), "required field 'endian' is missing"},
-      {nrrd("type: short\ndimension: 3\nsizes: 4 3 2\nencoding: bzip2\nendian: little\n", data), "'bzip2' is not supported"},
+      {nrrd("type: short\ndimension: 3\nsizes: 4 3 2\nencoding: bzip2\nendian: little\n", data),
+       "'bzip2' is not supported"},
       {nrrd(ok, data.substr(0, 40)), "truncated"},
       {nrrd(ok, data + "xx"), "2 bytes more than"},
       {nrrd(ok + "data file: ct.raw\n", ""), "detached data is not supported"},
@@ -139,7 +147,8 @@ Bytes nifti1(bool bigEndian, int16_t datatype = 512, float voxOffset = 352, int1
   putF(116, -1000.0f);
   std::memcpy(&h[344], "n+1", 4);
   Bytes b = h + Bytes(4, '\0');
-  for (int i = 0; i < 24; ++i) bigEndian ? test::putBE(b, uint16_t(1000 + i), 2) : test::putLE(b, uint16_t(1000 + i), 2);
+  for (int i = 0; i < 24; ++i)
+    bigEndian ? test::putBE(b, uint16_t(1000 + i), 2) : test::putLE(b, uint16_t(1000 + i), 2);
   return b;
 }
 
@@ -162,7 +171,7 @@ Bytes nifti2() {
   return b;
 }
 
-TEST(Nifti, readNifti_appliesSclSlopeAndInterInEitherByteOrder) {
+TEST(Nifti, ReadNiftiAppliesSclSlopeAndInterInEitherByteOrder) {
   for (bool big : {false, true}) {
     auto in = stream(nifti1(big));
     const VoxelVolume v = io::readNifti(*in, threshold(20), 0.01);  // value = stored - 1000
@@ -172,14 +181,14 @@ TEST(Nifti, readNifti_appliesSclSlopeAndInterInEitherByteOrder) {
   }
 }
 
-TEST(Nifti, readNifti_readsNifti2AndGzippedFiles) {
+TEST(Nifti, ReadNiftiReadsNifti2AndGzippedFiles) {
   auto in = stream(nifti2());
   EXPECT_EQ(io::readNifti(*in, threshold(12), 0.01).countFilled(), 12u);
   auto z = io::gzipStream(stream(test::gzipped(nifti1(false))));
   EXPECT_EQ(io::readNifti(*z, threshold(0), 0.01).countFilled(), 24u);
 }
 
-TEST(Nifti, readNifti_rejectsMalformedFiles) {
+TEST(Nifti, ReadNiftiRejectsMalformedFiles) {
   Bytes badSize = nifti1(false);
   badSize[0] = 7;
   Bytes pair = nifti1(false);
@@ -217,7 +226,7 @@ TEST(Nifti, readNifti_rejectsMalformedFiles) {
 
 // ---- raw ------------------------------------------------------------------------
 
-TEST(Raw, readRawVolume_readsTheGivenLayoutAndChecksTheFileSize) {
+TEST(Raw, ReadRawVolumeReadsTheGivenLayoutAndChecksTheFileSize) {
   io::RawLayout layout;
   layout.dims = {4, 3, 2};
   layout.samples.type = io::ScalarType::Int16;
@@ -227,14 +236,15 @@ TEST(Raw, readRawVolume_readsTheGivenLayoutAndChecksTheFileSize) {
   EXPECT_EQ(io::readRawVolume(*in, layout, threshold(0), 0.01).countFilled(), 14u);
 
   auto wrong = stream("HEAD!" + int16Samples(true) + "x", "r.raw");
-  EXPECT_EQ(errorOf([&] { io::readRawVolume(*wrong, layout, {}, 0.01); }),
-            "r.raw: size: the file has 54 bytes; header_bytes 5 + 4 x 3 x 2 int16 samples need 53 (check dims and type)");
+  EXPECT_EQ(
+      errorOf([&] { io::readRawVolume(*wrong, layout, {}, 0.01); }),
+      "r.raw: size: the file has 54 bytes; header_bytes 5 + 4 x 3 x 2 int16 samples need 53 (check dims and type)");
   layout.dims = {0, 3, 2};
   auto zero = stream("x", "r.raw");
   EXPECT_NE(errorOf([&] { io::readRawVolume(*zero, layout, {}, 0.01); }).find("dims: 0 x 3 x 2"), std::string::npos);
 }
 
-TEST(GreyLevels, nanSamplesAreEmptyAndFloatTypesWork) {
+TEST(GreyLevels, NanSamplesAreEmptyAndFloatTypesWork) {
   Bytes b;
   for (float f : {1.0f, std::numeric_limits<float>::quiet_NaN(), -2.0f, 0.0f}) test::putFloatLE(b, f);
   io::RawLayout layout;

@@ -19,7 +19,8 @@ using test::stream;
 // An axis-aligned box [lo, hi] as 12 outward triangles.
 TriangleMesh box(const Vec3& lo, const Vec3& hi) {
   TriangleMesh m;
-  for (int i = 0; i < 8; ++i) m.vertices.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
+  for (int i = 0; i < 8; ++i)
+    m.vertices.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
   const uint32_t q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   for (const auto& f : q) {
     m.triangles.push_back({f[0], f[1], f[2]});
@@ -60,14 +61,14 @@ TriangleMesh sphere(int nu = 48, int nv = 24) {
 
 // ---- voxeliser ------------------------------------------------------------------
 
-TEST(Voxelize, voxelize_closedBoxFillsItsGridExactly) {
+TEST(Voxelize, VoxelizeClosedBoxFillsItsGridExactly) {
   const VoxelVolume v = io::voxelize(box({0, 0, 0}, {2, 1, 0.5}), {16, 0.01}, "box");
   EXPECT_EQ(v.dims(), (std::array<int, 3>{16, 8, 4}));
   EXPECT_EQ(v.countFilled(), 16u * 8u * 4u);
   EXPECT_EQ(v.voxelSize(), 0.01);
 }
 
-TEST(Voxelize, voxelize_sphereMatchesTheBallWithinTheFacetingError) {
+TEST(Voxelize, VoxelizeSphereMatchesTheBallWithinTheFacetingError) {
   const int n = 32;
   const VoxelVolume v = io::voxelize(sphere(), {n, 0.01}, "sphere");
   ASSERT_EQ(v.dims(), (std::array<int, 3>{n, n, n}));
@@ -83,14 +84,14 @@ TEST(Voxelize, voxelize_sphereMatchesTheBallWithinTheFacetingError) {
   EXPECT_EQ(wrong, 0u);
 }
 
-TEST(Voxelize, voxelize_overlappingPartsGiveTheirUnion) {
+TEST(Voxelize, VoxelizeOverlappingPartsGiveTheirUnion) {
   // Two boxes sharing the middle third: parity would leave the overlap empty.
   const TriangleMesh m = merge(box({0, 0, 0}, {2, 1, 1}), box({1, 0, 0}, {3, 1, 1}));
   const VoxelVolume v = io::voxelize(m, {12, 0.01}, "two boxes");
   EXPECT_EQ(v.countFilled(), size_t(v.size()));
 }
 
-TEST(Voxelize, voxelize_toleratesAHoleAndInvertedOrientation) {
+TEST(Voxelize, VoxelizeToleratesAHoleAndInvertedOrientation) {
   TriangleMesh holed = sphere();
   holed.triangles.erase(holed.triangles.begin() + 200, holed.triangles.begin() + 204);  // a hole near the equator
   TriangleMesh inverted = sphere();
@@ -104,23 +105,32 @@ TEST(Voxelize, voxelize_toleratesAHoleAndInvertedOrientation) {
   EXPECT_LE(diff, 2u) << "of " << ref.countFilled();
 }
 
-TEST(Voxelize, voxelize_rejectsUnusableMeshes) {
+TEST(Voxelize, VoxelizeRejectsUnusableMeshes) {
   TriangleMesh sheet;
   sheet.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
   sheet.triangles = {{0, 1, 2}};
-  EXPECT_NE(errorOf([&] { io::voxelize(sheet, {8, 0.01}, "s.obj"); }).find("s.obj: the voxelised volume is empty"), std::string::npos);
+  EXPECT_NE(errorOf([&] {
+              io::voxelize(sheet, {8, 0.01}, "s.obj");
+            }).find("s.obj: the voxelised volume is empty"),
+            std::string::npos);
   TriangleMesh bad = sheet;
   bad.triangles = {{0, 1, 7}};
   EXPECT_NE(errorOf([&] { io::voxelize(bad, {8, 0.01}, "b"); }).find("index 7 out of range"), std::string::npos);
   TriangleMesh point = sheet;
   point.vertices = {{1, 1, 1}, {1, 1, 1}, {1, 1, 1}};
-  EXPECT_NE(errorOf([&] { io::voxelize(point, {8, 0.01}, "p"); }).find("not a finite, non-empty box"), std::string::npos);
-  EXPECT_NE(errorOf([&] { io::voxelize(box({0, 0, 0}, {1, 1, 1}), {0, 0.01}, "r"); }).find("resolution 0"), std::string::npos);
+  EXPECT_NE(errorOf([&] {
+              io::voxelize(point, {8, 0.01}, "p");
+            }).find("not a finite, non-empty box"),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] {
+              io::voxelize(box({0, 0, 0}, {1, 1, 1}), {0, 0.01}, "r");
+            }).find("resolution 0"),
+            std::string::npos);
 }
 
 // ---- OBJ ------------------------------------------------------------------------
 
-TEST(Obj, readObj_readsPolygonsAndNegativeIndices) {
+TEST(Obj, ReadObjReadsPolygonsAndNegativeIndices) {
   const Bytes f =
       "# quad and triangle\r\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0 1.0\nvn 0 0 1\nvt 0 0\ng part\n"
       "f 1/1/1 2/1/1 3/1/1 4//1\nf -1 -2 -3\nusemtl red\nl 1 2\n";
@@ -132,7 +142,7 @@ TEST(Obj, readObj_readsPolygonsAndNegativeIndices) {
   EXPECT_EQ(m.triangles[2], (std::array<uint32_t, 3>{3, 2, 1}));
 }
 
-TEST(Obj, readObj_rejectsMalformedFiles) {
+TEST(Obj, ReadObjRejectsMalformedFiles) {
   struct Case {
     Bytes file;
     std::string message;
@@ -171,7 +181,7 @@ Bytes binaryStl(const TriangleMesh& m, const std::string& header) {
   return b;
 }
 
-TEST(Stl, readStl_binaryEvenWhenTheHeaderSaysSolid) {
+TEST(Stl, ReadStlBinaryEvenWhenTheHeaderSaysSolid) {
   const TriangleMesh cube = box({0, 0, 0}, {1, 1, 1});
   for (const std::string& header : {std::string("binary"), std::string("solid cube exported as binary")}) {
     auto in = stream(binaryStl(cube, header));
@@ -181,17 +191,19 @@ TEST(Stl, readStl_binaryEvenWhenTheHeaderSaysSolid) {
   }
 }
 
-TEST(Stl, readStl_ascii) {
+TEST(Stl, ReadStlAscii) {
   const Bytes f =
-      "solid t\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n   vertex 1 0 0\n   vertex 0 1 0\n  endloop\n endfacet\n"
-      " facet normal 0 0 1\n  outer loop\n   vertex 1 0 0\n   vertex 1 1 0\n   vertex 0 1 0\n  endloop\n endfacet\nendsolid t\n";
+      "solid t\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n   vertex 1 0 0\n   vertex 0 1 0\n  endloop\n "
+      "endfacet\n"
+      " facet normal 0 0 1\n  outer loop\n   vertex 1 0 0\n   vertex 1 1 0\n   vertex 0 1 0\n  endloop\n "
+      "endfacet\nendsolid t\n";
   auto in = stream(f);
   const TriangleMesh m = io::readStl(*in);
   EXPECT_EQ(m.triangles.size(), 2u);
   EXPECT_EQ(m.vertices[4], Vec3(1, 1, 0));
 }
 
-TEST(Stl, readStl_rejectsMalformedFiles) {
+TEST(Stl, ReadStlRejectsMalformedFiles) {
   const Bytes good = binaryStl(box({0, 0, 0}, {1, 1, 1}), "binary");
   Bytes huge = good.substr(0, 80);
   test::putLE(huge, 0xffffffffu, 4);
@@ -206,7 +218,8 @@ TEST(Stl, readStl_rejectsMalformedFiles) {
       {good.substr(0, good.size() - 10), "truncated or not an STL file"},
       {huge, "4294967295 triangles need"},
       {nan, "triangle 0: vertex 0 is not finite"},
-      {"solid x\n facet normal 0 0 1\n outer loop\n vertex 0 0 0\n vertex 1 0 0\n endloop\n", "a facet with 2 vertices"},
+      {"solid x\n facet normal 0 0 1\n outer loop\n vertex 0 0 0\n vertex 1 0 0\n endloop\n",
+       "a facet with 2 vertices"},
       {"solid x\n facet normal 0 0 1\n outer loop\n vertex 0 0 zz\n", "'zz' is not a finite number"},
       {"solid x\n outer loop\n vertex 0 0 0\n", "ends inside a facet"},
       {"solid x\nendsolid x\n", "no facets"},
@@ -221,18 +234,20 @@ TEST(Stl, readStl_rejectsMalformedFiles) {
 
 // ---- PLY ------------------------------------------------------------------------
 
-TEST(Ply, readPly_asciiAndBigEndianBinaryWithExtraProperties) {
+TEST(Ply, ReadPlyAsciiAndBigEndianBinaryWithExtraProperties) {
   const Bytes ascii =
       "ply\nformat ascii 1.0\ncomment x\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
       "property uchar red\nelement face 1\nproperty list uchar int vertex_indices\nproperty int flags\n"
-      "element edge 1\nproperty int a\nproperty int b\nend_header\n0 0 0 255\n1 0 0 0\n1 1 0 0\n0 1 0 0\n4 0 1 2 3 7\n0 1\n";
+      "element edge 1\nproperty int a\nproperty int b\nend_header\n0 0 0 255\n1 0 0 0\n1 1 0 0\n0 1 0 0\n4 0 1 2 3 "
+      "7\n0 1\n";
   auto a = stream(ascii);
   const TriangleMesh m = io::readPly(*a);
   EXPECT_EQ(m.vertices.size(), 4u);
   EXPECT_EQ(m.triangles.size(), 2u);
 
-  Bytes bin = "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
-              "element face 1\nproperty list uchar uint vertex_index\nend_header\n";
+  Bytes bin =
+      "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
+      "element face 1\nproperty list uchar uint vertex_index\nend_header\n";
   for (double x : {0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 2.0, 0.0}) {
     uint64_t u;
     std::memcpy(&u, &x, 8);
@@ -246,8 +261,9 @@ TEST(Ply, readPly_asciiAndBigEndianBinaryWithExtraProperties) {
   EXPECT_EQ(t.vertices[2], Vec3(0, 2, 0));
 }
 
-TEST(Ply, readPly_rejectsMalformedFiles) {
-  const std::string head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
+TEST(Ply, ReadPlyRejectsMalformedFiles) {
+  const std::string head =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
   struct Case {
     Bytes file;
     std::string message;
@@ -289,8 +305,8 @@ namespace {
 // still read and voxelise right, and the crossing cap is a clear InputError.
 std::string tetraPlyHeader(const std::string& before, int faces, const std::string& listTypes) {
   return "ply\nformat binary_little_endian 1.0\n" + before +
-         "element vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face " + std::to_string(faces) +
-         "\nproperty list " + listTypes + " vertex_indices\nend_header\n";
+         "element vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face " +
+         std::to_string(faces) + "\nproperty list " + listTypes + " vertex_indices\nend_header\n";
 }
 std::string tetraVertices() {
   const float v[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
@@ -301,9 +317,10 @@ TriangleMesh readPlyText(const std::string& text) {
   return io::readPly(*in);
 }
 
-TEST(PlySpeed, rowsWithoutPropertiesAreSkippedWhateverTheirCount) {
+TEST(PlySpeed, RowsWithoutPropertiesAreSkippedWhateverTheirCount) {
   const std::string faces = std::string("\x03\x00\x02\x01\x03\x00\x01\x03\x03\x00\x03\x02\x03\x01\x02\x03", 16);
-  const TriangleMesh m = readPlyText(tetraPlyHeader("element junk 65536\n", 4, "uchar uchar") + tetraVertices() + faces);
+  const TriangleMesh m =
+      readPlyText(tetraPlyHeader("element junk 65536\n", 4, "uchar uchar") + tetraVertices() + faces);
   EXPECT_EQ(m.vertices.size(), 4u);
   EXPECT_EQ(m.triangles.size(), 4u);
   // A row-less element still counts against the limit.
@@ -315,16 +332,18 @@ TEST(PlySpeed, rowsWithoutPropertiesAreSkippedWhateverTheirCount) {
             std::string::npos);
 }
 
-TEST(PlySpeed, repeatedFacesHitTheCrossingCapAndFewCopiesGiveTheShell) {
+TEST(PlySpeed, RepeatedFacesHitTheCrossingCapAndFewCopiesGiveTheShell) {
   // 16000 copies of the tetrahedron's faces: 1.0e6 crossings per axis at resolution 16.
   std::string faces;
   const uint8_t tet[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
-  for (int i = 0; i < 16000; ++i) faces += std::string{char(3), char(tet[i % 4][0]), char(tet[i % 4][1]), char(tet[i % 4][2])};
+  for (int i = 0; i < 16000; ++i)
+    faces += std::string{char(3), char(tet[i % 4][0]), char(tet[i % 4][1]), char(tet[i % 4][2])};
   const TriangleMesh many = readPlyText(tetraPlyHeader("", 16000, "uchar uchar") + tetraVertices() + faces);
   ASSERT_EQ(many.triangles.size(), 16000u);
   io::VoxelizeSettings s{16, 0.01};
   s.minCrossingCap = 1 << 14;
-  EXPECT_NE(errorOf([&] { io::voxelize(many, s, "t.ply"); }).find("t.ply: more than 16384 ray crossings"), std::string::npos);
+  EXPECT_NE(errorOf([&] { io::voxelize(many, s, "t.ply"); }).find("t.ply: more than 16384 ray crossings"),
+            std::string::npos);
   // Four copies only: the tetrahedron, the same voxels as one copy (a union of identical shells).
   TriangleMesh one = many, four = many;
   one.triangles.resize(4);
@@ -334,14 +353,16 @@ TEST(PlySpeed, repeatedFacesHitTheCrossingCapAndFewCopiesGiveTheShell) {
   EXPECT_EQ(a.data(), b.data());
 }
 
-TEST(Voxelize, thinTrianglesAcrossTheGridCrossOnlyTheirRays) {
+TEST(Voxelize, ThinTrianglesAcrossTheGridCrossOnlyTheirRays) {
   // A closed sliver prism along the grid's diagonal: the per-row span must not drop any ray.
   const Real w = 0.037;
   const Vec3 A(0, 0.0031, 0), B(1, 1, 0), C(w, 0, 0);
   TriangleMesh m;
   m.vertices = {A, B, C, A + Vec3(0, 0, 1), B + Vec3(0, 0, 1), C + Vec3(0, 0, 1)};
   m.triangles = {{0, 1, 2}, {3, 5, 4}, {0, 2, 5}, {0, 5, 3}, {2, 1, 4}, {2, 4, 5}, {1, 0, 3}, {1, 3, 4}};
-  auto side = [](const Vec3& a, const Vec3& b, Real x, Real y) { return (b.x() - a.x()) * (y - a.y()) - (b.y() - a.y()) * (x - a.x()); };
+  auto side = [](const Vec3& a, const Vec3& b, Real x, Real y) {
+    return (b.x() - a.x()) * (y - a.y()) - (b.y() - a.y()) * (x - a.x());
+  };
   for (int res : {16, 64, 200}) {
     const VoxelVolume v = io::voxelize(m, {res, 0.01}, "sliver");
     ASSERT_EQ(v.nx(), res);

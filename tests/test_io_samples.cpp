@@ -27,7 +27,7 @@ io::VolumeFileSpec spec(const std::string& name) {
   return s;
 }
 
-TEST(Samples, ctThresholdSelectsBoneOrLimbAndFormatsAgree) {
+TEST(Samples, CtThresholdSelectsBoneOrLimbAndFormatsAgree) {
   io::VolumeFileSpec bone = spec("ct.nrrd");
   bone.grey.threshold = 300;
   io::VolumeFileSpec limb = spec("ct.nrrd");
@@ -45,7 +45,7 @@ TEST(Samples, ctThresholdSelectsBoneOrLimbAndFormatsAgree) {
   EXPECT_EQ(io::readVolumeFile(raw).data(), b.data());
 }
 
-TEST(Samples, meshesVoxeliseAndMatchTheBinvox) {
+TEST(Samples, MeshesVoxeliseAndMatchTheBinvox) {
   io::VolumeFileSpec obj = spec("torus.obj"), stl = spec("torus.stl");
   obj.resolution = stl.resolution = 24;
   const VoxelVolume o = io::readVolumeFile(obj), s = io::readVolumeFile(stl);
@@ -64,7 +64,7 @@ TEST(Samples, meshesVoxeliseAndMatchTheBinvox) {
   EXPECT_GT(p.countFilled(), 500u);
 }
 
-TEST(Samples, voxModelStandsUp) {
+TEST(Samples, VoxModelStandsUp) {
   const VoxelVolume v = io::readVolumeFile(spec("mushroom.vox"));
   ASSERT_EQ(v.dims(), (std::array<int, 3>{16, 16, 16}));
   // The cap (wide) is on top (high j), the stalk (narrow) below.
@@ -79,7 +79,7 @@ TEST(Samples, voxModelStandsUp) {
   EXPECT_EQ(rowCount(15), 0u);
 }
 
-TEST(Samples, readVolumeFile_checksFormatAndDimension) {
+TEST(Samples, ReadVolumeFileChecksFormatAndDimension) {
   io::VolumeFileSpec unknown = spec("make_samples.py");
   EXPECT_NE(errorOf([&] { io::readVolumeFile(unknown); }).find("cannot tell the format"), std::string::npos);
   io::VolumeFileSpec flat = spec("mushroom.vox");
@@ -98,7 +98,7 @@ Scene parseIn(const std::string& body, int dim = 3) {
                     std::string(GRADEL_SOURCE_DIR) + "/scenes/test.json");
 }
 
-TEST(SceneSource, parseScene_fileSourceBuildsTheBody) {
+TEST(SceneSource, ParseSceneFileSourceBuildsTheBody) {
   const Scene s = parseIn(R"({"source": {"file": "../samples/ct.nrrd", "threshold": 300}, "voxel_size": 0.005})");
   ASSERT_TRUE(s.body.source);
   EXPECT_NE(s.body.source->describe().find("samples/ct.nrrd"), std::string::npos);
@@ -107,35 +107,43 @@ TEST(SceneSource, parseScene_fileSourceBuildsTheBody) {
   EXPECT_GT(b.world->state().positions.size(), 100u);
 }
 
-TEST(SceneSource, parseScene_2dSceneTakesAOneSliceVolume) {
+TEST(SceneSource, ParseScene2dSceneTakesAOneSliceVolume) {
   const fs::path dir = fs::temp_directory_path() / ("gradel-io-2d-" + std::to_string(::getpid()));
   fs::create_directories(dir);
-  std::ofstream(dir / "img.nrrd", std::ios::binary) << "NRRD0004\ntype: uchar\ndimension: 2\nsizes: 6 5\nencoding: ascii\n\n"
-                                                    << "0 1 1 1 1 0\n1 1 1 1 1 1\n1 1 1 1 1 1\n1 1 1 1 1 1\n0 1 1 1 1 0\n";
-  const Scene s = parseScene(R"({"dim": 2, "body": {"source": {"file": "img.nrrd", "range": [1, 1]}}})", (dir / "s.json").string());
+  std::ofstream(dir / "img.nrrd", std::ios::binary)
+      << "NRRD0004\ntype: uchar\ndimension: 2\nsizes: 6 5\nencoding: ascii\n\n"
+      << "0 1 1 1 1 0\n1 1 1 1 1 1\n1 1 1 1 1 1\n1 1 1 1 1 1\n0 1 1 1 1 0\n";
+  const Scene s =
+      parseScene(R"({"dim": 2, "body": {"source": {"file": "img.nrrd", "range": [1, 1]}}})", (dir / "s.json").string());
   const BuiltScene b = buildScene(s);
   EXPECT_EQ(b.volume.dim(), 2);
   EXPECT_EQ(b.volume.countFilled(), 26u);
   fs::remove_all(dir);
 }
 
-TEST(SceneSource, parseScene_rejectsBadSourcesNamingTheKey) {
+TEST(SceneSource, ParseSceneRejectsBadSourcesNamingTheKey) {
   struct Case {
     std::string body;
     std::string message;
   };
   const Case cases[] = {
-      {R"({"source": {"file": "../samples/nope.nrrd"}})", "body.source.file: \"../samples/nope.nrrd\" is not a readable file"},
-      {R"({"source": {"file": "../samples/ct.nrrd", "treshold": 3}})", "body.source.treshold: unknown key (did you mean \"threshold\"?)"},
-      {R"({"source": {"file": "../samples/torus.binvox", "threshold": 3}})", "body.source.threshold: not allowed here: only grey-level"},
-      {R"({"source": {"file": "../samples/ct.nrrd", "threshold": 3, "range": [1, 2]}})", "give \"threshold\" or \"range\", not both"},
+      {R"({"source": {"file": "../samples/nope.nrrd"}})",
+       "body.source.file: \"../samples/nope.nrrd\" is not a readable file"},
+      {R"({"source": {"file": "../samples/ct.nrrd", "treshold": 3}})",
+       "body.source.treshold: unknown key (did you mean \"threshold\"?)"},
+      {R"({"source": {"file": "../samples/torus.binvox", "threshold": 3}})",
+       "body.source.threshold: not allowed here: only grey-level"},
+      {R"({"source": {"file": "../samples/ct.nrrd", "threshold": 3, "range": [1, 2]}})",
+       "give \"threshold\" or \"range\", not both"},
       {R"({"source": {"file": "../samples/ct.nrrd", "range": [5, 2]}})", "body.source.range: [5,2] is out of range"},
       {R"({"source": {"file": "../samples/ct.raw", "type": "uint8"}})", "body.source.dims: missing"},
-      {R"({"source": {"file": "../samples/ct.raw", "dims": [40, 40, 40], "type": "uint9"}})", "body.source.type: unknown sample type 'uint9'"},
+      {R"({"source": {"file": "../samples/ct.raw", "dims": [40, 40, 40], "type": "uint9"}})",
+       "body.source.type: unknown sample type 'uint9'"},
       {R"({"source": {"file": "../samples/ct.nrrd", "dims": [1, 1, 1]}})", "body.source.dims: not allowed here"},
       {R"({"source": {"file": "../samples/torus.obj", "resolution": 0}})", "body.source.resolution: 0 is out of range"},
       {R"({"source": {"file": "../samples/ct.nrrd", "resolution": 8}})", "body.source.resolution: not allowed here"},
-      {R"({"source": {"file": "../samples/ct.nrrd", "format": "dicom"}})", "body.source.format: unknown format 'dicom'"},
+      {R"({"source": {"file": "../samples/ct.nrrd", "format": "dicom"}})",
+       "body.source.format: unknown format 'dicom'"},
       {R"({"source": {"file": "../samples/make_samples.py"}})", "body.source.file: "},
       {R"({"source": {"file": "../samples/ct.nrrd"}, "shape": "sphere"})", "body.shape: not allowed here"},
       {R"({"source": {}})", "body.source.file: missing"},
@@ -145,17 +153,19 @@ TEST(SceneSource, parseScene_rejectsBadSourcesNamingTheKey) {
     const std::string e = errorOf([&] { parseIn(c.body); });
     EXPECT_NE(e.find(c.message), std::string::npos) << "got: " << e << "\nexpected: " << c.message;
   }
-  EXPECT_NE(errorOf([&] { parseIn(R"({"source": {"file": "../samples/torus.obj"}})", 2); }).find("voxelised in 3D only"),
-            std::string::npos);
+  EXPECT_NE(
+      errorOf([&] { parseIn(R"({"source": {"file": "../samples/torus.obj"}})", 2); }).find("voxelised in 3D only"),
+      std::string::npos);
 }
 
-TEST(SceneSource, cli_malformedSourceFileIsExitCode2) {
+TEST(SceneSource, CliMalformedSourceFileIsExitCode2) {
   const fs::path dir = fs::temp_directory_path() / ("gradel-io-cli-" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   std::ofstream(dir / "bad.binvox", std::ios::binary) << "#binvox 1\ndim 4 4 4\ndata\n\x01\x05";
   std::ofstream(dir / "s.json") << R"({"body": {"source": {"file": "bad.binvox"}}, "simulation": {"duration": 0.01}})";
-  const std::string cmd = "cd '" + dir.string() + "' && '" + GRADEL_CLI_PATH + "' run s.json --out out > o.txt 2> e.txt";
+  const std::string cmd =
+      "cd '" + dir.string() + "' && '" + GRADEL_CLI_PATH + "' run s.json --out out > o.txt 2> e.txt";
   const int status = std::system(cmd.c_str());
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 2);

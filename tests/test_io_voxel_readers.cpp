@@ -17,7 +17,7 @@ using test::stream;
 
 // ---- byte streams ---------------------------------------------------------------
 
-TEST(ByteStream, gzip_roundTripsAndRejectsTruncatedOrTrailingData) {
+TEST(ByteStream, GzipRoundTripsAndRejectsTruncatedOrTrailingData) {
   Bytes data;
   for (int i = 0; i < 300000; ++i) data.push_back(char(i * 7 % 251));
   const Bytes z = test::gzipped(data);
@@ -52,7 +52,7 @@ TEST(ByteStream, gzip_roundTripsAndRejectsTruncatedOrTrailingData) {
   EXPECT_NE(corrupt.find("gzip:"), std::string::npos) << corrupt;
 }
 
-TEST(ByteStream, gzip_smallReadsDrainOutputZlibHeldBack) {
+TEST(ByteStream, GzipSmallReadsDrainOutputZlibHeldBack) {
   // One byte at a time: zlib consumes the whole input while output is still pending, which must
   // not be mistaken for a truncated stream.
   const Bytes data(5000, 'a');
@@ -63,7 +63,7 @@ TEST(ByteStream, gzip_smallReadsDrainOutputZlibHeldBack) {
   EXPECT_EQ(back, data);
 }
 
-TEST(ByteStream, openFileStream_namesTheReasonAFileCannotBeRead) {
+TEST(ByteStream, OpenFileStreamNamesTheReasonAFileCannotBeRead) {
   const std::string e = errorOf([] { io::openFileStream("/nonexistent/gradel.nrrd"); });
   EXPECT_EQ(e, "/nonexistent/gradel.nrrd: cannot read: No such file or directory");
 }
@@ -81,7 +81,7 @@ Bytes binvox(int d, int h, int w, F f) {
   return b;
 }
 
-TEST(Binvox, readBinvox_mapsFileAxesToGradelAxes) {
+TEST(Binvox, ReadBinvoxMapsFileAxesToGradelAxes) {
   // dim D H W = 2 3 4: nx = 2, nz = 3, ny = 4 (x slowest, z, y fastest).
   auto filled = [](int x, int y, int z) { return (x + 2 * y + 3 * z) % 5 == 0; };
   auto in = stream(binvox(2, 3, 4, filled));
@@ -93,7 +93,7 @@ TEST(Binvox, readBinvox_mapsFileAxesToGradelAxes) {
       for (int z = 0; z < 3; ++z) EXPECT_EQ(v.at(x, y, z), filled(x, y, z)) << x << y << z;
 }
 
-TEST(Binvox, readBinvox_longRunsSpanRows) {
+TEST(Binvox, ReadBinvoxLongRunsSpanRows) {
   Bytes b = "#binvox 1\ndim 8 8 8\ndata\n";
   b += std::string{char(1), char(255)} + std::string{char(1), char(1)} + std::string{char(0), char(255)} +
        std::string{char(0), char(1)};
@@ -101,7 +101,7 @@ TEST(Binvox, readBinvox_longRunsSpanRows) {
   EXPECT_EQ(io::readBinvox(*in, 0.01).countFilled(), 256u);
 }
 
-TEST(Binvox, readBinvox_rejectsMalformedFiles) {
+TEST(Binvox, ReadBinvoxRejectsMalformedFiles) {
   const Bytes ok = binvox(2, 2, 2, [](int, int, int) { return true; });
   struct Case {
     Bytes file;
@@ -160,7 +160,7 @@ Bytes voxFile(const Bytes& children) {
   return b + chunk("MAIN", "", children);
 }
 
-TEST(Vox, readVox_turnsZUpIntoYUp) {
+TEST(Vox, ReadVoxTurnsZUpIntoYUp) {
   // A 3 x 4 x 5 model (x, y, z; z up) with voxels at (0,0,0) and (2,3,4).
   const Bytes f = voxFile(sizeChunk(3, 4, 5) + xyziChunk({{0, 0, 0}, {2, 3, 4}}) + chunk("RGBA", Bytes(1024, '\x7f')));
   auto in = stream(f);
@@ -171,20 +171,22 @@ TEST(Vox, readVox_turnsZUpIntoYUp) {
   EXPECT_TRUE(v.at(2, 4, 0));
 }
 
-TEST(Vox, readVox_picksTheRequestedModelAndSkipsUnknownChunks) {
+TEST(Vox, ReadVoxPicksTheRequestedModelAndSkipsUnknownChunks) {
   Bytes pack;
   test::putLE(pack, 2, 4);
-  const Bytes f = voxFile(chunk("PACK", pack) + sizeChunk(1, 1, 1) + xyziChunk({{0, 0, 0}}) + chunk("nTRN", "abcdefgh") +
-                          sizeChunk(2, 2, 2) + xyziChunk({{0, 0, 0}, {1, 1, 1}, {1, 0, 1}}));
+  const Bytes f =
+      voxFile(chunk("PACK", pack) + sizeChunk(1, 1, 1) + xyziChunk({{0, 0, 0}}) + chunk("nTRN", "abcdefgh") +
+              sizeChunk(2, 2, 2) + xyziChunk({{0, 0, 0}, {1, 1, 1}, {1, 0, 1}}));
   auto first = stream(f);
   EXPECT_EQ(io::readVox(*first, 0.01, 0).countFilled(), 1u);
   auto second = stream(f);
   EXPECT_EQ(io::readVox(*second, 0.01, 1).countFilled(), 3u);
   auto third = stream(f);
-  EXPECT_NE(errorOf([&] { io::readVox(*third, 0.01, 2); }).find("model 2 requested, the file has 2"), std::string::npos);
+  EXPECT_NE(errorOf([&] { io::readVox(*third, 0.01, 2); }).find("model 2 requested, the file has 2"),
+            std::string::npos);
 }
 
-TEST(Vox, readVox_rejectsMalformedFiles) {
+TEST(Vox, ReadVoxRejectsMalformedFiles) {
   Bytes negative = "VOX ";
   test::putLE(negative, 150, 4);
   negative += "MAIN";

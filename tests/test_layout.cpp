@@ -119,21 +119,23 @@ std::vector<std::tuple<int, int, int>> elementVertices(const Layout& L, size_t e
 // Invariant checkers: "" when the property holds, else the first violation.
 // ---------------------------------------------------------------------------------------------
 
-#define LAYOUT_REQUIRE(cond, what)              \
-  do {                                          \
-    if (!(cond)) {                              \
-      std::ostringstream os_;                   \
-      os_ << what;                              \
-      return os_.str();                         \
-    }                                           \
+#define LAYOUT_REQUIRE(cond, what) \
+  do {                             \
+    if (!(cond)) {                 \
+      std::ostringstream os_;      \
+      os_ << what;                 \
+      return os_.str();            \
+    }                              \
   } while (0)
 
 /// Element fields, alignment, and the numbering rules of layout.h.
 std::string checkStructure(const Layout& L, const VoxelVolume& vol) {
   const size_t E = L.numElements();
   LAYOUT_REQUIRE(L.dim == vol.dim() && L.dims == vol.dims(), "dims differ from the volume");
-  LAYOUT_REQUIRE(L.cellSize.size() == E && L.origin.size() == E && L.cellMask.size() == E, "element arrays differ in size");
-  LAYOUT_REQUIRE(L.elemStart.size() == E + 1 && L.elemStart[0] == 0 && L.elemStart[E] == L.numPairs(), "elemStart malformed");
+  LAYOUT_REQUIRE(L.cellSize.size() == E && L.origin.size() == E && L.cellMask.size() == E,
+                 "element arrays differ in size");
+  LAYOUT_REQUIRE(L.elemStart.size() == E + 1 && L.elemStart[0] == 0 && L.elemStart[E] == L.numPairs(),
+                 "elemStart malformed");
   LAYOUT_REQUIRE(L.pairIsOwn.size() == L.numPairs(), "pairIsOwn size");
   const unsigned full = L.dim == 3 ? 0xFFu : 0x0Fu;
   for (size_t e = 0; e < E; ++e) {
@@ -142,23 +144,28 @@ std::string checkStructure(const Layout& L, const VoxelVolume& vol) {
     LAYOUT_REQUIRE((L.cellMask[e] & ~full) == 0, "element " << e << " has cells outside the block");
     LAYOUT_REQUIRE(cs == (L.kind == LayoutKind::Voxel ? 1 : (1 << L.level[e])), "element " << e << " cell size");
     if (L.kind != LayoutKind::Gradational) LAYOUT_REQUIRE(L.level[e] == 0, "non-gradational level > 0");
-    if (L.kind == LayoutKind::Voxel) LAYOUT_REQUIRE(std::popcount(unsigned(L.cellMask[e])) == 1, "voxel element with >1 cell");
+    if (L.kind == LayoutKind::Voxel)
+      LAYOUT_REQUIRE(std::popcount(unsigned(L.cellMask[e])) == 1, "voxel element with >1 cell");
     for (int b = 0; b < 3; ++b) LAYOUT_REQUIRE(L.origin[e][b] >= 0, "negative origin");
-    for (int b = 0; b < L.dim; ++b) LAYOUT_REQUIRE(L.origin[e][b] % (2 * cs) == 0, "element " << e << " origin not aligned");
+    for (int b = 0; b < L.dim; ++b)
+      LAYOUT_REQUIRE(L.origin[e][b] % (2 * cs) == 0, "element " << e << " origin not aligned");
     if (L.dim == 2) LAYOUT_REQUIRE(L.origin[e].z() == 0, "2D element with z != 0");
     LAYOUT_REQUIRE(L.elemStart[e + 1] > L.elemStart[e], "element " << e << " has no vertices");
     for (uint32_t p = L.elemStart[e]; p < L.elemStart[e + 1]; ++p) {
       LAYOUT_REQUIRE(L.elemVerts[p] < L.numVertices(), "vertex id out of range");
-      if (p > L.elemStart[e]) LAYOUT_REQUIRE(L.elemVerts[p] > L.elemVerts[p - 1], "element " << e << " list not strictly sorted");
+      if (p > L.elemStart[e])
+        LAYOUT_REQUIRE(L.elemVerts[p] > L.elemVerts[p - 1], "element " << e << " list not strictly sorted");
     }
     if (e > 0) {
-      const auto prev = std::make_tuple(L.level[e - 1], zyx(L.origin[e - 1]), std::countr_zero(unsigned(L.cellMask[e - 1])));
+      const auto prev =
+          std::make_tuple(L.level[e - 1], zyx(L.origin[e - 1]), std::countr_zero(unsigned(L.cellMask[e - 1])));
       const auto cur = std::make_tuple(L.level[e], zyx(L.origin[e]), std::countr_zero(unsigned(L.cellMask[e])));
       LAYOUT_REQUIRE(prev < cur, "elements " << e - 1 << ", " << e << " out of order");
     }
   }
   for (size_t v = 0; v < L.numVertices(); ++v) {
-    for (int b = 0; b < 3; ++b) LAYOUT_REQUIRE(L.vertices[v][b] >= 0 && L.vertices[v][b] <= L.dims[b], "vertex outside [0, dims]");
+    for (int b = 0; b < 3; ++b)
+      LAYOUT_REQUIRE(L.vertices[v][b] >= 0 && L.vertices[v][b] <= L.dims[b], "vertex outside [0, dims]");
     if (L.dim == 2) LAYOUT_REQUIRE(L.vertices[v].z() == 0, "2D vertex with z != 0");
     if (v > 0) LAYOUT_REQUIRE(zyx(L.vertices[v - 1]) < zyx(L.vertices[v]), "vertices not strictly sorted by (z, y, x)");
   }
@@ -183,7 +190,8 @@ std::string checkCoverage(const Layout& L, const VoxelVolume& vol) {
           }
     }
   }
-  LAYOUT_REQUIRE(total == int64_t(vol.countFilled()), "region volume " << total << " != filled voxels " << vol.countFilled());
+  LAYOUT_REQUIRE(total == int64_t(vol.countFilled()),
+                 "region volume " << total << " != filled voxels " << vol.countFilled());
   for (size_t i = 0; i < covered.size(); ++i)
     LAYOUT_REQUIRE(covered[i] == (vol.data()[i] ? 1 : 0), "voxel index " << i << " covered " << covered[i] << " times");
   return "";
@@ -217,11 +225,12 @@ std::string checkClosure(const Layout& L) {
         }
     std::sort(expected.begin(), expected.end());
     const std::vector<uint32_t> actual(L.elemVerts.begin() + L.elemStart[e], L.elemVerts.begin() + L.elemStart[e + 1]);
-    LAYOUT_REQUIRE(actual == expected, "element " << e << " has " << actual.size() << " vertices, the closed region holds "
-                                                  << expected.size());
+    LAYOUT_REQUIRE(actual == expected, "element " << e << " has " << actual.size()
+                                                  << " vertices, the closed region holds " << expected.size());
     for (uint32_t p = L.elemStart[e]; p < L.elemStart[e + 1]; ++p) {
       const Int3& v = L.vertices[L.elemVerts[p]];
-      LAYOUT_REQUIRE(bool(L.pairIsOwn[p]) == (own.count({v.x(), v.y(), v.z()}) > 0), "element " << e << " wrong pairIsOwn");
+      LAYOUT_REQUIRE(bool(L.pairIsOwn[p]) == (own.count({v.x(), v.y(), v.z()}) > 0),
+                     "element " << e << " wrong pairIsOwn");
     }
   }
   LAYOUT_REQUIRE(allVerts == unionOwn, "vertex set != union of own corners");
@@ -241,8 +250,10 @@ std::string checkConnectivity(const Layout& L, const VoxelVolume& vol) {
   for (size_t e = 0; e < L.numElements(); ++e)
     for (uint32_t p = L.elemStart[e]; p < L.elemStart[e + 1]; ++p) {
       int64_t& f = firstElem[L.elemVerts[p]];
-      if (f < 0) f = int64_t(e);
-      else parent[find(e)] = find(size_t(f));
+      if (f < 0)
+        f = int64_t(e);
+      else
+        parent[find(e)] = find(size_t(f));
     }
   size_t elementComponents = 0;
   for (size_t e = 0; e < L.numElements(); ++e) elementComponents += find(e) == e;
@@ -470,7 +481,7 @@ TEST(Layout, OddSquare3x3In2DGivesIncompleteElements) {
     EXPECT_EQ(s.pairs, 22u);
     EXPECT_EQ(s.hangingVertices, 2u);
     EXPECT_EQ(elementVertices(L, 0), (std::vector<std::tuple<int, int, int>>{
-                                          {0, 0, 0}, {2, 0, 0}, {2, 1, 0}, {0, 2, 0}, {1, 2, 0}, {2, 2, 0}}));
+                                         {0, 0, 0}, {2, 0, 0}, {2, 1, 0}, {0, 2, 0}, {1, 2, 0}, {2, 2, 0}}));
     EXPECT_EQ(checkAll(L, vol), "");
   }
 }
@@ -525,8 +536,8 @@ TEST(Layout, LShape8x8In2DKeepsInnerCornerGroupForLevel1) {
   // elements; (1,1) becomes level-1 cell (1,1), alone in its level-1 group -> 1 incomplete
   // element, cell edge 2. Vertices: even lattice 25 minus (6,6), (8,6), (6,8), (8,8) = 21.
   // Pairs 12 * 4 = 48, no hanging (as in the 8x8 square).
-  const VoxelVolume vol = fromRows({"########", "########", "########", "########",
-                                    "####....", "####....", "####....", "####...."});
+  const VoxelVolume vol =
+      fromRows({"########", "########", "########", "########", "####....", "####....", "####....", "####...."});
   const Layout L = buildLayout(vol, LayoutKind::Gradational);
   const LayoutStats s = layoutStats(L, vol);
   EXPECT_EQ(s.elementsPerLevel, (std::vector<size_t>{11, 1}));
@@ -568,7 +579,8 @@ TEST(Layout, InvariantsOnSpheres) {
 }
 
 TEST(Layout, InvariantsOnOddBoxes) {
-  for (auto [nx, ny, nz] : {std::array<int, 3>{1, 1, 1}, {3, 5, 7}, {5, 5, 5}, {7, 3, 1}, {9, 9, 9}, {13, 11, 6}, {1, 17, 2}}) {
+  for (auto [nx, ny, nz] :
+       {std::array<int, 3>{1, 1, 1}, {3, 5, 7}, {5, 5, 5}, {7, 3, 1}, {9, 9, 9}, {13, 11, 6}, {1, 17, 2}}) {
     const VoxelVolume v3 = filledBox(3, nx, ny, nz);
     for (LayoutKind k : kAllKinds) EXPECT_EQ(checkAll(buildLayout(v3, k), v3), "") << nx << "x" << ny << "x" << nz;
     const VoxelVolume v2 = filledBox(2, nx, ny, 1);
@@ -598,7 +610,8 @@ RC_GTEST_PROP(LayoutProperty, RandomVolumesSatisfyAllInvariants, ()) {
   const int nz = dim == 3 ? *rc::gen::inRange(1, 11) : 1;
   // Fill by a threshold on random bytes so that shrinking moves towards emptier volumes.
   const int threshold = *rc::gen::inRange(1, 256);
-  const auto bytes = *rc::gen::container<std::vector<int>>(size_t(nx) * size_t(ny) * size_t(nz), rc::gen::inRange(0, 256));
+  const auto bytes =
+      *rc::gen::container<std::vector<int>>(size_t(nx) * size_t(ny) * size_t(nz), rc::gen::inRange(0, 256));
   VoxelVolume vol(dim, nx, ny, nz, 0.01);
   for (size_t i = 0; i < bytes.size(); ++i) vol.data()[i] = bytes[i] < threshold ? 1 : 0;
   RC_PRE(vol.countFilled() > 0);
@@ -656,31 +669,30 @@ TEST(Layout, LevelCountGrowsWithSize) {
   // Full cubes: 2 and 4 -> 1 level, 8 -> 2, 16 -> 3 (see the 8x8 and 12x12 squares above for
   // the pattern); beyond that, non-decreasing and more levels at 64 than at 16.
   std::vector<int> levels;
-  for (int n : {2, 4, 8, 16, 32, 64}) levels.push_back(buildLayout(filledBox(3, n, n, n), LayoutKind::Gradational).numLevels());
+  for (int n : {2, 4, 8, 16, 32, 64})
+    levels.push_back(buildLayout(filledBox(3, n, n, n), LayoutKind::Gradational).numLevels());
   EXPECT_EQ(levels[0], 1);
   EXPECT_EQ(levels[1], 1);
   EXPECT_EQ(levels[2], 2);
   EXPECT_EQ(levels[3], 3);
   EXPECT_TRUE(std::is_sorted(levels.begin(), levels.end()));
   EXPECT_GT(levels[5], levels[3]);
-  for (int n : {16, 32, 64})
-    EXPECT_EQ(buildLayout(sphere(n, 3), LayoutKind::Uniform).numLevels(), 1);
+  for (int n : {16, 32, 64}) EXPECT_EQ(buildLayout(sphere(n, 3), LayoutKind::Uniform).numLevels(), 1);
 }
-
 
 // Counting a layout without building it (issue 15: `gradel layout --size 512` built the voxel
 // baseline, 13 GB): countLayout gives the built layout's elements and vertices exactly and its
 // pairs within the estimate's 3^dim per element; voxelLayoutStats equals layoutStats of the
 // built voxel layout. Random volumes (holes, thin parts) and presets, 2D and 3D.
-TEST(Layout, CountsWithoutBuilding_matchTheBuiltLayout) {
+TEST(Layout, CountsWithoutBuildingMatchTheBuiltLayout) {
   std::vector<VoxelVolume> volumes = {sphere(12, 3), sphere(13, 2), filledBox(3, 9, 6, 5), filledBox(2, 7, 5, 1)};
   for (uint32_t seed = 1; seed <= 6; ++seed)
     volumes.push_back(randomVolume(seed % 2 ? 3 : 2, 11, 9, seed % 2 ? 7 : 1, 0.3 + 0.1 * seed, seed));
   for (const VoxelVolume& v : volumes) {
     if (v.countFilled() == 0) continue;
     for (LayoutKind kind : {LayoutKind::Gradational, LayoutKind::Uniform, LayoutKind::Voxel}) {
-      SCOPED_TRACE(std::string(layoutKindName(kind)) + " " + std::to_string(v.nx()) + "x" + std::to_string(v.ny()) + "x" +
-                   std::to_string(v.nz()));
+      SCOPED_TRACE(std::string(layoutKindName(kind)) + " " + std::to_string(v.nx()) + "x" + std::to_string(v.ny()) +
+                   "x" + std::to_string(v.nz()));
       const Layout L = buildLayout(v, kind);
       const LayoutCounts c = countLayout(v, kind);
       EXPECT_EQ(c.elements, L.numElements());

@@ -10,7 +10,7 @@
 using namespace gradel;
 using namespace gradel::test;
 
-TEST(Model, ConsistentIncompleteElements_exactAlongTheirLongAxis_neverStifferAcross) {
+TEST(Model, ConsistentIncompleteElementsExactAlongTheirLongAxisNeverStifferAcross) {
   // The interior of a gradational bar 8 voxels across is made of incomplete level-1 elements
   // whose two filled cells form a line along x (fig. 6). Under a uniform strain along x each
   // stores exactly the continuum energy E/2 eps^2 V_e; across (y, z) 3/8 of it (material.h).
@@ -32,7 +32,9 @@ TEST(Model, ConsistentIncompleteElements_exactAlongTheirLongAxis_neverStifferAcr
       for (Vec3& p : x) p[a] *= 1 + eps;
       std::vector<Vec3> f(n);
       Quat q = Quat::Identity();
-      energy[a] = elementForces(3, x.data(), &m.elemVerts[s], &m.restOffsets[s], int(n), m.stiffness[e], q, f.data(), 50).energy;
+      energy[a] =
+          elementForces(3, x.data(), &m.elemVerts[s], &m.restOffsets[s], int(n), m.stiffness[e], q, f.data(), 50)
+              .energy;
       EXPECT_LE(energy[a], continuum * (1 + 1e-6)) << "element " << e << " axis " << a;
     }
     const int cells = __builtin_popcount(b.layout.cellMask[e]);
@@ -40,7 +42,8 @@ TEST(Model, ConsistentIncompleteElements_exactAlongTheirLongAxis_neverStifferAcr
       for (int a = 0; a < 3; ++a) EXPECT_NEAR(energy[a] / continuum, 1.0, 1e-6);
     } else {
       const int mask = b.layout.cellMask[e];
-      ASSERT_TRUE(mask == 3 || mask == 12 || mask == 48 || mask == 192) << "expected two cells along x, got mask " << mask;
+      ASSERT_TRUE(mask == 3 || mask == 12 || mask == 48 || mask == 192)
+          << "expected two cells along x, got mask " << mask;
       ++incomplete;
       EXPECT_NEAR(energy[0] / continuum, 1.0, 1e-6);
       EXPECT_NEAR(energy[1] / continuum, 0.375, 1e-6);

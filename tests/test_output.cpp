@@ -25,9 +25,8 @@ namespace fs = std::filesystem;
 class OutputTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    root_ = fs::temp_directory_path() /
-            ("gradel-output-test-" + std::to_string(::getpid()) + "-" +
-             ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    root_ = fs::temp_directory_path() / ("gradel-output-test-" + std::to_string(::getpid()) + "-" +
+                                         ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(root_);
     fs::create_directories(root_);
   }
@@ -59,7 +58,8 @@ std::vector<std::string> listing(const fs::path& dir) {
 RestModel twoElements2d() {
   RestModel m;
   m.dim = 2;
-  m.restPositions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(2, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 0), Vec3(2, 1, 0), Vec3(1, 0.5, 0)};
+  m.restPositions = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(2, 0, 0),  Vec3(0, 1, 0),
+                     Vec3(1, 1, 0), Vec3(2, 1, 0), Vec3(1, 0.5, 0)};
   m.level = {0, 1};
   m.stiffness = {1, 1};
   m.size = {1, 1};
@@ -69,7 +69,8 @@ RestModel twoElements2d() {
     Vec3 c = Vec3::Zero();
     for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) c += m.restPositions[m.elemVerts[p]];
     c /= Real(m.elemStart[e + 1] - m.elemStart[e]);
-    for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) m.restOffsets.push_back(m.restPositions[m.elemVerts[p]] - c);
+    for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p)
+      m.restOffsets.push_back(m.restPositions[m.elemVerts[p]] - c);
   }
   return m;
 }
@@ -137,7 +138,7 @@ std::vector<T> decodeAscii(const std::string& xml, const std::string& name) {
   return v;
 }
 
-TEST_F(OutputTest, writeVtu_binary_decodesToModelAndState) {
+TEST_F(OutputTest, WriteVtuBinaryDecodesToModelAndState) {
   const RestModel m = twoElements2d();
   const State s = stateOf(m);
   const std::vector<Real> vstress = {0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6}, estress = {1.5, 2.5};
@@ -164,7 +165,7 @@ TEST_F(OutputTest, writeVtu_binary_decodesToModelAndState) {
   EXPECT_EQ(decodeBinary<int64_t>(xml, "connectivity"), (std::vector<int64_t>{0, 1, 4, 3, /**/ 1, 2, 5, 4, 6}));
 }
 
-TEST_F(OutputTest, writeVtu_ascii_matchesBinary) {
+TEST_F(OutputTest, WriteVtuAsciiMatchesBinary) {
   RestModel m = twoElements2d();
   m.dim = 3;  // the same vertices as a 3D model: convex point sets in stored order
   const State s = stateOf(m);
@@ -172,13 +173,13 @@ TEST_F(OutputTest, writeVtu_ascii_matchesBinary) {
   const std::string xml = readFile(root_ / "a.vtu");
   EXPECT_NE(xml.find("format=\"ascii\""), std::string::npos);
   EXPECT_EQ(xml.find("format=\"binary\""), std::string::npos);
-  EXPECT_EQ(xml.find("Name=\"stress\""), std::string::npos);  // no stress given, none written
+  EXPECT_EQ(xml.find("Name=\"stress\""), std::string::npos);               // no stress given, none written
   EXPECT_EQ(decodeAscii<double>(xml, "velocity")[3 * 2 + 1], -1.0 / 3.0);  // shortest round-trip text
   EXPECT_EQ(decodeAscii<int64_t>(xml, "connectivity"), (std::vector<int64_t>{0, 1, 3, 4, 1, 2, 4, 5, 6}));
   EXPECT_EQ(decodeAscii<int>(xml, "types"), (std::vector<int>{kVtkConvexPointSet, kVtkConvexPointSet}));
 }
 
-TEST_F(OutputTest, writeVtu_sizeMismatch_throws) {
+TEST_F(OutputTest, WriteVtuSizeMismatchThrows) {
   const RestModel m = twoElements2d();
   State s = stateOf(m);
   EXPECT_THROW(writeVtu(root_ / "x.vtu", m, s, {1.0, 2.0}), std::invalid_argument);
@@ -186,7 +187,7 @@ TEST_F(OutputTest, writeVtu_sizeMismatch_throws) {
   EXPECT_THROW(writeVtu(root_ / "x.vtu", m, s, {}), std::invalid_argument);
 }
 
-TEST_F(OutputTest, writeVtu_unwritablePath_throwsIoError) {
+TEST_F(OutputTest, WriteVtuUnwritablePathThrowsIoError) {
   const RestModel m = twoElements2d();
   EXPECT_THROW(writeVtu(root_ / "no-such-dir" / "x.vtu", m, stateOf(m), {}), IoError);
 }
@@ -203,7 +204,7 @@ std::string ioErrorOf(F&& f) {
 }
 
 // /dev/full answers every write with ENOSPC: a full disk, without filling one.
-TEST_F(OutputTest, diskFull_isIoErrorNamingPathAndReason) {
+TEST_F(OutputTest, DiskFullIsIoErrorNamingPathAndReason) {
   const RestModel m = twoElements2d();
   const std::string nospace = std::strerror(ENOSPC);
   std::string msg = ioErrorOf([&] { writeVtu("/dev/full", m, stateOf(m), {}); });
@@ -221,7 +222,7 @@ TEST_F(OutputTest, diskFull_isIoErrorNamingPathAndReason) {
 }
 
 // A folder the system will not let us create (sysfs refuses even root, who bypasses chmod).
-TEST_F(OutputTest, outputDirectory_unwritableLocation_isIoErrorAndLeavesNothing) {
+TEST_F(OutputTest, OutputDirectoryUnwritableLocationIsIoErrorAndLeavesNothing) {
   const std::string msg = ioErrorOf([] { OutputDirectory("/sys/gradel-output-test/result", "run.pvd"); });
   EXPECT_NE(msg.find("/sys/gradel-output-test"), std::string::npos) << msg;
   EXPECT_FALSE(fs::exists("/sys/gradel-output-test"));
@@ -239,7 +240,7 @@ pid_t deadPid() {
   return pid;
 }
 
-TEST_F(OutputTest, staleTemporaries_ofDeadRunsAreRemovedOthersKept) {
+TEST_F(OutputTest, StaleTemporariesOfDeadRunsAreRemovedOthersKept) {
   const fs::path target = root_ / "result";
   const fs::path dead = root_ / ("result.tmp-" + std::to_string(deadPid()) + "-Ab12Cd");
   const fs::path alive = root_ / ("result.tmp-" + std::to_string(::getppid()) + "-Ab12Cd");  // our parent lives
@@ -277,7 +278,7 @@ TEST_F(OutputTest, staleTemporaries_ofDeadRunsAreRemovedOthersKept) {
   EXPECT_FALSE(fs::exists(foreign));
 }
 
-TEST_F(OutputTest, writePvd_listsFramesWithTimes) {
+TEST_F(OutputTest, WritePvdListsFramesWithTimes) {
   writePvd(root_ / "run.pvd", {{0.0, frameFileName(0)}, {0.125, frameFileName(1)}});
   const std::string xml = readFile(root_ / "run.pvd");
   EXPECT_NE(xml.find("type=\"Collection\""), std::string::npos);
@@ -287,7 +288,7 @@ TEST_F(OutputTest, writePvd_listsFramesWithTimes) {
 
 // ---- metrics ----------------------------------------------------------------------
 
-TEST_F(OutputTest, metricsCsv_headerAndRows_roundTrip) {
+TEST_F(OutputTest, MetricsCsvHeaderAndRowsRoundTrip) {
   Metrics a;
   a.time = 0.1;
   a.kineticEnergy = 1.0 / 3.0;
@@ -323,7 +324,7 @@ TEST_F(OutputTest, metricsCsv_headerAndRows_roundTrip) {
 
 // ---- OutputDirectory ----------------------------------------------------------------
 
-TEST_F(OutputTest, outputDirectory_commit_publishesTarget) {
+TEST_F(OutputTest, OutputDirectoryCommitPublishesTarget) {
   const fs::path target = root_ / "deep" / "er" / "run";
   {
     OutputDirectory out(target, "run.pvd");
@@ -337,17 +338,17 @@ TEST_F(OutputTest, outputDirectory_commit_publishesTarget) {
   EXPECT_EQ(listing(target.parent_path()), std::vector<std::string>{"run"});  // no temporary left
 }
 
-TEST_F(OutputTest, outputDirectory_abort_leavesNothing) {
+TEST_F(OutputTest, OutputDirectoryAbortLeavesNothing) {
   const fs::path target = root_ / "deep" / "er" / "run";
   {
     OutputDirectory out(target, "run.pvd");
     writeFile(out.file("a.txt"), "partial");
-  }  // destroyed without commit: as after an error or a divergence
+  }                                          // destroyed without commit: as after an error or a divergence
   EXPECT_FALSE(fs::exists(root_ / "deep"));  // the parents it created are gone too
   EXPECT_TRUE(listing(root_).empty());
 }
 
-TEST_F(OutputTest, outputDirectory_existingTarget_keptOnAbortReplacedOnCommit) {
+TEST_F(OutputTest, OutputDirectoryExistingTargetKeptOnAbortReplacedOnCommit) {
   const fs::path target = root_ / "run";
   fs::create_directories(target);
   writeFile(target / "run.pvd", "old");
@@ -369,23 +370,23 @@ TEST_F(OutputTest, outputDirectory_existingTarget_keptOnAbortReplacedOnCommit) {
   EXPECT_EQ(listing(root_), std::vector<std::string>{"run"});  // the old copy was deleted
 }
 
-TEST_F(OutputTest, outputDirectory_refusesToReplaceForeignDirectoryOrFile) {
+TEST_F(OutputTest, OutputDirectoryRefusesToReplaceForeignDirectoryOrFile) {
   fs::create_directories(root_ / "home");
   writeFile(root_ / "home" / "precious.txt", "keep");
   EXPECT_THROW(OutputDirectory(root_ / "home", "run.pvd"), InputError);
   EXPECT_EQ(readFile(root_ / "home" / "precious.txt"), "keep");
   writeFile(root_ / "file", "x");
   EXPECT_THROW(OutputDirectory(root_ / "file", "run.pvd"), InputError);
-  EXPECT_THROW(OutputDirectory(root_ / "..", "run.pvd"), InputError);  // the non-empty temp directory
+  EXPECT_THROW(OutputDirectory(root_ / "..", "run.pvd"), InputError);        // the non-empty temp directory
   EXPECT_THROW(OutputDirectory(root_ / "a" / "..", "run.pvd"), InputError);  // normalises to root_ itself
-  EXPECT_EQ(listing(root_), (std::vector<std::string>{"file", "home"}));  // no temporaries left
+  EXPECT_EQ(listing(root_), (std::vector<std::string>{"file", "home"}));     // no temporaries left
   // An empty existing directory is fine to replace.
   fs::create_directories(root_ / "empty");
   OutputDirectory ok(root_ / "empty", "run.pvd");
   ok.commit();
 }
 
-TEST_F(OutputTest, outputDirectory_trailingSlash_namesTheDirectory) {
+TEST_F(OutputTest, OutputDirectoryTrailingSlashNamesTheDirectory) {
   {
     OutputDirectory out(root_.string() + "/res/", "run.pvd");
     EXPECT_EQ(out.target().filename(), "res");

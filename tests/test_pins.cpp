@@ -6,8 +6,8 @@
 
 #include <algorithm>
 #include <filesystem>
-#include <functional>
 #include <fstream>
+#include <functional>
 
 #include "gradel/pins.h"
 #include "gradel/scene.h"
@@ -26,7 +26,7 @@ BarSpec smallBar() {
   return bar;
 }
 
-TEST(Pins, selectPins_boxHoldsExactlyTheVerticesInside) {
+TEST(Pins, SelectPinsBoxHoldsExactlyTheVerticesInside) {
   const std::vector<Vec3> rest = {{0, 0, 0}, {0.01, 0, 0}, {0.02, 0, 0}, {0.01, 0.01, 0}};
   PinSettings p;
   p.min = Vec3(0.005, -1, -1);
@@ -36,14 +36,14 @@ TEST(Pins, selectPins_boxHoldsExactlyTheVerticesInside) {
   EXPECT_EQ(s.pinOf, (std::vector<uint32_t>{0, 0}));
 }
 
-TEST(Pins, selectPins_emptyBox_isInputError) {
+TEST(Pins, SelectPinsEmptyBoxIsInputError) {
   PinSettings p;
   p.min = Vec3(5, 5, 5);
   p.max = Vec3(6, 6, 6);
   EXPECT_THROW(selectPins({p}, {Vec3::Zero()}), InputError);
 }
 
-TEST(Pins, explicitClampedBar_pinnedVerticesStayAtRestAndTipSags) {
+TEST(Pins, ExplicitClampedBarPinnedVerticesStayAtRestAndTipSags) {
   SimulationSettings sim;
   BuiltScene b = buildScene(barScene(smallBar(), sim));
   World& w = *b.world;
@@ -57,7 +57,7 @@ TEST(Pins, explicitClampedBar_pinnedVerticesStayAtRestAndTipSags) {
   EXPECT_LT(w.state().positions[tip[0]].y(), w.model().restPositions[tip[0]].y() - 1e-4);
 }
 
-TEST(Pins, movingPin_followsItsPathOffset) {
+TEST(Pins, MovingPinFollowsItsPathOffset) {
   SimulationSettings sim;
   sim.gravity.setZero();
   Scene scene = barScene(smallBar(), sim);
@@ -78,7 +78,7 @@ const char* kPinScene = R"({
               "path": [ { "t": 0, "position": [0, 0, 0] }, { "t": 1, "position": [0, 0.01, 0] } ] } ]
 })";
 
-TEST(Pins, parseScene_pinsReadBoxAndPath) {
+TEST(Pins, ParseScenePinsReadBoxAndPath) {
   const Scene s = parseScene(kPinScene, "pins.json");
   ASSERT_EQ(s.pins.size(), 1u);
   EXPECT_EQ(s.pins[0].max, Vec3(0.001, 0.041, 0.041));
@@ -88,7 +88,7 @@ TEST(Pins, parseScene_pinsReadBoxAndPath) {
   EXPECT_EQ(b.world->pinned().vertices.size(), 9u);  // 3 x 3 block corners (2-voxel blocks)
 }
 
-TEST(Pins, parseScene_unknownKeyInPin_namesItsPath) {
+TEST(Pins, ParseSceneUnknownKeyInPinNamesItsPath) {
   std::string text = kPinScene;
   text.replace(text.find("\"min\""), 5, "\"mni\"");
   try {
@@ -99,7 +99,7 @@ TEST(Pins, parseScene_unknownKeyInPin_namesItsPath) {
   }
 }
 
-TEST(Pins, buildScene_pinHoldingNoVertex_isInputError) {
+TEST(Pins, BuildScenePinHoldingNoVertexIsInputError) {
   std::string text = kPinScene;
   text.replace(text.find("[-0.001, -0.001, -0.001]"), 24, "[ 0.5,    0.5,    0.5  ]");
   text.replace(text.find("[0.001, 0.041, 0.041]"), 21, "[0.6,   0.6,   0.6  ]");
@@ -108,7 +108,7 @@ TEST(Pins, buildScene_pinHoldingNoVertex_isInputError) {
 
 // ---- voxel-mask pins ----
 
-TEST(Pins, maskBoxes_selectTheCornersOfTheirVoxels_andFollowThePath) {
+TEST(Pins, MaskBoxesSelectTheCornersOfTheirVoxelsAndFollowThePath) {
   // smallBar: 2 x 2 x 8 voxels, 2-voxel blocks, so vertices sit at even lattice coordinates.
   // Mask voxels x in [0, 2] hold the vertices with lattice x <= 3: the planes x = 0 and x = 2.
   SimulationSettings sim;
@@ -151,11 +151,12 @@ std::string writeMask(const std::string& name, int slab) {
 std::string maskScene(const std::string& maskFields) {
   return R"({ "body": { "shape": "box", "size": 4, "voxel_size": 0.01, "position": [1, 0, 0] },
              "simulation": { "gravity": [0, 0, 0] },
-             "pins": [ { "mask": { )" + maskFields + R"( },
+             "pins": [ { "mask": { )" +
+         maskFields + R"( },
                          "path": [ { "t": 0, "position": [0, 0, 0] }, { "t": 0.01, "position": [0, 0, 0.003] } ] } ] })";
 }
 
-TEST(Pins, maskFile_onTheBodyLattice_pinsTheFilledVoxelsCorners_withOffset) {
+TEST(Pins, MaskFileOnTheBodyLatticePinsTheFilledVoxelsCornersWithOffset) {
   const std::string file = writeMask("slab0.raw", 0);
   const std::string raw = "\"file\": \"" + file + "\", \"dims\": [4, 4, 4], \"type\": \"uint8\"";
   for (int offset : {0, 2}) {
@@ -181,24 +182,32 @@ void expectInputError(const std::function<void()>& f, const std::vector<std::str
   }
 }
 
-TEST(Pins, maskErrors_nameTheFieldAndTheFile) {
+TEST(Pins, MaskErrorsNameTheFieldAndTheFile) {
   const std::string missing = "/nonexistent/gradel-mask.raw";
-  expectInputError([&] { parseScene(maskScene("\"file\": \"" + missing + "\", \"dims\": [4, 4, 4], \"type\": \"uint8\""), "s.json"); },
-                   {"s.json", "pins[0].mask.file", "gradel-mask.raw"});
+  expectInputError(
+      [&] {
+        parseScene(maskScene("\"file\": \"" + missing + "\", \"dims\": [4, 4, 4], \"type\": \"uint8\""), "s.json");
+      },
+      {"s.json", "pins[0].mask.file", "gradel-mask.raw"});
   expectInputError([&] { parseScene(maskScene("\"offset\": [0, 0, 0]"), "s.json"); }, {"pins[0].mask.file", "boxes"});
-  expectInputError([&] { parseScene(maskScene("\"boxes\": [ { \"min\": [2, 0, 0], \"max\": [1, 3, 3] } ]"), "s.json"); },
-                   {"pins[0].mask.boxes[0].max"});
+  expectInputError(
+      [&] { parseScene(maskScene("\"boxes\": [ { \"min\": [2, 0, 0], \"max\": [1, 3, 3] } ]"), "s.json"); },
+      {"pins[0].mask.boxes[0].max"});
   std::string both = maskScene("\"boxes\": [ { \"min\": [0, 0, 0], \"max\": [0, 3, 3] } ]");
   both.replace(both.find("\"mask\""), 6, "\"min\": [0, 0, 0], \"mask\"");
   expectInputError([&] { parseScene(both, "s.json"); }, {"pins[0].min", "not both"});
   // An empty label volume: read when the scene is built; the message names the pin and the file.
   const std::string empty = writeMask("empty.raw", 99);
-  const Scene s = parseScene(maskScene("\"file\": \"" + empty + "\", \"dims\": [4, 4, 4], \"type\": \"uint8\""), "s.json");
+  const Scene s =
+      parseScene(maskScene("\"file\": \"" + empty + "\", \"dims\": [4, 4, 4], \"type\": \"uint8\""), "s.json");
   expectInputError([&] { buildScene(s); }, {"pins[0].mask", "empty.raw"});
   std::filesystem::remove(empty);
   // A mask outside the body.
-  expectInputError([&] { buildScene(parseScene(maskScene("\"boxes\": [ { \"min\": [10, 10, 10], \"max\": [11, 11, 11] } ]"), "s.json")); },
-                   {"pins[0]", "mask holds no vertex"});
+  expectInputError(
+      [&] {
+        buildScene(parseScene(maskScene("\"boxes\": [ { \"min\": [10, 10, 10], \"max\": [11, 11, 11] } ]"), "s.json"));
+      },
+      {"pins[0]", "mask holds no vertex"});
 }
 
 }  // namespace

@@ -46,7 +46,7 @@ std::string scene2(const std::string& extra) {
   return R"({"dim": 2, "body": {"shape": "sphere", "size": 8})" + (extra.empty() ? "" : ", " + extra) + "}";
 }
 
-TEST(SceneIo, parseScene_fullFile_givesExpectedSettings) {
+TEST(SceneIo, ParseSceneFullFileGivesExpectedSettings) {
   const Scene s = parseScene(R"({
     "name": "demo",
     "description": "free text",
@@ -109,7 +109,7 @@ TEST(SceneIo, parseScene_fullFile_givesExpectedSettings) {
   EXPECT_TRUE(s.manipulators[1].path.keys.empty());
 }
 
-TEST(SceneIo, parseScene_minimalFile_usesStructDefaults) {
+TEST(SceneIo, ParseSceneMinimalFileUsesStructDefaults) {
   const Scene s = parseScene(scene3(), "dir/my-scene.json");
   const Scene d;
   const SimulationSettings sim;
@@ -128,7 +128,7 @@ TEST(SceneIo, parseScene_minimalFile_usesStructDefaults) {
   EXPECT_TRUE(s.manipulators.empty());
 }
 
-TEST(SceneIo, parseScene_2d_vectorsHaveTwoNumbersAndZeroZ) {
+TEST(SceneIo, ParseScene2dVectorsHaveTwoNumbersAndZeroZ) {
   const Scene s = parseScene(scene2(R"("simulation": {"gravity": [0, -1]}, "domain": {"min": [-1, -1], "max": [1, 2]},
       "manipulators": [{"type": "circle", "path": [{"t": 0, "position": [0.5, 0.25]}]}])"),
                              kFile);
@@ -139,7 +139,7 @@ TEST(SceneIo, parseScene_2d_vectorsHaveTwoNumbersAndZeroZ) {
   EXPECT_EQ(s.manipulators[0].path.keys[0].position, Vec3(0.5, 0.25, 0));
 }
 
-TEST(SceneIo, parseScene_union_readsGridAndPrimitives) {
+TEST(SceneIo, ParseSceneUnionReadsGridAndPrimitives) {
   const Scene s = parseScene(scene3(R"("shape": "union", "grid": [20, 10, 6], "primitives": [
       {"type": "box", "min": [0, 0, 0], "max": [10, 10, 6]},
       {"type": "sphere", "center": [15, 5, 3], "radius": 3},
@@ -154,47 +154,50 @@ TEST(SceneIo, parseScene_union_readsGridAndPrimitives) {
   EXPECT_GT(rasterize(s.body.shape).countFilled(), 0u);
 }
 
-TEST(SceneIo, parseScene_dtAuto_isZero) {
-  EXPECT_EQ(parseScene(scene3(R"("shape": "box", "size": 4)", R"("simulation": {"dt": "auto"})"), kFile).simulation.dt, 0);
+TEST(SceneIo, ParseSceneDtAutoIsZero) {
+  EXPECT_EQ(parseScene(scene3(R"("shape": "box", "size": 4)", R"("simulation": {"dt": "auto"})"), kFile).simulation.dt,
+            0);
 }
 
-TEST(SceneIo, parseScene_malformedJson_namesFileAndPosition) {
+TEST(SceneIo, ParseSceneMalformedJsonNamesFileAndPosition) {
   expectError(R"({"body": {"shape": "sphere",, }})", "invalid JSON", "line 1, column");
   expectError("{\n  \"body\": {\n    \"shape\": \"sphere\"\n  }\n", "invalid JSON", "line 5");
   expectError("", "invalid JSON");
 }
 
-TEST(SceneIo, parseScene_topLevelNotObject_isError) { expectError("[1, 2]", "expected an object"); }
+TEST(SceneIo, ParseSceneTopLevelNotObjectIsError) { expectError("[1, 2]", "expected an object"); }
 
-TEST(SceneIo, parseScene_unknownKey_namesNestedPath) {
+TEST(SceneIo, ParseSceneUnknownKeyNamesNestedPath) {
   expectError(scene3(R"("shape": "sphere", "size": 8, "radiuss": 3)"), "body.radiuss", "unknown key");
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("manipulators": [{"type": "sphere", "raduis": 0.1}])"),
               "manipulators[0].raduis", "did you mean \"radius\"");
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("bdoy": {})"), "bdoy", "unknown key");
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": {"dt": 0.001, "gravty": [0, 0, 0]})"),
               "simulation.gravty", "did you mean \"gravity\"");
-  expectError(scene3(R"("shape": "sphere", "size": 8)",
-                     R"("manipulators": [{"type": "sphere", "path": [{"t": 0, "position": [0,0,0], "vel": [0,0,0]}]}])"),
-              "manipulators[0].path[0].vel", "unknown key");
+  expectError(
+      scene3(R"("shape": "sphere", "size": 8)",
+             R"("manipulators": [{"type": "sphere", "path": [{"t": 0, "position": [0,0,0], "vel": [0,0,0]}]}])"),
+      "manipulators[0].path[0].vel", "unknown key");
 }
 
-TEST(SceneIo, parseScene_typoOfRequiredKey_isReportedAsTheTypo) {
+TEST(SceneIo, ParseSceneTypoOfRequiredKeyIsReportedAsTheTypo) {
   // "sise" is likelier a typo of the missing "size" than two separate mistakes.
   expectError(scene3(R"("shape": "sphere", "sise": 8)"), "body.sise", "did you mean \"size\"");
 }
 
-TEST(SceneIo, parseScene_duplicateKey_isError) {
+TEST(SceneIo, ParseSceneDuplicateKeyIsError) {
   expectError(R"({"body": {"shape": "sphere", "size": 8, "size": 9}})", "body.size", "duplicate key");
-  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("manipulators": [{"type": "sphere"}, {"type": "sphere", "type": "sphere"}])"),
+  expectError(scene3(R"("shape": "sphere", "size": 8)",
+                     R"("manipulators": [{"type": "sphere"}, {"type": "sphere", "type": "sphere"}])"),
               "manipulators[1].type", "duplicate key");
 }
 
-TEST(SceneIo, parseScene_missingRequired_isError) {
+TEST(SceneIo, ParseSceneMissingRequiredIsError) {
   expectError(R"({"dim": 3})", "body", "missing");
   expectError(R"({"body": {"size": 8}})", "body.shape", "missing");
   expectError(R"({"body": {"shape": "box"}})", "body.size", "missing");
-  expectError(scene3(R"("shape": "union", "primitives": [{"type": "box", "min": [0,0,0], "max": [1,1,1]}])"), "body.grid",
-              "missing");
+  expectError(scene3(R"("shape": "union", "primitives": [{"type": "box", "min": [0,0,0], "max": [1,1,1]}])"),
+              "body.grid", "missing");
   expectError(scene3(R"("shape": "union", "grid": [4, 4, 4])"), "body.primitives", "missing");
   expectError(scene3(R"("shape": "union", "grid": [4, 4, 4], "primitives": [{"type": "sphere", "radius": 2}])"),
               "body.primitives[0].center", "missing");
@@ -204,39 +207,46 @@ TEST(SceneIo, parseScene_missingRequired_isError) {
               "manipulators[0].path[0].position", "missing");
 }
 
-TEST(SceneIo, parseScene_wrongType_isError) {
+TEST(SceneIo, ParseSceneWrongTypeIsError) {
   expectError(scene3(R"("shape": "sphere", "size": "8")"), "body.size", "got string");
   expectError(scene3(R"("shape": "sphere", "size": 8.5)"), "body.size", "expected an integer");
   expectError(scene3(R"("shape": 3, "size": 8)"), "body.shape", "got number");
-  expectError(scene3(R"("shape": "sphere", "size": 8, "voxel_size": "1cm")"), "body.voxel_size", "expected a number > 0");
+  expectError(scene3(R"("shape": "sphere", "size": 8, "voxel_size": "1cm")"), "body.voxel_size",
+              "expected a number > 0");
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": [])"), "simulation", "expected an object");
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("manipulators": {"type": "sphere"})"), "manipulators",
               "expected an array");
-  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("manipulators": [3])"), "manipulators[0]", "expected an object");
+  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("manipulators": [3])"), "manipulators[0]",
+              "expected an object");
   expectError(scene3(R"("shape": "sphere", "size": 8, "position": [0, "a", 0])"), "body.position[1]", "got string");
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": {"dt": true})"), "simulation.dt", "\"auto\"");
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("name": 5)"), "name", "expected a string");
 }
 
-TEST(SceneIo, parseScene_outOfRange_isError) {
+TEST(SceneIo, ParseSceneOutOfRangeIsError) {
   expectError(scene3(R"("shape": "sphere", "size": 0)"), "body.size", "out of range");
   expectError(scene3(R"("shape": "sphere", "size": 8, "voxel_size": 0)"), "body.voxel_size", "> 0");
   expectError(scene3(R"("shape": "sphere", "size": 8, "voxel_size": -0.01)"), "body.voxel_size", "out of range");
-  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("material": {"youngs_modulus": -1})"), "material.youngs_modulus");
+  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("material": {"youngs_modulus": -1})"),
+              "material.youngs_modulus");
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("material": {"density": 0})"), "material.density");
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("material": {"k": 0})"), "material.k");
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": {"dt": 0})"), "simulation.dt", "out of range");
-  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": {"dt": "fast"})"), "simulation.dt", "\"auto\"");
-  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": {"dt_fraction": 1.5})"), "simulation.dt_fraction",
-              "(0, 0.3]");
-  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": {"damping": -0.1})"), "simulation.damping", ">= 0");
+  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": {"dt": "fast"})"), "simulation.dt",
+              "\"auto\"");
+  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": {"dt_fraction": 1.5})"),
+              "simulation.dt_fraction", "(0, 0.3]");
+  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": {"damping": -0.1})"), "simulation.damping",
+              ">= 0");
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": {"duration": 0})"), "simulation.duration");
-  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": {"frame_interval": -1})"), "simulation.frame_interval");
+  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": {"frame_interval": -1})"),
+              "simulation.frame_interval");
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": {"threads": 0})"), "simulation.threads");
-  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("domain": {"restitution": 1.5})"), "domain.restitution", "[0, 1]");
+  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("domain": {"restitution": 1.5})"), "domain.restitution",
+              "[0, 1]");
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("domain": {"friction": -1})"), "domain.friction");
-  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("domain": {"min": [0, 0, 0], "max": [1, 0, 1]})"), "domain.max",
-              "max > min");
+  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("domain": {"min": [0, 0, 0], "max": [1, 0, 1]})"),
+              "domain.max", "max > min");
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("manipulators": [{"type": "sphere", "radius": 0}])"),
               "manipulators[0].radius");
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("manipulators": [{"type": "sphere", "restitution": -0.5}])"),
@@ -244,13 +254,15 @@ TEST(SceneIo, parseScene_outOfRange_isError) {
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("manipulators": [{"type": "cylinder", "axis": [0, 0, 0]}])"),
               "manipulators[0].axis", "non-zero");
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("dim": 4)"), "dim", "in [2, 3]");
-  expectError(scene3(R"("shape": "union", "grid": [4, 0, 4], "primitives": [{"type": "box", "min": [0,0,0], "max": [1,1,1]}])"),
-              "body.grid[1]");
-  expectError(scene3(R"("shape": "union", "grid": [4, 4, 4], "primitives": [{"type": "box", "min": [0,0,0], "max": [1,1,0]}])"),
-              "body.primitives[0].max", "max > min");
+  expectError(
+      scene3(R"("shape": "union", "grid": [4, 0, 4], "primitives": [{"type": "box", "min": [0,0,0], "max": [1,1,1]}])"),
+      "body.grid[1]");
+  expectError(
+      scene3(R"("shape": "union", "grid": [4, 4, 4], "primitives": [{"type": "box", "min": [0,0,0], "max": [1,1,0]}])"),
+      "body.primitives[0].max", "max > min");
 }
 
-TEST(SceneIo, parseScene_nonFiniteNumber_isError) {
+TEST(SceneIo, ParseSceneNonFiniteNumberIsError) {
   // JSON has no NaN or Infinity literal; an overflowing literal (the only way to write
   // infinity) is rejected by the parser, NaN is a syntax error.
   expectError(scene3(R"("shape": "sphere", "size": 8, "voxel_size": 1e999)"), "invalid JSON", "overflow");
@@ -260,65 +272,71 @@ TEST(SceneIo, parseScene_nonFiniteNumber_isError) {
   expectError(scene3(R"("shape": "sphere", "size": 8, "position": [Infinity, 0, 0])"), "invalid JSON");
 }
 
-TEST(SceneIo, parseScene_wrongVectorLength_isError) {
+TEST(SceneIo, ParseSceneWrongVectorLengthIsError) {
   expectError(scene3(R"("shape": "sphere", "size": 8, "position": [0, 0])"), "body.position", "expected 3 numbers");
   expectError(scene2(R"("simulation": {"gravity": [0, -9.81, 0]})"), "simulation.gravity", "expected 2 numbers");
-  expectError(scene3(R"("shape": "union", "grid": [4, 4], "primitives": [{"type": "box", "min": [0,0,0], "max": [1,1,1]}])"),
-              "body.grid", "expected 3 integers");
+  expectError(
+      scene3(R"("shape": "union", "grid": [4, 4], "primitives": [{"type": "box", "min": [0,0,0], "max": [1,1,1]}])"),
+      "body.grid", "expected 3 integers");
 }
 
-TEST(SceneIo, parseScene_unknownEnumValue_isError) {
+TEST(SceneIo, ParseSceneUnknownEnumValueIsError) {
   expectError(scene3(R"("shape": "cube", "size": 8)"), "body.shape", "\"cube\"");
   expectError(scene3(R"("shape": "sphere", "size": 8, "layout": "octree")"), "body.layout", "octree");
-  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("material": {"scaling": "linear"})"), "material.scaling", "linear");
-  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": {"integrator": "rk4"})"), "simulation.integrator",
-              "rk4");
-  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("manipulators": [{"type": "cube"}])"), "manipulators[0].type",
-              "cube");
-  expectError(scene3(R"("shape": "union", "grid": [4, 4, 4], "primitives": [{"type": "cone"}])"), "body.primitives[0].type",
-              "cone");
+  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("material": {"scaling": "linear"})"), "material.scaling",
+              "linear");
+  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": {"integrator": "rk4"})"),
+              "simulation.integrator", "rk4");
+  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("manipulators": [{"type": "cube"}])"),
+              "manipulators[0].type", "cube");
+  expectError(scene3(R"("shape": "union", "grid": [4, 4, 4], "primitives": [{"type": "cone"}])"),
+              "body.primitives[0].type", "cone");
   expectError(scene3(R"("shape": "union", "grid": [4, 4, 4], "primitives": [{"type": "cylinder", "center": [2,2,2],
       "radius": 1, "half_length": 1, "axis": "w"}])"),
               "body.primitives[0].axis", "\"w\"");
 }
 
-TEST(SceneIo, parseScene_pathTimes_mustIncreaseStrictly) {
+TEST(SceneIo, ParseScenePathTimesMustIncreaseStrictly) {
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("manipulators": [{"type": "sphere", "path": [
       {"t": 0, "position": [0,0,0]}, {"t": 0.5, "position": [0,0,0]}, {"t": 0.5, "position": [1,0,0]}]}])"),
               "manipulators[0].path[2].t", "strictly increasing");
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("manipulators": [{"type": "sphere", "path": [
       {"t": 1, "position": [0,0,0]}, {"t": 0.5, "position": [0,0,0]}]}])"),
               "manipulators[0].path[1].t");
-  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("manipulators": [{"type": "sphere", "path": [{"t": -1, "position": [0,0,0]}]}])"),
+  expectError(scene3(R"("shape": "sphere", "size": 8)",
+                     R"("manipulators": [{"type": "sphere", "path": [{"t": -1, "position": [0,0,0]}]}])"),
               "manipulators[0].path[0].t", ">= 0");
 }
 
-TEST(SceneIo, parseScene_shapesMustSuitTheDimension) {
+TEST(SceneIo, ParseSceneShapesMustSuitTheDimension) {
   expectError(scene2(R"("manipulators": [{"type": "cylinder"}])"), "manipulators[0].type", "3D only");
-  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("manipulators": [{"type": "circle"}])"), "manipulators[0].type",
-              "2D only");
+  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("manipulators": [{"type": "circle"}])"),
+              "manipulators[0].type", "2D only");
   expectError(R"({"dim": 2, "body": {"shape": "cylinder", "size": 8}})", "body.shape", "3D only");
   expectError(R"({"dim": 2, "body": {"shape": "union", "grid": [4, 4], "primitives": [{"type": "cylinder",
       "center": [2, 2], "radius": 1, "half_length": 1}]}})",
               "body.primitives[0].type", "3D only");
 }
 
-TEST(SceneIo, parseScene_keysOfAnotherVariant_areRejected) {
+TEST(SceneIo, ParseSceneKeysOfAnotherVariantAreRejected) {
   expectError(scene3(R"("shape": "sphere", "size": 8, "grid": [4, 4, 4])"), "body.grid", "only for shape \"union\"");
-  expectError(scene3(R"("shape": "union", "size": 8, "grid": [4, 4, 4], "primitives": [])"), "body.size", "not allowed");
+  expectError(scene3(R"("shape": "union", "size": 8, "grid": [4, 4, 4], "primitives": [])"), "body.size",
+              "not allowed");
   expectError(scene3(R"("shape": "union", "grid": [4, 4, 4], "primitives": [])"), "body.primitives", "at least one");
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("manipulators": [{"type": "sphere", "half_length": 0.1}])"),
               "manipulators[0].half_length", "cylinder");
-  expectError(scene3(R"("shape": "union", "grid": [4, 4, 4], "primitives": [{"type": "box", "min": [0,0,0], "max": [1,1,1], "radius": 2}])"),
-              "body.primitives[0].radius", "not allowed");
+  expectError(
+      scene3(
+          R"("shape": "union", "grid": [4, 4, 4], "primitives": [{"type": "box", "min": [0,0,0], "max": [1,1,1], "radius": 2}])"),
+      "body.primitives[0].radius", "not allowed");
 }
 
-TEST(SceneIo, parseScene_badName_isError) {
+TEST(SceneIo, ParseSceneBadNameIsError) {
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("name": "../escape")"), "name", "directory name");
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("name": "")"), "name");
 }
 
-TEST(SceneIo, loadScene_unreadableFile_namesFileAndReason) {
+TEST(SceneIo, LoadSceneUnreadableFileNamesFileAndReason) {
   const std::string missing = "/nonexistent-dir/none.json";
   try {
     loadScene(missing);
@@ -334,25 +352,22 @@ TEST(SceneIo, loadScene_unreadableFile_namesFileAndReason) {
   }
 }
 
-TEST(SceneIo, loadScene_file_usesPathInMessagesAndStemAsName) {
-  const auto path = std::filesystem::temp_directory_path() / ("gradel-scene-io-" + std::to_string(::getpid()) + ".json");
-  {
-    std::ofstream(path) << R"({"body": {"shape": "sphere", "size": 8, "colour": "red"}})";
-  }
+TEST(SceneIo, LoadSceneFileUsesPathInMessagesAndStemAsName) {
+  const auto path =
+      std::filesystem::temp_directory_path() / ("gradel-scene-io-" + std::to_string(::getpid()) + ".json");
+  { std::ofstream(path) << R"({"body": {"shape": "sphere", "size": 8, "colour": "red"}})"; }
   try {
     loadScene(path.string());
     ADD_FAILURE() << "expected an InputError";
   } catch (const InputError& e) {
     EXPECT_EQ(std::string(e.what()).rfind(path.string() + ": body.colour: unknown key", 0), 0u) << e.what();
   }
-  {
-    std::ofstream(path) << scene3();
-  }
+  { std::ofstream(path) << scene3(); }
   EXPECT_EQ(loadScene(path.string()).name, path.stem().string());
   std::filesystem::remove(path);
 }
 
-TEST(SceneIo, shippedScenes_allParse) {
+TEST(SceneIo, ShippedScenesAllParse) {
   int n = 0;
   for (const auto& entry : std::filesystem::directory_iterator(std::string(GRADEL_SOURCE_DIR) + "/scenes")) {
     if (entry.path().extension() != ".json") continue;
@@ -363,10 +378,9 @@ TEST(SceneIo, shippedScenes_allParse) {
   EXPECT_GE(n, 7);
 }
 
-
 // ---- issue 15: messages, stable dt_fraction, size limits ----------------------------------
 
-TEST(SceneIo, messages_escapeNulAndCutLongText) {
+TEST(SceneIo, MessagesEscapeNulAndCutLongText) {
   // A NUL in a key or a value: the whole message survives (std::runtime_error keeps a C string).
   std::string msg = errorOf(scene3(R"("shape": "sphere", "size": 8, "lay\u0000out": "voxel")"));
   EXPECT_NE(msg.find("body.lay\\u0000out: unknown key"), std::string::npos) << msg;
@@ -391,7 +405,7 @@ TEST(SceneIo, messages_escapeNulAndCutLongText) {
   EXPECT_EQ(msg.find('\n'), std::string::npos);
 }
 
-TEST(SceneIo, numberOverflow_reportsLineAndColumn) {
+TEST(SceneIo, NumberOverflowReportsLineAndColumn) {
   const std::string msg = errorOf("{\n  \"body\": {\"shape\": \"sphere\", \"size\": 8,\n    \"voxel_size\": 1e999}}");
   EXPECT_NE(msg.find("invalid JSON: at line 3, column 19: "), std::string::npos) << msg;
   EXPECT_NE(msg.find("1e999"), std::string::npos) << msg;
@@ -399,16 +413,17 @@ TEST(SceneIo, numberOverflow_reportsLineAndColumn) {
   EXPECT_NE(errorOf(R"({"dim": 1e400, "body": {}})").find("at line 1, column 9"), std::string::npos);
 }
 
-TEST(SceneIo, dtFraction_acceptsOnlyTheStableRange) {
+TEST(SceneIo, DtFractionAcceptsOnlyTheStableRange) {
   // Measured on the shipped scenes (docs/scenes.md): symplectic Euler holds at 0.3 with the vertex
   // rule and diverges from 0.33; the element rule holds at 0.12 and diverges at 0.15.
   EXPECT_DOUBLE_EQ(parseScene(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": {"dt_fraction": 0.3})"), kFile)
                        .simulation.dtFraction,
                    0.3);
-  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": {"dt_fraction": 0.5})"), "simulation.dt_fraction",
-              "(0, 0.3]");
-  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": {"dt_period": "element", "dt_fraction": 0.2})"),
-              "simulation.dt_fraction", "(0, 0.1]");
+  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": {"dt_fraction": 0.5})"),
+              "simulation.dt_fraction", "(0, 0.3]");
+  expectError(
+      scene3(R"("shape": "sphere", "size": 8)", R"("simulation": {"dt_period": "element", "dt_fraction": 0.2})"),
+      "simulation.dt_fraction", "(0, 0.1]");
 }
 
 // The InputError message of building `text`, or "" when it built.
@@ -421,22 +436,29 @@ std::string buildErrorOf(const std::string& text, const SizeLimits& limits = {})
   return "";
 }
 
-TEST(SceneIo, sizeLimits_refuseBeforeAllocatingAndNameTheKey) {
+TEST(SceneIo, SizeLimitsRefuseBeforeAllocatingAndNameTheKey) {
   // 1588^3 voxels (4.0e9) used to be refused by the volume with a message naming no key; now the
   // voxel cap of 2^30 (1024^3) refuses it before anything is allocated.
   std::string msg = buildErrorOf(scene3(R"("shape": "sphere", "size": 1588)"));
-  EXPECT_EQ(msg.rfind("body.size: a grid of 1588 x 1588 x 1588 = 4004529472 voxels is over the limit of 1073741824", 0), 0u)
+  EXPECT_EQ(msg.rfind("body.size: a grid of 1588 x 1588 x 1588 = 4004529472 voxels is over the limit of 1073741824", 0),
+            0u)
       << msg;
-  msg = buildErrorOf(scene3(R"("shape": "union", "grid": [2048, 1024, 1024], "primitives": [{"type": "sphere", "center": [1,1,1], "radius": 1}])"));
+  msg = buildErrorOf(scene3(
+      R"("shape": "union", "grid": [2048, 1024, 1024], "primitives": [{"type": "sphere", "center": [1,1,1], "radius": 1}])"));
   EXPECT_EQ(msg.rfind("body.grid: ", 0), 0u) << msg;
   // Memory: a 1 MB limit refuses the volume of a 128^3 grid, and the model of a 48^3 voxel
   // layout (110,592 elements), each naming the estimate and the limit.
   SizeLimits small;
   small.maxBytes = 1u << 20;
   msg = buildErrorOf(scene3(R"("shape": "box", "size": 128)"), small);
-  EXPECT_EQ(msg.rfind("body.size: a grid of 128 x 128 x 128 voxels needs about 2.8 MB for the volume alone, over the memory limit of 1.0 MB", 0), 0u) << msg;
+  EXPECT_EQ(msg.rfind("body.size: a grid of 128 x 128 x 128 voxels needs about 2.8 MB for the volume alone, over the "
+                      "memory limit of 1.0 MB",
+                      0),
+            0u)
+      << msg;
   msg = buildErrorOf(scene3(R"("shape": "box", "size": 48, "layout": "voxel")"), small);
-  EXPECT_EQ(msg.rfind("body.size: the voxel layout of this body has 110592 elements and 117649 vertices", 0), 0u) << msg;
+  EXPECT_EQ(msg.rfind("body.size: the voxel layout of this body has 110592 elements and 117649 vertices", 0), 0u)
+      << msg;
   EXPECT_NE(msg.find("over the memory limit of 1.0 MB"), std::string::npos) << msg;
   // The same body in the gradational layout fits.
   small.maxBytes = 16u << 20;
@@ -445,7 +467,7 @@ TEST(SceneIo, sizeLimits_refuseBeforeAllocatingAndNameTheKey) {
 
 // The estimate holds the real footprint: World::memoryBytes() plus the layout, for bodies of each
 // layout, is below estimateModelBytes and not absurdly so (within 4x).
-TEST(SceneIo, sizeLimits_modelEstimateBoundsTheWorld) {
+TEST(SceneIo, SizeLimitsModelEstimateBoundsTheWorld) {
   for (const char* body : {R"("shape": "box", "size": 24, "layout": "voxel")", R"("shape": "sphere", "size": 32)",
                            R"("shape": "sphere", "size": 32, "layout": "uniform")", R"("shape": "box", "size": 48)"}) {
     SCOPED_TRACE(body);
@@ -462,7 +484,7 @@ TEST(SceneIo, sizeLimits_modelEstimateBoundsTheWorld) {
 
 // Rules the core checks itself (settings_check.h, shared with World and the Python module) come
 // with the file and the key path too.
-TEST(SceneIo, parseScene_coreSettingsCheck_namesFileAndKey) {
+TEST(SceneIo, ParseSceneCoreSettingsCheckNamesFileAndKey) {
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": {"integrator": "forward_euler"})"),
               "simulation.integrator", "unstable at every dt without damping");
   EXPECT_EQ(errorOf(scene3(R"("shape": "sphere", "size": 8)",
@@ -475,4 +497,3 @@ TEST(SceneIo, parseScene_coreSettingsCheck_namesFileAndKey) {
 
 }  // namespace
 }  // namespace gradel
-

@@ -17,8 +17,8 @@ struct Body {
   std::shared_ptr<const RestModel> model;
 };
 
-inline Body makeBody(const std::string& shape, int size, int dim, LayoutKind kind,
-                     MaterialSettings material = {}, Real voxelSize = 0.01, Vec3 origin = Vec3::Zero()) {
+inline Body makeBody(const std::string& shape, int size, int dim, LayoutKind kind, MaterialSettings material = {},
+                     Real voxelSize = 0.01, Vec3 origin = Vec3::Zero()) {
   Body b;
   b.volume = rasterize(presetShape(shape, size, dim, voxelSize));
   b.layout = buildLayout(b.volume, kind);

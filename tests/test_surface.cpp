@@ -140,7 +140,8 @@ TEST(DisplaySurface, SurfaceMeshMovesWithTheModelVertices) {
   Vec3 c = Vec3::Zero();
   for (const Vec3& p : rest.vertices) c += p;
   c /= Real(rest.vertices.size());
-  for (size_t i = 0; i < rest.vertices.size(); ++i) EXPECT_GT(rest.normals[i].dot((rest.vertices[i] - c).normalized()), -1e-9);
+  for (size_t i = 0; i < rest.vertices.size(); ++i)
+    EXPECT_GT(rest.normals[i].dot((rest.vertices[i] - c).normalized()), -1e-9);
 }
 
 TEST(DisplaySurface, ParseSurfaceKindRejectsUnknownNames) {

@@ -11,10 +11,10 @@ int main() {
   scene.name = "consumer-drop";
   scene.dim = 3;
   scene.body.shape = presetShape("sphere", 8, 3, 0.01);  // [m] voxel size
-  scene.body.position = Vec3(-0.04, 0.30, -0.04);         // lattice origin: the sphere's centre at y = 0.34 m
-  scene.body.material.youngsModulus = 1e5;                // [Pa]
-  scene.body.material.density = 1000;                     // [kg/m^3]
-  scene.simulation.damping = 4.0;                         // [1/s], as scenes/drop.json
+  scene.body.position = Vec3(-0.04, 0.30, -0.04);        // lattice origin: the sphere's centre at y = 0.34 m
+  scene.body.material.youngsModulus = 1e5;               // [Pa]
+  scene.body.material.density = 1000;                    // [kg/m^3]
+  scene.simulation.damping = 4.0;                        // [1/s], as scenes/drop.json
   scene.domain.enabled = true;
   scene.domain.min = Vec3(-0.3, 0.0, -0.3);
   scene.domain.max = Vec3(0.3, 1.0, 0.3);
@@ -45,6 +45,7 @@ int main() {
 
   // Resting on the floor: the centre about one radius (4 cm) up, squashed a little, and still.
   const bool onFloor = end.y() > 0.025 && end.y() < 0.05 && speed < 0.05;
-  std::printf("%s: the sphere %s\n", onFloor ? "ok" : "FAILED", onFloor ? "fell and lies on the floor" : "is not on the floor");
+  std::printf("%s: the sphere %s\n", onFloor ? "ok" : "FAILED",
+              onFloor ? "fell and lies on the floor" : "is not on the floor");
   return onFloor ? 0 : 1;
 }

@@ -24,10 +24,10 @@ struct DivergenceSettings {
 
 /// What can have put energy into the body.
 struct EnergyBudget {
-  Metrics initial;                ///< Metrics at t = 0.
-  double mass = 0;                ///< [kg] total mass of the body.
-  double drivenSpeed = 0;         ///< [m/s] fastest manipulator (an elastic hit gives at most 2x its speed).
-  bool unbounded = false;         ///< Moving pins do work the budget cannot bound: the energy check is off.
+  Metrics initial;         ///< Metrics at t = 0.
+  double mass = 0;         ///< [kg] total mass of the body.
+  double drivenSpeed = 0;  ///< [m/s] fastest manipulator (an elastic hit gives at most 2x its speed).
+  bool unbounded = false;  ///< Moving pins do work the budget cannot bound: the energy check is off.
 };
 
 /// Kinetic + elastic energy now that the budget allows [J]:

@@ -16,15 +16,15 @@
 namespace gradel {
 
 struct ElementResult {
-  Real energy = 0;        ///< [J] elastic energy of the element.
-  Real sumSqDisp = 0;     ///< [m^2] sum_i |M R0_i - r_i|^2 (stress = sqrt(sumSqDisp / n) / size).
+  Real energy = 0;     ///< [J] elastic energy of the element.
+  Real sumSqDisp = 0;  ///< [m^2] sum_i |M R0_i - r_i|^2 (stress = sqrt(sumSqDisp / n) / size).
 };
 
 /// Computes the element's forces into f[0..n). `x` is the global position array, `verts` the
 /// element's vertex ids, `R0` its rest offsets, `q` the rotation (in: warm start, out: fit; in 2D
 /// a rotation about z). dim is 2 or 3. maxIterations bounds the 3D rotation refinement.
-ElementResult elementForces(int dim, const Vec3* x, const uint32_t* verts, const Vec3* R0, int n,
-                            Real k, Quat& q, Vec3* f, int maxIterations = 4);
+ElementResult elementForces(int dim, const Vec3* x, const uint32_t* verts, const Vec3* R0, int n, Real k, Quat& q,
+                            Vec3* f, int maxIterations = 4);
 
 /// A = sum_i r_i R0_i^T about the current centroid (also returns the centroid).
 Mat3 elementCovariance(const Vec3* x, const uint32_t* verts, const Vec3* R0, int n, Vec3* centroid = nullptr);

@@ -23,7 +23,8 @@ namespace gradel {
 /// Shared rest data of an embedded mesh (immutable after embedMesh).
 struct EmbeddedMesh {
   std::vector<std::array<uint32_t, 3>> triangles;  ///< As in the input mesh.
-  std::vector<uint32_t> weightStart;   ///< Size mesh vertices + 1: weights of vertex v are [weightStart[v], weightStart[v+1]).
+  std::vector<uint32_t>
+      weightStart;  ///< Size mesh vertices + 1: weights of vertex v are [weightStart[v], weightStart[v+1]).
   std::vector<uint32_t> weightVertex;  ///< Model vertex id of each weight.
   std::vector<Real> weight;            ///< [-] sums to 1 per mesh vertex.
   std::vector<uint32_t> element;       ///< Element each mesh vertex is bound to.

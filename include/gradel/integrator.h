@@ -31,20 +31,18 @@ const char* periodRuleName(PeriodRule r);
 
 /// One worker thread per hardware thread (at least 1, at most 1024): the default, since results
 /// are identical at any count and the step's thread team never waits by spinning for long.
-inline int hardwareThreads() {
-  return int(std::clamp(std::thread::hardware_concurrency(), 1u, 1024u));
-}
+inline int hardwareThreads() { return int(std::clamp(std::thread::hardware_concurrency(), 1u, 1024u)); }
 
 struct SimulationSettings {
   IntegratorKind integrator = IntegratorKind::SymplecticEuler;
-  Real dt = 0;               ///< [s] time step; 0 = auto: dtFraction of the smallest element's period.
-  Real dtFraction = 0.1;     ///< [-] the paper's 1/10 (sec. 3.4), used when dt is auto.
+  Real dt = 0;                               ///< [s] time step; 0 = auto: dtFraction of the smallest element's period.
+  Real dtFraction = 0.1;                     ///< [-] the paper's 1/10 (sec. 3.4), used when dt is auto.
   PeriodRule dtPeriod = PeriodRule::Vertex;  ///< Which smallest period dt = auto refers to.
-  Real damping = 0.0;        ///< [1/s] velocity damping rate c: v <- v / (1 + c dt) every step (never adds energy).
+  Real damping = 0.0;         ///< [1/s] velocity damping rate c: v <- v / (1 + c dt) every step (never adds energy).
   Vec3 gravity{0, -9.81, 0};  ///< [m/s^2]
   int threads = hardwareThreads();  ///< Worker threads (results are identical at any count).
-  int rotationIterations = 4;  ///< Max warm-started rotation refinements per element per step.
-  int implicitIterations = 10;  ///< Implicit only: local/global passes per step (projective.h).
+  int rotationIterations = 4;       ///< Max warm-started rotation refinements per element per step.
+  int implicitIterations = 10;      ///< Implicit only: local/global passes per step (projective.h).
 };
 
 }  // namespace gradel

@@ -43,9 +43,9 @@ LayoutKind parseLayoutKind(const std::string& name);  ///< "gradational" | "unif
 const char* layoutKindName(LayoutKind k);
 
 struct Layout {
-  int dim = 3;                     ///< 2 or 3.
+  int dim = 3;                       ///< 2 or 3.
   std::array<int, 3> dims{0, 0, 0};  ///< Volume size [voxels].
-  Real voxelSize = 1;              ///< [m]
+  Real voxelSize = 1;                ///< [m]
   LayoutKind kind = LayoutKind::Gradational;
 
   // ---- vertices ----
@@ -65,20 +65,20 @@ struct Layout {
   size_t numElements() const { return level.size(); }
   size_t numVertices() const { return vertices.size(); }
   size_t numPairs() const { return elemVerts.size(); }
-  int numLevels() const;                      ///< 1 + highest level.
+  int numLevels() const;  ///< 1 + highest level.
   bool isFull(size_t e) const { return cellMask[e] == (dim == 3 ? 0xFF : 0x0F); }
   /// Lattice volume of element e's region [voxels^dim].
   int64_t regionVoxels(size_t e) const;
 };
 
 struct LayoutStats {
-  size_t voxels = 0;                    ///< Filled voxels.
+  size_t voxels = 0;  ///< Filled voxels.
   size_t elements = 0;
   std::vector<size_t> elementsPerLevel;  ///< Index = level.
   size_t uniqueVertices = 0;
-  size_t pairs = 0;                     ///< Element-vertex pairs ("8 n^3" counting of the paper).
-  size_t hangingVertices = 0;           ///< Unique vertices that are hanging in at least one element.
-  size_t hangingPairs = 0;              ///< Pairs with pairIsOwn == 0.
+  size_t pairs = 0;            ///< Element-vertex pairs ("8 n^3" counting of the paper).
+  size_t hangingVertices = 0;  ///< Unique vertices that are hanging in at least one element.
+  size_t hangingPairs = 0;     ///< Pairs with pairIsOwn == 0.
 };
 
 /// Counts of a layout without building it (no element-vertex lists): exact elements and unique

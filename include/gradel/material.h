@@ -34,9 +34,9 @@ const char* scalingName(Scaling s);
 
 struct MaterialSettings {
   Scaling scaling = Scaling::Consistent;  ///< See above.
-  Real youngsModulus = 1.0e5;            ///< [Pa] consistent scaling: Young's-modulus-like E (soft rubber / gel).
-  Real density = 1000.0;                 ///< [kg/m^3] both scalings (paper: mass per voxel = density * h^3).
-  Real paperK = 10000.0;                 ///< [N] paper scaling: force per unit strain (the paper's k).
+  Real youngsModulus = 1.0e5;             ///< [Pa] consistent scaling: Young's-modulus-like E (soft rubber / gel).
+  Real density = 1000.0;                  ///< [kg/m^3] both scalings (paper: mass per voxel = density * h^3).
+  Real paperK = 10000.0;                  ///< [N] paper scaling: force per unit strain (the paper's k).
 };
 
 }  // namespace gradel

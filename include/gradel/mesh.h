@@ -11,9 +11,9 @@
 namespace gradel {
 
 struct TriangleMesh {
-  std::vector<Vec3> vertices;                    ///< [m] (or the file's own units when read).
+  std::vector<Vec3> vertices;                      ///< [m] (or the file's own units when read).
   std::vector<std::array<uint32_t, 3>> triangles;  ///< Counter-clockwise seen from outside.
-  std::vector<Vec3> normals;                     ///< Optional, one per vertex (empty = none).
+  std::vector<Vec3> normals;                       ///< Optional, one per vertex (empty = none).
 };
 
 /// Writes Wavefront OBJ (v / vn / f lines). Throws InputError naming the path on failure.

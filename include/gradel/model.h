@@ -12,7 +12,7 @@ namespace gradel {
 
 struct RestModel {
   int dim = 3;
-  Real voxelSize = 1;       ///< [m]
+  Real voxelSize = 1;  ///< [m]
   MaterialSettings material;
 
   // ---- per vertex ----
@@ -32,8 +32,10 @@ struct RestModel {
   std::vector<Vec3> restOffsets;    ///< R0 per pair [m]: rest position minus the element's rest centroid.
 
   Real totalMass = 0;  ///< [kg]
-  Real smallestPeriod = 0;        ///< [s] the paper's "smallest element period": min over elements of 2 pi sqrt(m_min / k_e) (sec. 3.4).
-  Real smallestVertexPeriod = 0;  ///< [s] min over vertices of 2 pi sqrt(m_i / sum_{e at i} k_e): a vertex shared by n elements vibrates ~sqrt(n) times faster than one element.
+  Real smallestPeriod =
+      0;  ///< [s] the paper's "smallest element period": min over elements of 2 pi sqrt(m_min / k_e) (sec. 3.4).
+  Real smallestVertexPeriod = 0;  ///< [s] min over vertices of 2 pi sqrt(m_i / sum_{e at i} k_e): a vertex shared by n
+                                  ///< elements vibrates ~sqrt(n) times faster than one element.
 
   size_t numVertices() const { return restPositions.size(); }
   size_t numElements() const { return stiffness.size(); }

@@ -21,9 +21,9 @@ inline constexpr double kExplicitSecondsPerVertexStep = 30e-9;
 inline constexpr double kImplicitSecondsPerVertexStep = 4e-6;
 
 struct RunEstimate {
-  double steps = 0;         ///< ceil(duration / dt)
-  double vertexSteps = 0;   ///< steps x vertices
-  double wallSeconds = 0;   ///< vertexSteps x seconds per vertex-step of the integrator
+  double steps = 0;        ///< ceil(duration / dt)
+  double vertexSteps = 0;  ///< steps x vertices
+  double wallSeconds = 0;  ///< vertexSteps x seconds per vertex-step of the integrator
 };
 
 RunEstimate estimateRun(double duration, double dt, size_t vertices, IntegratorKind integrator);

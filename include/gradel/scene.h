@@ -20,8 +20,8 @@
 namespace gradel {
 
 struct BodySettings {
-  ShapeSpec shape;                                ///< Procedural volume, used when `source` is null.
-  std::shared_ptr<const VolumeSource> source;     ///< File or array volume (io/volume_file.h); overrides `shape`.
+  ShapeSpec shape;                             ///< Procedural volume, used when `source` is null.
+  std::shared_ptr<const VolumeSource> source;  ///< File or array volume (io/volume_file.h); overrides `shape`.
   LayoutKind layout = LayoutKind::Gradational;
   MaterialSettings material;
   Vec3 position{0, 0, 0};  ///< [m] world position of the volume's lattice origin (voxel (0,0,0)'s lower corner).

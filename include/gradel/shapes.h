@@ -27,10 +27,10 @@ struct Primitive {
 
 /// A union of primitives rasterised into a dims[0] x dims[1] x dims[2] grid.
 struct ShapeSpec {
-  int dim = 3;                         ///< 2 or 3.
+  int dim = 3;                          ///< 2 or 3.
   std::array<int, 3> dims{12, 12, 12};  ///< Grid size [voxels]; dims[2] == 1 in 2D.
-  Real voxelSize = 0.01;               ///< [m]
-  std::vector<Primitive> primitives;   ///< Union; at least one.
+  Real voxelSize = 0.01;                ///< [m]
+  std::vector<Primitive> primitives;    ///< Union; at least one.
 };
 
 /// Rasterises the union. Throws InputError for a bad spec or an empty result.

@@ -40,7 +40,7 @@ const char* surfaceKindName(SurfaceKind k);
 struct DisplaySurface {
   int dim = 3;
   SurfaceKind kind = SurfaceKind::Smooth;
-  std::vector<uint32_t> modelVertex;                ///< Model vertex id of each surface vertex.
+  std::vector<uint32_t> modelVertex;               ///< Model vertex id of each surface vertex.
   std::vector<std::array<uint32_t, 3>> triangles;  ///< Surface vertex ids, CCW from outside.
 };
 
@@ -54,6 +54,7 @@ TriangleMesh surfaceMesh(const DisplaySurface& surface, const std::vector<Vec3>&
 
 /// Unit vertex normals of `mesh` averaged from its faces, area-weighted (sec. 3.3). A vertex
 /// with no face (or only degenerate ones) gets (0, 0, 1).
-std::vector<Vec3> vertexNormals(const std::vector<Vec3>& vertices, const std::vector<std::array<uint32_t, 3>>& triangles);
+std::vector<Vec3> vertexNormals(const std::vector<Vec3>& vertices,
+                                const std::vector<std::array<uint32_t, 3>>& triangles);
 
 }  // namespace gradel

@@ -12,9 +12,9 @@
 namespace gradel {
 
 struct BarSpec {
-  int across = 2;           ///< Voxels across the square section (y and z).
-  int along = 16;           ///< Voxels along the bar (x).
-  Real width = 0.02;        ///< [m] edge of the section a; voxel size = width / across.
+  int across = 2;     ///< Voxels across the square section (y and z).
+  int along = 16;     ///< Voxels along the bar (x).
+  Real width = 0.02;  ///< [m] edge of the section a; voxel size = width / across.
   LayoutKind layout = LayoutKind::Uniform;
   MaterialSettings material;
   Real voxelSize() const { return width / across; }
@@ -37,8 +37,8 @@ Real beamFrequency(Real L, Real a, Real rho, Real E);
 Real stretchModulus(const BarSpec& bar, Real strain = 1e-3);
 
 struct SagResult {
-  Real sag = 0;        ///< [m] mean downward displacement of the free end face's vertices.
-  size_t steps = 0;    ///< Explicit steps of the dynamic relaxation.
+  Real sag = 0;      ///< [m] mean downward displacement of the free end face's vertices.
+  size_t steps = 0;  ///< Explicit steps of the dynamic relaxation.
   size_t elements = 0, vertices = 0;
 };
 /// Static tip sag of the clamped bar under gravity. Projective dynamics' local/global iteration

@@ -35,9 +35,7 @@ class VoxelVolume {
   Real voxelSize() const { return voxelSize_; }
   size_t size() const { return data_.size(); }
 
-  bool inside(int i, int j, int k) const {
-    return i >= 0 && j >= 0 && k >= 0 && i < n_[0] && j < n_[1] && k < n_[2];
-  }
+  bool inside(int i, int j, int k) const { return i >= 0 && j >= 0 && k >= 0 && i < n_[0] && j < n_[1] && k < n_[2]; }
   size_t index(int i, int j, int k) const {
     return size_t(i) + size_t(n_[0]) * (size_t(j) + size_t(n_[1]) * size_t(k));
   }

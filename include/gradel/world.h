@@ -31,16 +31,16 @@ struct State {
 
 /// Figures written per frame to metrics.csv.
 struct Metrics {
-  Real time = 0;              ///< [s]
-  Real kineticEnergy = 0;     ///< [J]
-  Real elasticEnergy = 0;     ///< [J]
-  Real gravityEnergy = 0;     ///< [J] -sum m g.x (relative to the origin)
+  Real time = 0;                  ///< [s]
+  Real kineticEnergy = 0;         ///< [J]
+  Real elasticEnergy = 0;         ///< [J]
+  Real gravityEnergy = 0;         ///< [J] -sum m g.x (relative to the origin)
   Vec3 linearMomentum{0, 0, 0};   ///< [kg m/s]
   Vec3 angularMomentum{0, 0, 0};  ///< [kg m^2/s] about the world origin.
-  Real maxStress = 0;         ///< [-] max per-element stress (strain-like, see stress()).
-  Real maxPenetration = 0;    ///< [m] deepest vertex inside a manipulator or outside the walls now (should be 0).
-  Real maxContactDepth = 0;   ///< [m] deepest vertex found (and corrected) in the last step.
-  Real minElementDet = 0;     ///< [-] min det of the elements' deformation estimate (< 0: inverted).
+  Real maxStress = 0;             ///< [-] max per-element stress (strain-like, see stress()).
+  Real maxPenetration = 0;        ///< [m] deepest vertex inside a manipulator or outside the walls now (should be 0).
+  Real maxContactDepth = 0;       ///< [m] deepest vertex found (and corrected) in the last step.
+  Real minElementDet = 0;         ///< [-] min det of the elements' deformation estimate (< 0: inverted).
 };
 
 class World {

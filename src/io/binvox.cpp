@@ -69,7 +69,8 @@ VoxelVolume readBinvox(ByteStream& in, Real voxelSize, const ReadLimits& limits)
     }
   }
   if (n < total)
-    in.fail("truncated: run-length data covers " + std::to_string(n) + " of dim's " + std::to_string(total) + " voxels");
+    in.fail("truncated: run-length data covers " + std::to_string(n) + " of dim's " + std::to_string(total) +
+            " voxels");
   uint8_t extra = 0;
   if (in.read(&extra, 1) != 0) in.fail("run-length data: unexpected bytes after the last run");
   return v;

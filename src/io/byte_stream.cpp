@@ -14,8 +14,7 @@ namespace gradel::io {
 
 void ByteStream::readExact(void* dst, size_t n, const std::string& what) {
   const size_t got = read(dst, n);
-  if (got != n)
-    fail("truncated: expected " + std::to_string(n) + " bytes of " + what + ", got " + std::to_string(got));
+  if (got != n) fail("truncated: expected " + std::to_string(n) + " bytes of " + what + ", got " + std::to_string(got));
 }
 
 void ByteStream::skip(uint64_t n, const std::string& what) {
@@ -37,7 +36,8 @@ std::optional<std::string> ByteStream::readLine(size_t maxBytes, const std::stri
   while (read(&c, 1) == 1) {
     any = true;
     if (c == '\n') break;
-    if (line.size() >= maxBytes) fail(what + ": line longer than " + std::to_string(maxBytes) + " bytes (not a text header?)");
+    if (line.size() >= maxBytes)
+      fail(what + ": line longer than " + std::to_string(maxBytes) + " bytes (not a text header?)");
     line.push_back(c);
   }
   if (!any) return std::nullopt;
@@ -118,7 +118,8 @@ class GzipStream final : public ByteStream {
         if (produced == 0 && innerEnded_) fail("gzip: compressed data ends early (truncated file?)");
         if (produced == 0 && z_.avail_in != 0) fail("gzip: corrupt compressed data (no progress)");
       } else if (rc != Z_OK) {
-        fail(std::string("gzip: corrupt compressed data (") + (z_.msg ? z_.msg : "zlib error " + std::to_string(rc)) + ")");
+        fail(std::string("gzip: corrupt compressed data (") + (z_.msg ? z_.msg : "zlib error " + std::to_string(rc)) +
+             ")");
       }
     }
     offset_ += done;

@@ -17,9 +17,9 @@ struct TypeInfo {
   size_t bytes;
 };
 constexpr TypeInfo kTypes[] = {
-    {ScalarType::Int8, "int8", 1},     {ScalarType::UInt8, "uint8", 1},     {ScalarType::Int16, "int16", 2},
-    {ScalarType::UInt16, "uint16", 2}, {ScalarType::Int32, "int32", 4},     {ScalarType::UInt32, "uint32", 4},
-    {ScalarType::Int64, "int64", 8},   {ScalarType::UInt64, "uint64", 8},   {ScalarType::Float32, "float32", 4},
+    {ScalarType::Int8, "int8", 1},       {ScalarType::UInt8, "uint8", 1},   {ScalarType::Int16, "int16", 2},
+    {ScalarType::UInt16, "uint16", 2},   {ScalarType::Int32, "int32", 4},   {ScalarType::UInt32, "uint32", 4},
+    {ScalarType::Int64, "int64", 8},     {ScalarType::UInt64, "uint64", 8}, {ScalarType::Float32, "float32", 4},
     {ScalarType::Float64, "float64", 8},
 };
 

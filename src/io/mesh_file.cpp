@@ -31,7 +31,8 @@ class TextReader {
     if (c < 0) return false;
     ++lineNo_;
     for (; c >= 0 && c != '\n'; c = get()) {
-      if (out.size() >= (1u << 20)) in_.fail("line " + std::to_string(lineNo_) + ": longer than 1 MiB (not a text file?)");
+      if (out.size() >= (1u << 20))
+        in_.fail("line " + std::to_string(lineNo_) + ": longer than 1 MiB (not a text file?)");
       out.push_back(char(c));
     }
     if (!out.empty() && out.back() == '\r') out.pop_back();
@@ -46,7 +47,8 @@ class TextReader {
       c = get();
     }
     for (; c >= 0 && c != ' ' && c != '\t' && c != '\r' && c != '\n'; c = get()) {
-      if (t.size() >= 256) in_.fail("line " + std::to_string(lineNo_ + 1) + ": token longer than 256 bytes (not a text file?)");
+      if (t.size() >= 256)
+        in_.fail("line " + std::to_string(lineNo_ + 1) + ": token longer than 256 bytes (not a text file?)");
       t.push_back(char(c));
     }
     if (c == '\n') ++lineNo_;
@@ -88,8 +90,7 @@ double number(const ByteStream& in, const std::string& t, const std::string& whe
 }
 
 void checkCount(const ByteStream& in, uint64_t n, const ReadLimits& limits, const std::string& what) {
-  if (n > limits.maxMeshElements)
-    in.fail(what + ": more than the limit of " + std::to_string(limits.maxMeshElements));
+  if (n > limits.maxMeshElements) in.fail(what + ": more than the limit of " + std::to_string(limits.maxMeshElements));
 }
 
 // Fans polygon `poly` (>= 3 vertex ids) into triangles.
@@ -116,7 +117,8 @@ TriangleMesh readObj(ByteStream& in, const ReadLimits& limits) {
       const std::vector<std::string> t = split(line);
       if (t.size() < 4) in.fail(where + ": 'v' needs x y z");
       checkCount(in, m.vertices.size() + 1, limits, where + ": vertex count");
-      m.vertices.emplace_back(number(in, t[1], where + ": v x"), number(in, t[2], where + ": v y"), number(in, t[3], where + ": v z"));
+      m.vertices.emplace_back(number(in, t[1], where + ": v x"), number(in, t[2], where + ": v y"),
+                              number(in, t[3], where + ": v z"));
     } else if (line[0] == 'f' && (line[1] == ' ' || line[1] == '\t')) {
       const std::vector<std::string> t = split(line);
       if (t.size() < 4) in.fail(where + ": 'f' needs at least 3 vertices");
@@ -128,7 +130,8 @@ TriangleMesh readObj(ByteStream& in, const ReadLimits& limits) {
         if (id < 0) {
           // Relative to the vertices read so far: -1 is the last one.
           if (-id > int64_t(m.vertices.size()))
-            in.fail(where + ": f vertex " + std::to_string(i) + ": index " + std::to_string(id) + " reaches before the first vertex");
+            in.fail(where + ": f vertex " + std::to_string(i) + ": index " + std::to_string(id) +
+                    " reaches before the first vertex");
           id = int64_t(m.vertices.size()) + id + 1;
         }
         ids.push_back(id);
@@ -144,8 +147,8 @@ TriangleMesh readObj(ByteStream& in, const ReadLimits& limits) {
     std::array<uint32_t, 3> tri;
     for (int k = 0; k < 3; ++k) {
       if (raw[f][k] > int64_t(m.vertices.size()))
-        in.fail("line " + std::to_string(faceLine[f]) + ": f index " + std::to_string(raw[f][k]) + " but the file has " +
-                std::to_string(m.vertices.size()) + " vertices");
+        in.fail("line " + std::to_string(faceLine[f]) + ": f index " + std::to_string(raw[f][k]) +
+                " but the file has " + std::to_string(m.vertices.size()) + " vertices");
       tri[k] = uint32_t(raw[f][k] - 1);
     }
     m.triangles.push_back(tri);
@@ -220,7 +223,8 @@ TriangleMesh readStl(ByteStream& in, const ReadLimits& limits) {
   const size_t got = in.read(head, 84);
   const bool startsSolid = got >= 5 && std::memcmp(head, "solid", 5) == 0;
   if (got == 84) {
-    const uint32_t count = uint32_t(head[80]) | uint32_t(head[81]) << 8 | uint32_t(head[82]) << 16 | uint32_t(head[83]) << 24;
+    const uint32_t count =
+        uint32_t(head[80]) | uint32_t(head[81]) << 8 | uint32_t(head[82]) << 16 | uint32_t(head[83]) << 24;
     const auto left = in.remaining();
     // Binary when the size matches exactly (or, without a known size, when it is not "solid").
     if ((left && *left == uint64_t(count) * 50) || (!left && !startsSolid)) return readStlBinary(in, count, limits);
@@ -256,10 +260,12 @@ enum class PlyType { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64
 
 bool plyType(const std::string& s, PlyType& t) {
   static const std::pair<const char*, PlyType> kNames[] = {
-      {"char", PlyType::Int8},     {"int8", PlyType::Int8},     {"uchar", PlyType::UInt8},   {"uint8", PlyType::UInt8},
-      {"short", PlyType::Int16},   {"int16", PlyType::Int16},   {"ushort", PlyType::UInt16}, {"uint16", PlyType::UInt16},
-      {"int", PlyType::Int32},     {"int32", PlyType::Int32},   {"uint", PlyType::UInt32},   {"uint32", PlyType::UInt32},
-      {"float", PlyType::Float32}, {"float32", PlyType::Float32}, {"double", PlyType::Float64}, {"float64", PlyType::Float64},
+      {"char", PlyType::Int8},       {"int8", PlyType::Int8},       {"uchar", PlyType::UInt8},
+      {"uint8", PlyType::UInt8},     {"short", PlyType::Int16},     {"int16", PlyType::Int16},
+      {"ushort", PlyType::UInt16},   {"uint16", PlyType::UInt16},   {"int", PlyType::Int32},
+      {"int32", PlyType::Int32},     {"uint", PlyType::UInt32},     {"uint32", PlyType::UInt32},
+      {"float", PlyType::Float32},   {"float32", PlyType::Float32}, {"double", PlyType::Float64},
+      {"float64", PlyType::Float64},
   };
   for (const auto& [name, type] : kNames)
     if (s == name) return t = type, true;
@@ -268,9 +274,13 @@ bool plyType(const std::string& s, PlyType& t) {
 
 size_t plyBytes(PlyType t) {
   switch (t) {
-    case PlyType::Int8: case PlyType::UInt8: return 1;
-    case PlyType::Int16: case PlyType::UInt16: return 2;
-    case PlyType::Int32: case PlyType::UInt32: case PlyType::Float32: return 4;
+    case PlyType::Int8:
+    case PlyType::UInt8: return 1;
+    case PlyType::Int16:
+    case PlyType::UInt16: return 2;
+    case PlyType::Int32:
+    case PlyType::UInt32:
+    case PlyType::Float32: return 4;
     case PlyType::Float64: return 8;
   }
   return 1;
@@ -322,12 +332,36 @@ class PlyValues {
     switch (t) {
       case PlyType::Int8: return double(std::bit_cast<int8_t>(b[0]));
       case PlyType::UInt8: return double(b[0]);
-      case PlyType::Int16: { int16_t v; std::memcpy(&v, b, 2); return v; }
-      case PlyType::UInt16: { uint16_t v; std::memcpy(&v, b, 2); return v; }
-      case PlyType::Int32: { int32_t v; std::memcpy(&v, b, 4); return v; }
-      case PlyType::UInt32: { uint32_t v; std::memcpy(&v, b, 4); return v; }
-      case PlyType::Float32: { float v; std::memcpy(&v, b, 4); return v; }
-      case PlyType::Float64: { double v; std::memcpy(&v, b, 8); return v; }
+      case PlyType::Int16: {
+        int16_t v;
+        std::memcpy(&v, b, 2);
+        return v;
+      }
+      case PlyType::UInt16: {
+        uint16_t v;
+        std::memcpy(&v, b, 2);
+        return v;
+      }
+      case PlyType::Int32: {
+        int32_t v;
+        std::memcpy(&v, b, 4);
+        return v;
+      }
+      case PlyType::UInt32: {
+        uint32_t v;
+        std::memcpy(&v, b, 4);
+        return v;
+      }
+      case PlyType::Float32: {
+        float v;
+        std::memcpy(&v, b, 4);
+        return v;
+      }
+      case PlyType::Float64: {
+        double v;
+        std::memcpy(&v, b, 8);
+        return v;
+      }
     }
     return 0;
   }
@@ -354,10 +388,14 @@ TriangleMesh readPly(ByteStream& in, const ReadLimits& limits) {
     if (t[0] == "end_header") break;
     if (t[0] == "format") {
       if (t.size() != 3) in.fail(where + ": 'format' needs a type and a version");
-      if (t[1] == "ascii") format = 0;
-      else if (t[1] == "binary_little_endian") format = 1;
-      else if (t[1] == "binary_big_endian") format = 2;
-      else in.fail(where + ": unknown format '" + t[1].substr(0, 30) + "'");
+      if (t[1] == "ascii")
+        format = 0;
+      else if (t[1] == "binary_little_endian")
+        format = 1;
+      else if (t[1] == "binary_big_endian")
+        format = 2;
+      else
+        in.fail(where + ": unknown format '" + t[1].substr(0, 30) + "'");
     } else if (t[0] == "element") {
       if (t.size() != 3) in.fail(where + ": 'element' needs a name and a count");
       const int64_t n = parseIntegerToken(in, t[2], where + ": element count");
@@ -370,7 +408,8 @@ TriangleMesh readPly(ByteStream& in, const ReadLimits& limits) {
       if (t.size() == 5 && t[1] == "list") {
         p.list = true;
         if (!plyType(t[2], p.countType) || !plyType(t[3], p.type)) in.fail(where + ": unknown list types");
-        if (p.countType == PlyType::Float32 || p.countType == PlyType::Float64) in.fail(where + ": a list count must be an integer type");
+        if (p.countType == PlyType::Float32 || p.countType == PlyType::Float64)
+          in.fail(where + ": a list count must be an integer type");
         p.name = t[4];
       } else if (t.size() == 3) {
         if (!plyType(t[1], p.type)) in.fail(where + ": unknown property type '" + t[1].substr(0, 30) + "'");
@@ -398,7 +437,8 @@ TriangleMesh readPly(ByteStream& in, const ReadLimits& limits) {
       if (isVertex && !p.list && (p.name == "x" || p.name == "y" || p.name == "z")) xyz[p.name[0] - 'x'] = int(i);
       if (isFace && p.list && (p.name == "vertex_indices" || p.name == "vertex_index")) indices = int(i);
     }
-    if (isVertex && (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0)) in.fail("header: element 'vertex' lacks property x, y or z");
+    if (isVertex && (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0))
+      in.fail("header: element 'vertex' lacks property x, y or z");
     if (isFace) {
       if (indices < 0) in.fail("header: element 'face' lacks list property 'vertex_indices'");
       haveFaces = true;
@@ -423,13 +463,14 @@ TriangleMesh readPly(ByteStream& in, const ReadLimits& limits) {
         }
         const double n = values.next(p.countType, listCount);
         // A polygon of more than 2^16 corners is not a mesh face; the cap bounds the work.
-        if (!(n >= 0 && n <= 65536) || n != std::floor(n)) in.fail(what() + ": list count " + std::to_string(n) + " (expected 0 to 65536)");
+        if (!(n >= 0 && n <= 65536) || n != std::floor(n))
+          in.fail(what() + ": list count " + std::to_string(n) + " (expected 0 to 65536)");
         for (int64_t j = 0; j < int64_t(n); ++j) {
           const double id = values.next(p.type, listEntry);
           if (isFace && int(i) == indices) {
             if (!(id >= 0 && id < double(m.vertices.size())) || id != std::floor(id))
-              in.fail(what() + ": vertex index " + std::to_string(id) + " (the file has " + std::to_string(m.vertices.size()) +
-                      " vertices before its faces)");
+              in.fail(what() + ": vertex index " + std::to_string(id) + " (the file has " +
+                      std::to_string(m.vertices.size()) + " vertices before its faces)");
             poly.push_back(uint32_t(id));
           }
         }
@@ -439,7 +480,8 @@ TriangleMesh readPly(ByteStream& in, const ReadLimits& limits) {
         m.vertices.push_back(x);
       }
       if (isFace) {
-        if (poly.size() < 3) in.fail(what() + ": a face with " + std::to_string(poly.size()) + " vertices (expected at least 3)");
+        if (poly.size() < 3)
+          in.fail(what() + ": a face with " + std::to_string(poly.size()) + " vertices (expected at least 3)");
         const uint64_t triangles = m.triangles.size() + poly.size() - 2;
         if (triangles > limits.maxMeshElements) checkCount(in, triangles, limits, what() + ": triangle count");
         addPolygon(m, poly);

@@ -63,7 +63,8 @@ Header readHeader(ByteStream& in) {
   if (size == 348) {
     nifti_1_header n;
     std::memcpy(&n, raw, 348);
-    if (std::memcmp(n.magic, "ni1", 4) == 0) in.fail("header: a two-file (.hdr/.img) NIfTI pair is not supported (use .nii)");
+    if (std::memcmp(n.magic, "ni1", 4) == 0)
+      in.fail("header: a two-file (.hdr/.img) NIfTI pair is not supported (use .nii)");
     if (std::memcmp(n.magic, "n+1", 4) != 0) in.fail("header: magic is not 'n+1' (not a NIfTI-1 .nii file)");
     for (int i = 0; i < 8; ++i) h.dim[i] = swapped(n.dim[i], swap);
     h.datatype = swapped(n.datatype, swap);
@@ -74,8 +75,10 @@ Header readHeader(ByteStream& in) {
     in.readExact(raw + 348, 540 - 348, "NIfTI-2 header");
     nifti_2_header n;
     std::memcpy(&n, raw, 540);
-    if (std::memcmp(n.magic, "ni2", 4) == 0) in.fail("header: a two-file (.hdr/.img) NIfTI pair is not supported (use .nii)");
-    if (std::memcmp(n.magic, "n+2\0\r\n\032\n", 8) != 0) in.fail("header: magic is not 'n+2' (not a NIfTI-2 .nii file)");
+    if (std::memcmp(n.magic, "ni2", 4) == 0)
+      in.fail("header: a two-file (.hdr/.img) NIfTI pair is not supported (use .nii)");
+    if (std::memcmp(n.magic, "n+2\0\r\n\032\n", 8) != 0)
+      in.fail("header: magic is not 'n+2' (not a NIfTI-2 .nii file)");
     for (int i = 0; i < 8; ++i) h.dim[i] = swapped(n.dim[i], swap);
     h.datatype = swapped(n.datatype, swap);
     h.voxOffset = double(swapped(n.vox_offset, swap));
@@ -96,7 +99,8 @@ VoxelVolume readNifti(ByteStream& in, const GreyRule& rule, Real voxelSize, cons
   std::array<int64_t, 3> dims{1, 1, 1};
   for (int i = 0; i < std::min<int64_t>(3, h.dim[0]); ++i) dims[i] = h.dim[i + 1];
   for (int64_t i = 4; i <= h.dim[0]; ++i)
-    if (h.dim[i] < 1) in.fail("header: dim[" + std::to_string(i) + "] is " + std::to_string(h.dim[i]) + " (expected >= 1)");
+    if (h.dim[i] < 1)
+      in.fail("header: dim[" + std::to_string(i) + "] is " + std::to_string(h.dim[i]) + " (expected >= 1)");
   SampleLayout layout;
   layout.type = niftiType(in, h.datatype);
   layout.bigEndian = h.bigEndian;

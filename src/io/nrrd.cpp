@@ -26,29 +26,50 @@ std::vector<std::string> words(const std::string& s) {
 // NRRD's type names (format.html, "type") and their gradel ScalarType.
 ScalarType nrrdType(const ByteStream& in, const std::string& name) {
   static const std::map<std::string, ScalarType> kNames = {
-      {"signed char", ScalarType::Int8},          {"int8", ScalarType::Int8},
-      {"int8_t", ScalarType::Int8},               {"uchar", ScalarType::UInt8},
-      {"unsigned char", ScalarType::UInt8},       {"uint8", ScalarType::UInt8},
-      {"uint8_t", ScalarType::UInt8},             {"short", ScalarType::Int16},
-      {"short int", ScalarType::Int16},           {"signed short", ScalarType::Int16},
-      {"signed short int", ScalarType::Int16},    {"int16", ScalarType::Int16},
-      {"int16_t", ScalarType::Int16},             {"ushort", ScalarType::UInt16},
-      {"unsigned short", ScalarType::UInt16},     {"unsigned short int", ScalarType::UInt16},
-      {"uint16", ScalarType::UInt16},             {"uint16_t", ScalarType::UInt16},
-      {"int", ScalarType::Int32},                 {"signed int", ScalarType::Int32},
-      {"int32", ScalarType::Int32},               {"int32_t", ScalarType::Int32},
-      {"uint", ScalarType::UInt32},               {"unsigned int", ScalarType::UInt32},
-      {"uint32", ScalarType::UInt32},             {"uint32_t", ScalarType::UInt32},
-      {"longlong", ScalarType::Int64},            {"long long", ScalarType::Int64},
-      {"long long int", ScalarType::Int64},       {"signed long long", ScalarType::Int64},
-      {"signed long long int", ScalarType::Int64}, {"int64", ScalarType::Int64},
-      {"int64_t", ScalarType::Int64},             {"ulonglong", ScalarType::UInt64},
-      {"unsigned long long", ScalarType::UInt64}, {"unsigned long long int", ScalarType::UInt64},
-      {"uint64", ScalarType::UInt64},             {"uint64_t", ScalarType::UInt64},
-      {"float", ScalarType::Float32},             {"double", ScalarType::Float64},
+      {"signed char", ScalarType::Int8},
+      {"int8", ScalarType::Int8},
+      {"int8_t", ScalarType::Int8},
+      {"uchar", ScalarType::UInt8},
+      {"unsigned char", ScalarType::UInt8},
+      {"uint8", ScalarType::UInt8},
+      {"uint8_t", ScalarType::UInt8},
+      {"short", ScalarType::Int16},
+      {"short int", ScalarType::Int16},
+      {"signed short", ScalarType::Int16},
+      {"signed short int", ScalarType::Int16},
+      {"int16", ScalarType::Int16},
+      {"int16_t", ScalarType::Int16},
+      {"ushort", ScalarType::UInt16},
+      {"unsigned short", ScalarType::UInt16},
+      {"unsigned short int", ScalarType::UInt16},
+      {"uint16", ScalarType::UInt16},
+      {"uint16_t", ScalarType::UInt16},
+      {"int", ScalarType::Int32},
+      {"signed int", ScalarType::Int32},
+      {"int32", ScalarType::Int32},
+      {"int32_t", ScalarType::Int32},
+      {"uint", ScalarType::UInt32},
+      {"unsigned int", ScalarType::UInt32},
+      {"uint32", ScalarType::UInt32},
+      {"uint32_t", ScalarType::UInt32},
+      {"longlong", ScalarType::Int64},
+      {"long long", ScalarType::Int64},
+      {"long long int", ScalarType::Int64},
+      {"signed long long", ScalarType::Int64},
+      {"signed long long int", ScalarType::Int64},
+      {"int64", ScalarType::Int64},
+      {"int64_t", ScalarType::Int64},
+      {"ulonglong", ScalarType::UInt64},
+      {"unsigned long long", ScalarType::UInt64},
+      {"unsigned long long int", ScalarType::UInt64},
+      {"uint64", ScalarType::UInt64},
+      {"uint64_t", ScalarType::UInt64},
+      {"float", ScalarType::Float32},
+      {"double", ScalarType::Float64},
   };
   const auto it = kNames.find(name);
-  if (it == kNames.end()) in.fail("header: type: unsupported type '" + name.substr(0, 40) + "' (block types are not voxels)");
+  if (it == kNames.end())
+    in.fail("header: type: unsupported type '" + name.substr(0, 40) + "' (block types are not voxels)");
   return it->second;
 }
 
@@ -88,28 +109,37 @@ VoxelVolume readNrrd(ByteStream& in, const GreyRule& rule, Real voxelSize, const
     in.fail("header: 'data file': detached data is not supported (save the NRRD with an attached header, .nrrd)");
   const ScalarType type = nrrdType(in, require("type"));
   const int64_t dimension = parseIntegerToken(in, require("dimension"), "header: dimension");
-  if (dimension != 2 && dimension != 3) in.fail("header: dimension: " + std::to_string(dimension) + " (expected 2 or 3)");
+  if (dimension != 2 && dimension != 3)
+    in.fail("header: dimension: " + std::to_string(dimension) + " (expected 2 or 3)");
   const std::vector<std::string> sizeWords = words(require("sizes"));
   if (int64_t(sizeWords.size()) != dimension)
-    in.fail("header: sizes: " + std::to_string(sizeWords.size()) + " values for dimension " + std::to_string(dimension));
+    in.fail("header: sizes: " + std::to_string(sizeWords.size()) + " values for dimension " +
+            std::to_string(dimension));
   std::array<int64_t, 3> dims{1, 1, 1};
   for (size_t i = 0; i < sizeWords.size(); ++i)
     dims[i] = parseIntegerToken(in, sizeWords[i], "header: sizes[" + std::to_string(i) + "]");
 
   const std::string encoding = require("encoding");
   enum { Raw, Gzip, Ascii } enc;
-  if (encoding == "raw") enc = Raw;
-  else if (encoding == "gzip" || encoding == "gz") enc = Gzip;
-  else if (encoding == "ascii" || encoding == "text" || encoding == "txt") enc = Ascii;
-  else in.fail("header: encoding: '" + encoding.substr(0, 20) + "' is not supported (expected raw, gzip or ascii)");
+  if (encoding == "raw")
+    enc = Raw;
+  else if (encoding == "gzip" || encoding == "gz")
+    enc = Gzip;
+  else if (encoding == "ascii" || encoding == "text" || encoding == "txt")
+    enc = Ascii;
+  else
+    in.fail("header: encoding: '" + encoding.substr(0, 20) + "' is not supported (expected raw, gzip or ascii)");
 
   SampleLayout layout;
   layout.type = type;
   if (const std::string* e = field("endian")) {
-    if (*e == "big") layout.bigEndian = true;
-    else if (*e != "little") in.fail("header: endian: '" + e->substr(0, 20) + "' (expected little or big)");
+    if (*e == "big")
+      layout.bigEndian = true;
+    else if (*e != "little")
+      in.fail("header: endian: '" + e->substr(0, 20) + "' (expected little or big)");
   } else if (scalarTypeBytes(type) > 1 && enc != Ascii) {
-    in.fail("header: required field 'endian' is missing (needed for " + std::string(scalarTypeName(type)) + " samples)");
+    in.fail("header: required field 'endian' is missing (needed for " + std::string(scalarTypeName(type)) +
+            " samples)");
   }
   for (const char* key : {"line skip", "lineskip"})
     if (const std::string* s = field(key))

@@ -58,13 +58,15 @@ VolumeFormat volumeFormatFromPath(const std::string& path) {
   if (endsWith(p, ".gz")) p.erase(p.size() - 3);
   for (const FormatInfo& f : kFormats)
     if (endsWith(p, f.extension)) return f.format;
-  throw InputError(path + ": cannot tell the format from the extension (expected .binvox, .vox, .nrrd, .nii, .raw, "
-                          ".obj, .stl or .ply, or give \"format\")");
+  throw InputError(path +
+                   ": cannot tell the format from the extension (expected .binvox, .vox, .nrrd, .nii, .raw, "
+                   ".obj, .stl or .ply, or give \"format\")");
 }
 
 bool isMeshFormat(VolumeFormat f) { return f == VolumeFormat::Obj || f == VolumeFormat::Stl || f == VolumeFormat::Ply; }
 
-VoxelVolume readVolumeStream(ByteStream& in, VolumeFormat format, const VolumeFileSpec& spec, TriangleMesh* latticeMesh) {
+VoxelVolume readVolumeStream(ByteStream& in, VolumeFormat format, const VolumeFileSpec& spec,
+                             TriangleMesh* latticeMesh) {
   if (latticeMesh) *latticeMesh = TriangleMesh{};
   switch (format) {
     case VolumeFormat::Binvox: return readBinvox(in, spec.voxelSize, spec.limits);
@@ -92,7 +94,8 @@ VoxelVolume readVolumeFile(const VolumeFileSpec& spec, TriangleMesh* latticeMesh
   if (v.countFilled() == 0) throw InputError(spec.path + ": the volume is empty (no filled voxel)");
   if (spec.dim == 2) {
     if (v.nz() != 1)
-      throw InputError(spec.path + ": a 2D scene needs a volume one voxel thick in z, this one has nz = " + std::to_string(v.nz()));
+      throw InputError(spec.path +
+                       ": a 2D scene needs a volume one voxel thick in z, this one has nz = " + std::to_string(v.nz()));
     VoxelVolume flat(2, v.nx(), v.ny(), 1, v.voxelSize());
     flat.data().swap(v.data());
     return flat;
@@ -100,6 +103,8 @@ VoxelVolume readVolumeFile(const VolumeFileSpec& spec, TriangleMesh* latticeMesh
   return v;
 }
 
-std::unique_ptr<VolumeSource> openVolume(const VolumeFileSpec& spec) { return std::make_unique<FileVolumeSource>(spec); }
+std::unique_ptr<VolumeSource> openVolume(const VolumeFileSpec& spec) {
+  return std::make_unique<FileVolumeSource>(spec);
+}
 
 }  // namespace gradel::io

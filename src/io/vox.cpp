@@ -26,7 +26,8 @@ Chunk readChunkHeader(ByteStream& in, int64_t left) {
   c.content = le32(h + 4);
   c.children = le32(h + 8);
   if (c.content < 0 || c.children < 0)
-    in.fail("chunk '" + c.id + "': negative size (" + std::to_string(c.content) + ", " + std::to_string(c.children) + ")");
+    in.fail("chunk '" + c.id + "': negative size (" + std::to_string(c.content) + ", " + std::to_string(c.children) +
+            ")");
   if (c.content + c.children > left - 12)
     in.fail("chunk '" + c.id + "': " + std::to_string(c.content + c.children) + " bytes do not fit in the " +
             std::to_string(left - 12) + " bytes left in its parent");
@@ -40,7 +41,8 @@ VoxelVolume readVox(ByteStream& in, Real voxelSize, int model, const ReadLimits&
   uint8_t head[8];
   in.readExact(head, 8, "header");
   if (std::memcmp(head, "VOX ", 4) != 0) in.fail("not a MagicaVoxel file (expected 'VOX ' at the start)");
-  const int64_t fileLeft = in.remaining() ? int64_t(std::min<uint64_t>(*in.remaining(), uint64_t(1) << 40)) : int64_t(1) << 40;
+  const int64_t fileLeft =
+      in.remaining() ? int64_t(std::min<uint64_t>(*in.remaining(), uint64_t(1) << 40)) : int64_t(1) << 40;
   const Chunk main = readChunkHeader(in, fileLeft);
   if (main.id != "MAIN") in.fail("first chunk is '" + main.id + "' (expected 'MAIN')");
   in.skip(uint64_t(main.content), "MAIN content");
@@ -73,7 +75,8 @@ VoxelVolume readVox(ByteStream& in, Real voxelSize, int model, const ReadLimits&
       in.readExact(n4, 4, "XYZI voxel count");
       const int64_t count = le32(n4);
       if (count < 0 || count > (c.content - 4) / 4)
-        in.fail("XYZI chunk: voxel count " + std::to_string(count) + " does not fit in its " + std::to_string(c.content) + " bytes");
+        in.fail("XYZI chunk: voxel count " + std::to_string(count) + " does not fit in its " +
+                std::to_string(c.content) + " bytes");
       std::vector<uint8_t> xyzi(size_t(count) * 4);
       in.readExact(xyzi.data(), xyzi.size(), "XYZI voxels");
       for (int64_t i = 0; i < count; ++i) {

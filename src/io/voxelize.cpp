@@ -58,7 +58,8 @@ bool ownsEdge(const P2& a, const P2& b) {
 
 }  // namespace
 
-VoxelVolume voxelize(const TriangleMesh& mesh, const VoxelizeSettings& s, const std::string& name, TriangleMesh* latticeMesh) {
+VoxelVolume voxelize(const TriangleMesh& mesh, const VoxelizeSettings& s, const std::string& name,
+                     TriangleMesh* latticeMesh) {
   auto fail = [&](const std::string& what) { throw InputError(name + ": " + what); };
   if (s.resolution < 1 || s.resolution > 1024)
     fail("resolution " + std::to_string(s.resolution) + " (expected 1 to 1024 voxels)");
@@ -139,7 +140,8 @@ VoxelVolume voxelize(const TriangleMesh& mesh, const VoxelizeSettings& s, const 
           sHi = std::max({sHi, su, e1.v == e0.v ? e1.u : su});
         }
         if (!(sLo <= sHi)) continue;
-        const int ju0 = std::max(iu0, int(std::ceil(sLo - 0.5)) - 1), ju1 = std::min(iu1, int(std::floor(sHi - 0.5)) + 1);
+        const int ju0 = std::max(iu0, int(std::ceil(sLo - 0.5)) - 1),
+                  ju1 = std::min(iu1, int(std::floor(sHi - 0.5)) + 1);
         for (int iu = ju0; iu <= ju1; ++iu) {
           const P2 c{iu + 0.5, iv + 0.5};
           double w[3];
@@ -154,7 +156,8 @@ VoxelVolume voxelize(const TriangleMesh& mesh, const VoxelizeSettings& s, const 
           const double sum = w[0] + w[1] + w[2];
           const double t = (w[0] * z[0] + w[1] * z[1] + w[2] * z[2]) / sum;
           if (crossings.size() >= maxCrossings)
-            fail("more than " + std::to_string(maxCrossings) + " ray crossings: too many overlapping triangles for this resolution");
+            fail("more than " + std::to_string(maxCrossings) +
+                 " ray crossings: too many overlapping triangles for this resolution");
           crossings.push_back({uint32_t(iu + n[u] * iv), float(t), delta});
         }
       }
@@ -190,7 +193,8 @@ VoxelVolume voxelize(const TriangleMesh& mesh, const VoxelizeSettings& s, const 
     out[i] = in > outVotes ? 1 : 0;
   }
   if (volume.countFilled() == 0)
-    fail("the voxelised volume is empty (an open mesh, or resolution " + std::to_string(s.resolution) + " too coarse for it)");
+    fail("the voxelised volume is empty (an open mesh, or resolution " + std::to_string(s.resolution) +
+         " too coarse for it)");
   if (latticeMesh) {
     latticeMesh->vertices = std::move(lattice);
     latticeMesh->triangles = mesh.triangles;

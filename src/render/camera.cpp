@@ -61,7 +61,8 @@ Mat4f Camera::projection(Real aspect) const {
 }
 
 Vec3 Camera::project(const Vec3& p, int width, int height) const {
-  const Eigen::Vector4f c = projection(Real(width) / height) * view() * Eigen::Vector4f(float(p.x()), float(p.y()), float(p.z()), 1);
+  const Eigen::Vector4f c =
+      projection(Real(width) / height) * view() * Eigen::Vector4f(float(p.x()), float(p.y()), float(p.z()), 1);
   const Real x = c.x() / c.w(), y = c.y() / c.w(), z = c.z() / c.w();
   return Vec3((x + 1) / 2 * width, (1 - y) / 2 * height, z);
 }

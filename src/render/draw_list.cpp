@@ -39,7 +39,9 @@ constexpr Color kTextColor{0.10f, 0.10f, 0.12f};
 constexpr Real kFloorGridStep = 0.05;  // [m]
 
 DrawVertex vertex(const Vec3& p, const Vec3& n, const Color& c, float alpha = 1) {
-  return {{float(p.x()), float(p.y()), float(p.z())}, {float(n.x()), float(n.y()), float(n.z())}, {c[0], c[1], c[2], alpha}};
+  return {{float(p.x()), float(p.y()), float(p.z())},
+          {float(n.x()), float(n.y()), float(n.z())},
+          {c[0], c[1], c[2], alpha}};
 }
 
 void addLine(std::vector<DrawVertex>& out, const Vec3& a, const Vec3& b, const Color& c) {
@@ -85,12 +87,17 @@ void addCylinder(DrawList& list, const Manipulator& m, const Color& color) {
     const Real a0 = 2 * M_PI * j / kSegments, a1 = 2 * M_PI * (j + 1) / kSegments;
     const Vec3 n0 = std::cos(a0) * u + std::sin(a0) * v, n1 = std::cos(a1) * u + std::sin(a1) * v;
     const Vec3 top = m.position + hl * axis, bot = m.position - hl * axis;
-    for (const auto& [p, n] : {std::pair<Vec3, Vec3>{bot + r * n0, n0}, {bot + r * n1, n1}, {top + r * n1, n1}, {bot + r * n0, n0},
-                               {top + r * n1, n1}, {top + r * n0, n0}})
+    for (const auto& [p, n] : {std::pair<Vec3, Vec3>{bot + r * n0, n0},
+                               {bot + r * n1, n1},
+                               {top + r * n1, n1},
+                               {bot + r * n0, n0},
+                               {top + r * n1, n1},
+                               {top + r * n0, n0}})
       list.triangles.push_back(vertex(p, n, color));
     for (int s = -1; s <= 1; s += 2) {
       const Vec3 c = m.position + s * hl * axis;
-      for (const Vec3& p : {c, Vec3(c + r * n0), Vec3(c + r * n1)}) list.triangles.push_back(vertex(p, s * axis, color));
+      for (const Vec3& p : {c, Vec3(c + r * n0), Vec3(c + r * n1)})
+        list.triangles.push_back(vertex(p, s * axis, color));
     }
   }
 }
@@ -100,7 +107,8 @@ void addDisk(DrawList& list, const Vec3& c, Real r, const Color& color) {
   const Vec3 front = c + Vec3(0, 0, 1e-4);  // just in front of the z = 0 body
   for (int j = 0; j < kSegments; ++j) {
     const Real a0 = 2 * M_PI * j / kSegments, a1 = 2 * M_PI * (j + 1) / kSegments;
-    for (const Vec3& p : {front, Vec3(front + r * Vec3(std::cos(a0), std::sin(a0), 0)), Vec3(front + r * Vec3(std::cos(a1), std::sin(a1), 0))})
+    for (const Vec3& p : {front, Vec3(front + r * Vec3(std::cos(a0), std::sin(a0), 0)),
+                          Vec3(front + r * Vec3(std::cos(a1), std::sin(a1), 0))})
       list.triangles.push_back(vertex(p, Vec3(0, 0, 1), color));
   }
 }
@@ -160,8 +168,9 @@ std::array<float, 3> stressColor(Real s, Real scale) {
 }
 
 std::array<float, 3> levelColor(int level) {
-  constexpr Color palette[8] = {{0.15f, 0.35f, 0.85f}, {0.10f, 0.65f, 0.20f}, {0.95f, 0.55f, 0.05f}, {0.85f, 0.10f, 0.10f},
-                                {0.55f, 0.20f, 0.75f}, {0.45f, 0.30f, 0.15f}, {0.05f, 0.65f, 0.65f}, {0.90f, 0.30f, 0.70f}};
+  constexpr Color palette[8] = {{0.15f, 0.35f, 0.85f}, {0.10f, 0.65f, 0.20f}, {0.95f, 0.55f, 0.05f},
+                                {0.85f, 0.10f, 0.10f}, {0.55f, 0.20f, 0.75f}, {0.45f, 0.30f, 0.15f},
+                                {0.05f, 0.65f, 0.65f}, {0.90f, 0.30f, 0.70f}};
   return palette[size_t(level) % 8];
 }
 
@@ -182,7 +191,9 @@ BodyView makeBodyView(const BuiltScene& scene, const TriangleMesh* restMesh) {
   v.voxel = buildDisplaySurface(layout, scene.volume, SurfaceKind::Voxel);
   v.levels = layout.numLevels();
   std::unordered_map<uint64_t, uint32_t> id;
-  auto key = [](const Int3& p) { return uint64_t(uint32_t(p.x())) | uint64_t(uint32_t(p.y())) << 21 | uint64_t(uint32_t(p.z())) << 42; };
+  auto key = [](const Int3& p) {
+    return uint64_t(uint32_t(p.x())) | uint64_t(uint32_t(p.y())) << 21 | uint64_t(uint32_t(p.z())) << 42;
+  };
   for (size_t i = 0; i < layout.numVertices(); ++i) id.emplace(key(layout.vertices[i]), uint32_t(i));
   const int dim = layout.dim, corners = dim == 3 ? 8 : 4;
   for (size_t e = 0; e < layout.numElements(); ++e) {
@@ -262,7 +273,8 @@ DrawList buildDrawList(const BodyView& body, const World& world, const ViewOptio
     if (o.stress)
       for (size_t v = 0; v < colors.size(); ++v) {
         Real s = 0;
-        for (uint32_t k = em.weightStart[v]; k < em.weightStart[v + 1]; ++k) s += em.weight[k] * stress[em.weightVertex[k]];
+        for (uint32_t k = em.weightStart[v]; k < em.weightStart[v + 1]; ++k)
+          s += em.weight[k] * stress[em.weightVertex[k]];
         colors[v] = stressColor(std::max(s, 0.0), o.stressScale);
       }
     addMesh(list, m, colors, false);
@@ -277,7 +289,8 @@ DrawList buildDrawList(const BodyView& body, const World& world, const ViewOptio
 
   if (o.wireframe)
     for (size_t i = 0; i < body.edges.size(); ++i)
-      if (!o.section || body.edgeInSection[i]) addLine(list.lines, x[body.edges[i][0]], x[body.edges[i][1]], levelColor(body.edgeLevel[i]));
+      if (!o.section || body.edgeInSection[i])
+        addLine(list.lines, x[body.edges[i][0]], x[body.edges[i][1]], levelColor(body.edgeLevel[i]));
   if (o.vertices)
     for (const Vec3& p : x) list.points.push_back(vertex(p, Vec3::Zero(), kVertexColor));
 

@@ -21,10 +21,12 @@ std::string eglError(const char* what) {
 OffscreenContext::OffscreenContext(int width, int height) : width_(width), height_(height) {
   if (width < 16 || height < 16 || width > 8192 || height > 8192)
     throw GlUnavailable("picture size " + std::to_string(width) + "x" + std::to_string(height) + " outside 16..8192");
-  auto getPlatformDisplay = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(eglGetProcAddress("eglGetPlatformDisplayEXT"));
+  auto getPlatformDisplay =
+      reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(eglGetProcAddress("eglGetPlatformDisplayEXT"));
   if (!getPlatformDisplay) throw GlUnavailable("EGL has no eglGetPlatformDisplayEXT (install libegl-mesa0)");
   EGLDisplay dpy = getPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
-  if (dpy == EGL_NO_DISPLAY) throw GlUnavailable("no EGL surfaceless display (install libegl-mesa0 and libgl1-mesa-dri)");
+  if (dpy == EGL_NO_DISPLAY)
+    throw GlUnavailable("no EGL surfaceless display (install libegl-mesa0 and libgl1-mesa-dri)");
   EGLint major = 0, minor = 0;
   if (!eglInitialize(dpy, &major, &minor)) throw GlUnavailable(eglError("eglInitialize (surfaceless)"));
   display_ = dpy;
@@ -35,8 +37,9 @@ OffscreenContext::OffscreenContext(int width, int height) : width_(width), heigh
   EGLConfig config = EGL_NO_CONFIG_KHR;
   EGLint count = 0;
   if (!eglChooseConfig(dpy, configAttribs, &config, 1, &count) || count < 1) config = EGL_NO_CONFIG_KHR;
-  const EGLint contextAttribs[] = {EGL_CONTEXT_MAJOR_VERSION, 3, EGL_CONTEXT_MINOR_VERSION, 3, EGL_CONTEXT_OPENGL_PROFILE_MASK,
-                                   EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
+  const EGLint contextAttribs[] = {
+      EGL_CONTEXT_MAJOR_VERSION,           3,       EGL_CONTEXT_MINOR_VERSION, 3, EGL_CONTEXT_OPENGL_PROFILE_MASK,
+      EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
   EGLContext ctx = eglCreateContext(dpy, config, EGL_NO_CONTEXT, contextAttribs);
   if (ctx == EGL_NO_CONTEXT) throw GlUnavailable(eglError("eglCreateContext (OpenGL 3.3 core)"));
   context_ = ctx;
@@ -52,7 +55,8 @@ OffscreenContext::OffscreenContext(int width, int height) : width_(width), heigh
   glBindFramebuffer(GL_FRAMEBUFFER, msFbo_);
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, msColor_);
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, msDepth_);
-  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) throw GlUnavailable("multisampled framebuffer incomplete");
+  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw GlUnavailable("multisampled framebuffer incomplete");
 
   glGenFramebuffers(1, &fbo_);
   glGenRenderbuffers(1, &color_);
@@ -60,7 +64,8 @@ OffscreenContext::OffscreenContext(int width, int height) : width_(width), heigh
   glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, width, height);
   glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
   glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color_);
-  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) throw GlUnavailable("resolve framebuffer incomplete");
+  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw GlUnavailable("resolve framebuffer incomplete");
   glBindFramebuffer(GL_FRAMEBUFFER, msFbo_);
 }
 

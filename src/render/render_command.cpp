@@ -56,8 +56,10 @@ int runRenderCommand(const RenderCommandOptions& o) {
   if (!(o.start >= 0) || !std::isfinite(o.start)) throw InputError("--start: must be >= 0 seconds");
   if (!(o.zoom > 0) || !std::isfinite(o.zoom)) throw InputError("--zoom: must be a positive number");
   for (const auto& [name, angle] : {std::pair{"--yaw", o.yaw}, {"--pitch", o.pitch}})
-    if (angle && (!std::isfinite(*angle) || std::abs(*angle) > 10)) throw InputError(std::string(name) + ": must be an angle in radians");
-  if (!(o.stressScale > 0) || !std::isfinite(o.stressScale)) throw InputError("--stress-scale: must be a positive number");
+    if (angle && (!std::isfinite(*angle) || std::abs(*angle) > 10))
+      throw InputError(std::string(name) + ": must be an angle in radians");
+  if (!(o.stressScale > 0) || !std::isfinite(o.stressScale))
+    throw InputError("--stress-scale: must be a positive number");
   view.stressScale = o.stressScale;
   if (o.exportFormat != "none" && o.exportFormat != "obj" && o.exportFormat != "ply")
     throw InputError("--export: \"" + o.exportFormat + "\" (expected none, obj or ply)");

@@ -78,9 +78,12 @@ Renderer::Renderer() {
   glEnableVertexAttribArray(0);
   glEnableVertexAttribArray(1);
   glEnableVertexAttribArray(2);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(DrawVertex), reinterpret_cast<void*>(offsetof(DrawVertex, position)));
-  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(DrawVertex), reinterpret_cast<void*>(offsetof(DrawVertex, normal)));
-  glVertexAttribPointer(2, 4, GL_FLOAT, GL_FALSE, sizeof(DrawVertex), reinterpret_cast<void*>(offsetof(DrawVertex, color)));
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(DrawVertex),
+                        reinterpret_cast<void*>(offsetof(DrawVertex, position)));
+  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(DrawVertex),
+                        reinterpret_cast<void*>(offsetof(DrawVertex, normal)));
+  glVertexAttribPointer(2, 4, GL_FLOAT, GL_FALSE, sizeof(DrawVertex),
+                        reinterpret_cast<void*>(offsetof(DrawVertex, color)));
   glBindVertexArray(0);
 }
 

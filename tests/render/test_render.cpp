@@ -95,7 +95,8 @@ TEST(RenderHeadless, StressColourIsDarkerAtTheContactThanFarFromIt) {
   const double lumFar = bodyLuminanceNear(img, cam.project(far, kW, kH), radius, &nFar);
   ASSERT_GT(nNear, 50) << "no body pixels near the contact";
   ASSERT_GT(nFar, 50) << "no body pixels on the far side";
-  EXPECT_LT(lumNear, lumFar - 25) << "stress colour must be darker near the contact (" << lumNear << " vs " << lumFar << ")";
+  EXPECT_LT(lumNear, lumFar - 25) << "stress colour must be darker near the contact (" << lumNear << " vs " << lumFar
+                                  << ")";
 }
 
 // Number of layout levels whose colour appears on at least `minPixels` pixels.
@@ -107,7 +108,8 @@ int levelsSeen(const Image& img, int levels, int minPixels) {
     for (int y = 0; y < img.height; ++y)
       for (int x = 60; x < img.width; ++x) {  // skip the legend at the left
         const uint8_t* p = img.pixel(x, y);
-        if (std::abs(p[0] - c[0] * 255) < 24 && std::abs(p[1] - c[1] * 255) < 24 && std::abs(p[2] - c[2] * 255) < 24) ++n;
+        if (std::abs(p[0] - c[0] * 255) < 24 && std::abs(p[1] - c[1] * 255) < 24 && std::abs(p[2] - c[2] * 255) < 24)
+          ++n;
       }
     if (n >= minPixels) ++seen;
   }
@@ -116,9 +118,10 @@ int levelsSeen(const Image& img, int levels, int minPixels) {
 
 TEST(RenderHeadless, WireframeShowsMoreLevelsForALargerSphere) {
   auto wire = [&](int size) {
-    Scene scene = parseScene(R"({"dim": 3, "body": {"shape": "sphere", "size": )" + std::to_string(size) +
-                                 R"(, "voxel_size": )" + std::to_string(0.12 / size) + R"(}, "simulation": {"gravity": [0, 0, 0]}})",
-                             "wire");
+    Scene scene =
+        parseScene(R"({"dim": 3, "body": {"shape": "sphere", "size": )" + std::to_string(size) + R"(, "voxel_size": )" +
+                       std::to_string(0.12 / size) + R"(}, "simulation": {"gravity": [0, 0, 0]}})",
+                   "wire");
     BuiltScene built = buildScene(scene);
     ViewOptions v;
     v.surface = SurfaceMode::None;
@@ -140,8 +143,8 @@ TEST(RenderHeadless, CliWritesPngFramesThatShowTheBody) {
   const fs::path out = fs::temp_directory_path() / ("gradel-render-test-" + std::to_string(::getpid()));
   fs::remove_all(out);
   const std::string cmd = std::string(GRADEL_CLI_PATH) + " render " + GRADEL_SOURCE_DIR +
-                          "/scenes/strike.json --frames 3 --size 200x150 --stress --export obj --no-video --out " + out.string() +
-                          " > /dev/null";
+                          "/scenes/strike.json --frames 3 --size 200x150 --stress --export obj --no-video --out " +
+                          out.string() + " > /dev/null";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   for (int f = 0; f < 3; ++f) {
     char name[32];
@@ -165,8 +168,9 @@ TEST(RenderHeadless, CliWritesPngFramesThatShowTheBody) {
 TEST(ViewerWindow, ScreenshotShowsBodyAndPanel) {
   ASSERT_NE(std::getenv("DISPLAY"), nullptr) << "run under xvfb-run";
   const fs::path shot = fs::temp_directory_path() / ("gradel-view-test-" + std::to_string(::getpid()) + ".png");
-  const std::string cmd = std::string(GRADEL_VIEW_PATH) + " " + GRADEL_SOURCE_DIR + "/scenes/grasp-two.json --size 640x480 --screenshot " +
-                          shot.string() + " --screenshot-time 0.3 > /dev/null";
+  const std::string cmd = std::string(GRADEL_VIEW_PATH) + " " + GRADEL_SOURCE_DIR +
+                          "/scenes/grasp-two.json --size 640x480 --screenshot " + shot.string() +
+                          " --screenshot-time 0.3 > /dev/null";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   const Image img = readPng(shot.string());
   EXPECT_EQ(img.width, 640);

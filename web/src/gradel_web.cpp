@@ -114,7 +114,7 @@ class Demo {
   void buildFrame(int width, int height) { list_ = buildDrawList(body_, *built_.world, view_, width, height); }
   val triangles() const { return floats(list_.triangles); }  ///< 10 floats a vertex: position, normal, RGBA.
   val lines() const { return floats(list_.lines); }
-  val overlay() const { return floats(list_.overlay); }      ///< Pixels, y down.
+  val overlay() const { return floats(list_.overlay); }  ///< Pixels, y down.
   val background() const { return floatArray(list_.background.data(), 3); }
   /// Column-major projection * view for the canvas aspect, and the light direction (renderer.cpp's).
   val viewProjection(int width, int height) const {
@@ -122,7 +122,8 @@ class Demo {
     return floatArray(m.data(), 16);
   }
   val light() const {
-    const Vec3 l = ((camera_.eye() - camera_.target).normalized() * 0.8 + camera_.up() * 0.45 + camera_.right() * 0.3).normalized();
+    const Vec3 l = ((camera_.eye() - camera_.target).normalized() * 0.8 + camera_.up() * 0.45 + camera_.right() * 0.3)
+                       .normalized();
     const float f[3] = {float(l.x()), float(l.y()), float(l.z())};
     return floatArray(f, 3);
   }
@@ -204,7 +205,8 @@ class Demo {
     const World& w = *built_.world;
     Vec3 c = Vec3::Zero();
     Real m = 0;
-    for (size_t i = 0; i < w.state().positions.size(); ++i) c += w.model().mass[i] * w.state().positions[i], m += w.model().mass[i];
+    for (size_t i = 0; i < w.state().positions.size(); ++i)
+      c += w.model().mass[i] * w.state().positions[i], m += w.model().mass[i];
     c /= std::max(m, Real(1e-30));
     const float f[3] = {float(c.x()), float(c.y()), float(c.z())};
     return floatArray(f, 3);
@@ -237,7 +239,9 @@ class Demo {
     if (mode_ == Mode::Drag) mode_ = Mode::None;
   }
 
-  Vec3 planeNormal() const { return camera_.flat ? Vec3(0, 0, 1) : Vec3((camera_.eye() - camera_.target).normalized()); }
+  Vec3 planeNormal() const {
+    return camera_.flat ? Vec3(0, 0, 1) : Vec3((camera_.eye() - camera_.target).normalized());
+  }
   Real pixelSize(int height) const {
     return camera_.flat ? 2 * camera_.distance / height : 2 * camera_.distance * std::tan(camera_.fovY / 2) / height;
   }
@@ -341,9 +345,9 @@ std::string bench(const std::string& shape, int n, const std::string& layoutName
   const RestModel& m = w.model();
   char row[512];
   std::snprintf(row, sizeof row, "%s,%d,%s,1,%zu,%zu,%zu,%.3f,%.3f,%.1f,%.6g,%.4g,%.1f,%016llx", shape.c_str(), n,
-                layoutKindName(layout), m.numElements(), m.numVertices(), m.numPairs(), t * 1e9 / double(m.numVertices()),
-                t * 1e9 / double(m.numPairs()), 1 / t, w.dt(), w.dt() / t, double(w.memoryBytes()) / double(m.numVertices()),
-                static_cast<unsigned long long>(hash));
+                layoutKindName(layout), m.numElements(), m.numVertices(), m.numPairs(),
+                t * 1e9 / double(m.numVertices()), t * 1e9 / double(m.numPairs()), 1 / t, w.dt(), w.dt() / t,
+                double(w.memoryBytes()) / double(m.numVertices()), static_cast<unsigned long long>(hash));
   return row;
 }
 

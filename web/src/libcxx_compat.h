@@ -1,15 +1,15 @@
 // Force-included into every source of the WebAssembly build (web/CMakeLists.txt, -include).
 // Debian's emscripten 3.1.6 ships a libc++ without four C++20 / C++17 library pieces that the
-// core uses: std::bit_cast, std::make_unique_for_overwrite, and std::to_chars / std::from_chars for floating point. Provided
-// here only when the library lacks them (its <version> leaves the feature macros undefined), so
-// a newer emscripten uses its own. Same results as the standard ones for what gradel does with
-// them: shortest round-trip output; input in the "general" format only (no leading whitespace,
+// core uses: std::bit_cast, std::make_unique_for_overwrite, and std::to_chars / std::from_chars for floating point.
+// Provided here only when the library lacks them (its <version> leaves the feature macros undefined), so a newer
+// emscripten uses its own. Same results as the standard ones for what gradel does with them: shortest round-trip
+// output; input in the "general" format only (no leading whitespace,
 // '+' or hex prefix, which strtod would accept).
 #pragma once
 
 #include <cctype>
-#include <charconv>
 #include <cerrno>
+#include <charconv>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -23,8 +23,9 @@ namespace std {
 
 #ifndef __cpp_lib_bit_cast
 template <class To, class From>
-  requires(sizeof(To) == sizeof(From) && is_trivially_copyable_v<To> && is_trivially_copyable_v<From>)
-To bit_cast(const From& from) noexcept {
+requires(sizeof(To) == sizeof(From) && is_trivially_copyable_v<To> && is_trivially_copyable_v<From>) To
+    bit_cast(const From& from)
+noexcept {
   To to;
   std::memcpy(&to, &from, sizeof to);
   return to;
@@ -33,8 +34,7 @@ To bit_cast(const From& from) noexcept {
 
 #ifndef __cpp_lib_smart_ptr_for_overwrite
 template <class T>
-  requires is_unbounded_array_v<T>
-unique_ptr<T> make_unique_for_overwrite(size_t n) {
+requires is_unbounded_array_v<T> unique_ptr<T> make_unique_for_overwrite(size_t n) {
   return unique_ptr<T>(new remove_extent_t<T>[n]);
 }
 #endif
@@ -59,7 +59,8 @@ from_chars_result fromChars(const char* first, const char* last, F& value) {
   const char* p = first;
   if (p != last && *p == '-') ++p;
   const bool hex = last - p >= 2 && p[0] == '0' && (p[1] == 'x' || p[1] == 'X');
-  if (p == last || hex || !(std::isdigit(static_cast<unsigned char>(*p)) || *p == '.' || *p == 'i' || *p == 'I' || *p == 'n' || *p == 'N'))
+  if (p == last || hex ||
+      !(std::isdigit(static_cast<unsigned char>(*p)) || *p == '.' || *p == 'i' || *p == 'I' || *p == 'n' || *p == 'N'))
     return {first, errc::invalid_argument};
   const std::string text(first, last);  // strtod needs a terminated string
   char* end = nullptr;
@@ -74,8 +75,12 @@ from_chars_result fromChars(const char* first, const char* last, F& value) {
 }
 }  // namespace gradel_compat
 
-inline to_chars_result to_chars(char* first, char* last, double value) { return gradel_compat::toChars(first, last, value); }
-inline to_chars_result to_chars(char* first, char* last, float value) { return gradel_compat::toChars(first, last, value); }
+inline to_chars_result to_chars(char* first, char* last, double value) {
+  return gradel_compat::toChars(first, last, value);
+}
+inline to_chars_result to_chars(char* first, char* last, float value) {
+  return gradel_compat::toChars(first, last, value);
+}
 inline from_chars_result from_chars(const char* first, const char* last, double& value) {
   return gradel_compat::fromChars(first, last, value);
 }

@@ -24,8 +24,8 @@ size_t scalarTypeBytes(ScalarType t);
 
 /// Which values are filled. Neither set: every non-zero value (masks, label maps).
 struct GreyRule {
-  std::optional<double> threshold;           ///< value >= threshold is filled [the file's units].
-  std::optional<double> rangeLo, rangeHi;    ///< rangeLo <= value <= rangeHi is filled (both or neither).
+  std::optional<double> threshold;         ///< value >= threshold is filled [the file's units].
+  std::optional<double> rangeLo, rangeHi;  ///< rangeLo <= value <= rangeHi is filled (both or neither).
 
   bool filled(double v) const {
     if (threshold) return v >= *threshold;
@@ -40,7 +40,7 @@ struct GreyRule {
 struct SampleLayout {
   ScalarType type = ScalarType::UInt8;
   bool bigEndian = false;
-  double scale = 1.0;   ///< value = scale * stored + offset (NIfTI scl_slope / scl_inter).
+  double scale = 1.0;  ///< value = scale * stored + offset (NIfTI scl_slope / scl_inter).
   double offset = 0.0;
 };
 

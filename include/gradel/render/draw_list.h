@@ -22,15 +22,16 @@ enum class SurfaceMode {
   Embedded,  ///< The embedded render mesh (embedding.h); the smooth surface if there is none.
   None,
 };
-SurfaceMode parseSurfaceMode(const std::string& name);  ///< "smooth" | "voxel" | "embedded" | "none"; InputError otherwise.
+SurfaceMode parseSurfaceMode(
+    const std::string& name);  ///< "smooth" | "voxel" | "embedded" | "none"; InputError otherwise.
 
 /// What to draw (the viewer's toggles; `gradel render --show`).
 struct ViewOptions {
   SurfaceMode surface = SurfaceMode::Smooth;
   bool wireframe = false;  ///< Element outlines coloured by level.
   bool section = false;    ///< Wireframe of only the elements cut by the body's middle z plane (fig. 4's section).
-  bool stress = false;    ///< Colour the surface by stress, with a legend.
-  bool vertices = false;  ///< Model vertices as points.
+  bool stress = false;     ///< Colour the surface by stress, with a legend.
+  bool vertices = false;   ///< Model vertices as points.
   bool manipulators = true;
   bool walls = true;
   Real stressScale = 0.05;  ///< [-] stress drawn darkest (World::vertexStress units).

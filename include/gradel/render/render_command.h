@@ -13,19 +13,20 @@ namespace gradel::render {
 struct RenderCommandOptions {
   std::string scene;
   std::string out;
-  std::optional<int> frames;        ///< Frames at the scene's frame interval; default: the whole duration.
-  std::string size = "640x480";     ///< WxH [pixels].
-  std::string surface = "auto";     ///< auto | smooth | voxel | embedded | none (auto: embedded for a body from a mesh file, else smooth)
+  std::optional<int> frames;     ///< Frames at the scene's frame interval; default: the whole duration.
+  std::string size = "640x480";  ///< WxH [pixels].
+  std::string surface =
+      "auto";  ///< auto | smooth | voxel | embedded | none (auto: embedded for a body from a mesh file, else smooth)
   bool stress = false;
   bool wireframe = false;
   bool vertices = false;
-  bool section = false;             ///< Wireframe of the middle z section only.
-  double start = 0;                 ///< [s] simulated time of the first frame.
-  std::optional<double> yaw, pitch;  ///< [rad] camera angles (default: framing's 0.6, 0.35).
-  double zoom = 1;                  ///< > 1 moves the camera closer.
-  double stressScale = 0.05;        ///< [-] stress drawn darkest.
+  bool section = false;               ///< Wireframe of the middle z section only.
+  double start = 0;                   ///< [s] simulated time of the first frame.
+  std::optional<double> yaw, pitch;   ///< [rad] camera angles (default: framing's 0.6, 0.35).
+  double zoom = 1;                    ///< > 1 moves the camera closer.
+  double stressScale = 0.05;          ///< [-] stress drawn darkest.
   std::string exportFormat = "none";  ///< none | obj | ply
-  bool noPictures = false;          ///< Export only (no OpenGL needed).
+  bool noPictures = false;            ///< Export only (no OpenGL needed).
   bool noVideo = false;
 };
 
