@@ -246,7 +246,7 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
 // leaves the box. Returns the deepest penetration found [m].
 Real World::resolveVertexContacts(const Vec3& previous, const Vec3& previousVelocity, Vec3& x, Vec3& v) const {
   const int dim = model_->dim;
-  const StepStart start{previousVelocity, dt_};
+  const StepStart start{previousVelocity, dt_, sim_.integrator == IntegratorKind::SymplecticEuler};
   const size_t surfaces = manipulators_.size() + (domain_.enabled ? 1 : 0);
   Real depth = 0;
   for (int pass = 0; pass < 4; ++pass) {

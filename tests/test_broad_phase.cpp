@@ -59,8 +59,9 @@ void checkBroadPhaseExact(const Body& b, int threads, const DomainSettings& d,
     State& r = ref.state();
     for (size_t i = 0; i < r.positions.size(); ++i) {
       const Vec3 before = r.positions[i];
-      resolveAll(poses, d, b.model->dim, previous[i], StepStart{previousVelocity[i], w.dt()}, r.positions[i],
-                 r.velocities[i]);
+      resolveAll(poses, d, b.model->dim, previous[i],
+                 StepStart{previousVelocity[i], w.dt(), w.settings().integrator == IntegratorKind::SymplecticEuler},
+                 r.positions[i], r.velocities[i]);
       touched += r.positions[i] != before;
     }
     ASSERT_TRUE(sameBits(w.state().positions, r.positions)) << "positions differ at step " << k;

@@ -6,6 +6,7 @@
 #include <rapidcheck/gtest.h>
 
 #include <cstdlib>
+#include <iomanip>
 #include <sstream>
 
 #include "gradel/contacts.h"
@@ -74,15 +75,23 @@ TEST(ContactEnergy, RestingContactDoesNotBounce) {
   m.settings.radius = 1.0;
   m.settings.restitution = 1.0;
   const Real dt = 1e-3;
+<<<<<<< HEAD
   const Vec3 xPrev(0, 1.0, 0);                 // on the surface
   const StepStart start{Vec3(0.2, 0, 0), dt};  // sliding, no normal speed
   Vec3 v(0.2, -0.03, 0);                       // a = -30 m/s^2 gained this step
+=======
+  const Vec3 xPrev(0, 1.0, 0);                       // on the surface
+  const StepStart start{Vec3(0.2, 0, 0), dt, true};  // sliding, no normal speed; symplectic Euler
+  Vec3 v(0.2, -0.03, 0);                             // a = -30 m/s^2 gained this step
+>>>>>>> h15soak
   Vec3 x = xPrev + dt * v;
   resolveManipulator(m, xPrev, x, v, 3, true, &start);
   EXPECT_GE(m.signedDistance(x, nullptr), 0.0);
   Vec3 n;
   m.signedDistance(x, &n);
-  EXPECT_NEAR(v.dot(n), 0.0, 1e-4);  // no bounce (the old rule sent it back out at 0.03 m/s)
+  // No bounce (the old rule sent it back out at 0.03 m/s): its normal velocity at the time of
+  // the positions, v + a dt / 2 (contacts.h), is 0; the stored (leapfrog) velocity is -a dt / 2.
+  EXPECT_NEAR(v.dot(n) + 0.5 * dt * -30.0, 0.0, 1e-4);
   // The projection lifted it 3e-5 m against 30 m/s^2: that energy (9e-4 J/kg) comes out of the
   // sliding, 1/2 (0.2^2 - vx^2) = 9e-4.
   EXPECT_NEAR(v.x(), std::sqrt(0.04 - 2 * 9e-4), 1e-4);
@@ -96,15 +105,16 @@ TEST(ContactEnergy, StrikeStillBouncesElastically) {
   m.settings.restitution = 1.0;
   const Real dt = 1e-3;
   const Vec3 xPrev(0, 1.001, 0);
-  const StepStart start{Vec3(0, -2.0, 0), dt};
+  const StepStart start{Vec3(0, -2.0, 0), dt, true};
   Vec3 v(0, -2.0, 0), x = xPrev + dt * v;
   resolveManipulator(m, xPrev, x, v, 3, true, &start);
   EXPECT_NEAR(v.y(), 2.0, 1e-12);
-  // Pressed in by a force on the way (u0 = -2, u1 = -2.5): it leaves at its approach speed 2 m/s
-  // (never more), less the elastic energy the projection stored: |a| depth = 500 * 0.0015 J/kg.
+  // Pressed in by a force on the way (u0 = -2, u1 = -2.5, a = -500): it leaves at its approach
+  // speed 2 m/s (never more), less the elastic energy the projection stored: |a| depth =
+  // 500 * 0.0015 J/kg; that is its velocity at the time of the positions, v + a dt / 2.
   x = xPrev + dt * Vec3(0, -2.5, 0), v = Vec3(0, -2.5, 0);
   resolveManipulator(m, xPrev, x, v, 3, true, &start);
-  EXPECT_NEAR(v.y(), std::sqrt(4.0 - 2 * 500 * 0.0015), 1e-6);
+  EXPECT_NEAR(v.y() + 0.5 * dt * -500.0, std::sqrt(4.0 - 2 * 500 * 0.0015), 1e-6);
   // Started inside (no crossing): put out, no bounce.
   const Vec3 inside(0, 0.99, 0);
   x = inside + dt * Vec3(0, -2.0, 0), v = Vec3(0, -2.0, 0);
@@ -161,6 +171,44 @@ long propertySteps() {
 // body it stays flat to ~2e-5 over 1e5 steps. 1e-4 is above that measurement noise and far below
 // the pumping seen (x2 to x1000).
 const Real kTolerance = 1e-4;
+const long kWindow = 20;
+
+// The largest energy of a run over `steps` steps relative to the reference: the energy once the
+// vertices placed inside an obstacle or beyond a wall are out (the deepest within 1 % of a
+// voxel, at most 100 steps). Pushing them out legitimately stores elastic energy, and a vertex
+// pinched between a wall and an obstacle (placed inside both) takes a few steps. The reference
+// is the largest value over the next kWindow steps: a vertex pressed hard against a surface
+// (a body crushed between two obstacles and a wall) moves in by a dt^2 and is put back every
+// step, a step-to-step swing of the measured energy of order m (a dt)^2 that a single sample
+// could catch at its low point.
+struct Rise {
+  long start = 0;
+  Real e0 = 0, peak = 0, last = 0, elastic = 0;
+  // Rounding: the energy is a sum over ~10^3 terms of size up to E, each with relative error
+  // ~1e-16, and the symplectic energy measure itself (v + a dt / 2) has an O((omega dt)^2)
+  // swing: kTolerance of the larger of E and the elastic energy scale is far above the first and
+  // below any pumping (x2 to x1000).
+  bool holds() const { return peak <= e0 + kTolerance * std::max(std::abs(e0), elastic) + 1e-12; }
+};
+
+Rise rise(World& w, long steps) {
+  Rise r;
+  do {
+    w.step();
+  } while (++r.start < 100 && w.metrics().maxPenetration > 1e-4);
+  r.e0 = totalEnergy(w);
+  for (long k = 1; k < kWindow; ++k) w.step(), r.e0 = std::max(r.e0, totalEnergy(w));
+  r.peak = r.e0;
+  for (long s = r.start + kWindow; s < steps; ++s) {
+    w.step();
+    if (s % 25 == 0) r.peak = std::max(r.peak, totalEnergy(w));
+  }
+  const Metrics m = w.metrics();
+  r.last = m.kineticEnergy + m.elasticEnergy + m.gravityEnergy;
+  r.elastic = m.elasticEnergy;
+  r.peak = std::max(r.peak, r.last);
+  return r;
+}
 
 void energyNeverRises() {
   const std::string shape = *rc::gen::element<std::string>("sphere", "box");
@@ -192,39 +240,35 @@ void energyNeverRises() {
     walls.restitution = unit();
     walls.friction = unit();
   }
+  for (const ManipulatorSettings& o : obstacles)
+    RC_LOG() << std::setprecision(17) << manipulatorShapeName(o.shape) << " at " << o.path.keys[0].position.transpose()
+             << " r " << o.radius << " half " << o.halfLength << " axis " << o.axis.transpose() << " e "
+             << o.restitution << " mu " << o.friction << "\n";
+  if (walls.enabled)
+    RC_LOG() << std::setprecision(17) << "walls min " << walls.min.transpose() << " max " << walls.max.transpose()
+             << " e " << walls.restitution << " mu " << walls.friction << "\n";
   World w(body.model, sim, walls, obstacles);
-  const long steps = propertySteps();
-  w.step();  // pushes the vertices out of the obstacles: the reference energy after it
-  const Real e0 = totalEnergy(w);
-  Real peak = e0;
-  for (long s = 1; s < steps; ++s) {
-    w.step();
-    if (s % 25 == 0) peak = std::max(peak, totalEnergy(w));
-  }
-  // Rounding: the energy is a sum over ~10^3 terms of size up to E, each with relative error
-  // ~1e-16, and the symplectic energy measure itself (v + a dt / 2) has an O((omega dt)^2)
-  // swing that the first steps' re-balancing can show: 1e-6 of the larger of E and the elastic
-  // energy scale is far above the first and below any pumping (which was x5 to x30).
-  const Metrics m = w.metrics();
-  RC_ASSERT(std::isfinite(peak));
+  const Rise r = rise(w, propertySteps());
+  RC_ASSERT(std::isfinite(r.peak));
   RC_LOG() << shape << " " << size << ", damping " << sim.damping << ", " << obstacles.size() << " obstacles, walls "
-           << walls.enabled << ": E after the first step " << e0 << " J, peak " << peak << " J, now "
-           << m.kineticEnergy + m.elasticEnergy + m.gravityEnergy << " J\n";
-  RC_ASSERT(peak <= e0 + kTolerance * std::max(std::abs(e0), m.elasticEnergy) + 1e-12);
+           << walls.enabled << ": E once out of the obstacles (step " << r.start << ") " << r.e0 << " J, peak "
+           << r.peak << " J, now " << r.last << " J\n";
+  RC_ASSERT(r.holds());
 }
 
 }  // namespace
 
-// OPEN (issue 15), hence disabled: the property still fails. Counterexamples found (3000 steps):
-// a thin cylinder (radius ~1 voxel, random axis, restitution 0, friction 0.05) at the edge of a
-// 7^3 sphere, damping 0.1/s, no gravity, no walls: 0.047 J -> 58 J; a 7^3 box with two
-// obstacles and walls: 0.90 J -> 29 J; a 6^3 sphere on a sphere under gravity: +1.2 %.
-// The issue's three reproductions (above) pass. Run it with
-//   build/gradel_tests --gtest_also_run_disabled_tests --gtest_filter='ContactEnergy.*Never*'
-// (GRADEL_PROPERTY_CASES, GRADEL_PROPERTY_STEPS, GRADEL_PROPERTY_NO_WALLS, _NO_GRAVITY narrow it).
-TEST(ContactEnergy, DISABLED_NeverRisesWithMotionlessObstaclesAndWalls) {
+// Random bodies (spheres and boxes, 6^3 to 10^3), one or two motionless spheres or capped
+// cylinders anywhere in them (some deep inside, thin ones at the edges), maybe a floor and a side
+// wall cutting into them, damping (0, 5] /s, gravity or none, any restitution and friction. The
+// CI default is 6 cases of 1e4 steps from a fixed seed (a few seconds; deterministic); explore
+// with RC_PARAMS="seed=..." and GRADEL_PROPERTY_CASES / GRADEL_PROPERTY_STEPS (GRADEL_PROPERTY_NO_WALLS,
+// _NO_GRAVITY narrow it). Before the fixes of issue 15 it failed within 100 cases of 3000 steps
+// (the two counterexamples below; 0.047 J -> 58 J and 0.90 J -> 29 J in the issue).
+TEST(ContactEnergy, NeverRisesWithMotionlessObstaclesAndWalls) {
   rc::detail::TestParams params = rc::detail::configuration().testParams;
-  params.maxSuccess = std::getenv("GRADEL_PROPERTY_CASES") ? std::atoi(std::getenv("GRADEL_PROPERTY_CASES")) : 12;
+  params.maxSuccess = std::getenv("GRADEL_PROPERTY_CASES") ? std::atoi(std::getenv("GRADEL_PROPERTY_CASES")) : 6;
+  if (!std::getenv("RC_PARAMS")) params.seed = 15;
   rc::detail::TestMetadata metadata;
   metadata.id = "ContactEnergy/NeverRisesWithMotionlessObstaclesAndWalls";
   const auto result = rc::detail::checkTestable(&energyNeverRises, metadata, params);
@@ -233,4 +277,58 @@ TEST(ContactEnergy, DISABLED_NeverRisesWithMotionlessObstaclesAndWalls) {
     rc::detail::printResultMessage(result, ss);
     FAIL() << ss.str();
   }
+}
+
+// The property's counterexamples, as regular tests (3000 steps each).
+
+// A thin capped cylinder through the corner of a falling sphere (no walls, restitution and
+// friction 0): a vertex on the cylinder's rim, pulled across it, was taken for one that passed
+// through the middle (cap and side normals orthogonal, their dot product -1e-16) and put back
+// every step (energy +0.3 %, and a frictionless rim holding a vertex); leaving the rim along the
+// side it was taken for a pass-through (a corner clipped by 1e-8 m) and put back while its
+// velocity grew: 0.040 J -> 4.3 J once the first was fixed alone.
+TEST(ContactEnergy, CylinderRimNeitherHoldsNorPumpsAVertex) {
+  const Body body = makeBody("sphere", 6, 3, LayoutKind::Gradational);
+  SimulationSettings sim;
+  sim.damping = 0.1;
+  sim.gravity = Vec3(0, -9.81, 0);
+  ManipulatorSettings m = obstacle(ManipulatorShape::Cylinder, 0.006, Vec3(0, 0, 0), 0, 0);
+  m.halfLength = 0.0138;
+  m.axis = Vec3(-0.5, -0.47, -0.499);
+  World w(body.model, sim, {}, {m});
+  const Rise r = rise(w, 3000);
+  std::printf("cylinder rim: E %.4g J (step %ld), peak %.4g J, last %.4g J\n", r.e0, r.start, r.peak, r.last);
+  EXPECT_TRUE(r.holds());
+  EXPECT_LT(r.last, r.e0);
+}
+
+// A 7^3 box dropped onto two overlapping spheres sunk in the floor, near a side wall (weak
+// damping, 0.3/s): the push out of the spheres leaves a corner vertex oscillating in the fastest
+// element mode (8 steps a period, omega dt = 0.8) and hitting the floor (restitution 0.78) while
+// its element pulls it up. Reflecting the leapfrog velocity added m |vn| a dt (1 + e) / 2 of
+// measured energy per bounce: 1.2 J -> 290 J in 3000 steps. Reflecting the velocity at the time
+// of the positions takes energy out.
+TEST(ContactEnergy, FastModeBouncingOnTheFloorTakesEnergyOut) {
+  const Body body = makeBody("box", 7, 3, LayoutKind::Gradational);
+  SimulationSettings sim;
+  sim.damping = 3 * 0.1;
+  sim.gravity = Vec3(0, -9.81, 0);
+  // The property's values to the last bit (the run is chaotic: rounded to 3 digits it stays calm).
+  const Real h = 0.01 * 7;
+  auto u = [](int k) { return k * 0.01; };
+  const ManipulatorSettings a =
+      obstacle(ManipulatorShape::Sphere, (0.1 + 0.3 * u(40)) * h, Vec3(u(65) * h, u(8) * h, u(44) * h), u(21), u(54));
+  const ManipulatorSettings b =
+      obstacle(ManipulatorShape::Sphere, (0.1 + 0.3 * u(20)) * h, Vec3(u(39) * h, u(4) * h, u(47) * h), u(27), u(92));
+  DomainSettings d;
+  d.enabled = true;
+  d.min = Vec3(-1, u(35) * 0.2 * h, -1);
+  d.max = Vec3(h * (1 - 0.2 * u(73)), 1, 1);
+  d.restitution = u(78);
+  d.friction = u(1);
+  World w(body.model, sim, d, {a, b});
+  const Rise r = rise(w, 3000);
+  std::printf("fast mode on the floor: E %.4g J (step %ld), peak %.4g J, last %.4g J\n", r.e0, r.start, r.peak, r.last);
+  EXPECT_TRUE(r.holds());
+  EXPECT_LT(r.last, r.e0);
 }
