@@ -11,10 +11,13 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -354,6 +357,31 @@ int runScene(const RunOptions& o) {
   return 0;
 }
 
+// `gradel study FILE [options]`: the parameter study front (docs/study.md). The study runs in
+// Python on Dask (gradel.study); this hands the arguments to `python3 -m gradel.study`, with the
+// build tree's package first on the path when the program runs from a build tree (an installed
+// package is found by Python itself). $GRADEL_PYTHON names another interpreter.
+int runStudy(const std::vector<std::string>& args) {
+  const char* python = std::getenv("GRADEL_PYTHON") ? std::getenv("GRADEL_PYTHON") : "/usr/bin/python3";
+  std::error_code ec;
+  const fs::path buildPython = fs::read_symlink("/proc/self/exe", ec).parent_path() / "python";
+  if (!ec && fs::exists(buildPython / "gradel", ec)) {
+    const char* old = std::getenv("PYTHONPATH");
+    const std::string path = buildPython.string() + (old && *old ? ":" + std::string(old) : "");
+    setenv("PYTHONPATH", path.c_str(), 1);
+  }
+  std::vector<std::string> argvStrings{python, "-m", "gradel.study"};
+  argvStrings.insert(argvStrings.end(), args.begin(), args.end());
+  std::vector<char*> argvPtrs;
+  for (std::string& a : argvStrings) argvPtrs.push_back(a.data());
+  argvPtrs.push_back(nullptr);
+  std::cout.flush();
+  execv(python, argvPtrs.data());
+  std::cerr << "gradel: study: cannot start " << python << ": " << std::strerror(errno)
+            << " (the study needs Python 3 with numpy and python3-distributed: scripts/setup)\n";
+  return kExitInternal;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -379,6 +407,13 @@ int main(int argc, char** argv) {
   run->add_option("--max-steps", ro.maxSteps,
                   "Allow up to N time steps (default: refuse runs over 1e7 steps or 1e11 vertex-steps)");
 
+  CLI::App* study = app.add_subcommand(
+      "study",
+      "Run a parameter study (a base scene and a grid of overrides) on a Dask cluster: gradel study FILE "
+      "[--address tcp://HOST:8786] [--workers N] [--out DIR] (all options: gradel study --help)");
+  study->prefix_command();  // everything after `study` goes to gradel.study, --help included
+  study->set_help_flag();
+
 #ifdef GRADEL_WITH_RENDER
   gradel::render::RenderCommandOptions rendo;
   CLI::App* render = gradel::render::addRenderCommand(app, rendo);
@@ -387,6 +422,7 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
     if (layout->parsed()) return runLayout(lo);
+    if (study->parsed()) return runStudy(study->remaining());
 #ifdef GRADEL_WITH_RENDER
     if (render->parsed()) return gradel::render::runRenderCommand(rendo);
 #endif

@@ -29,11 +29,18 @@ bench() { "$build/gradel-bench" --reps 5 --min-time 0.3 "$@"; }
 } > "$stem-paper.csv.tmp" && mv "$stem-paper.csv.tmp" "$stem-paper.csv"
 # The threading mechanisms: the team (default), OpenMP with libgomp's default (spinning) wait and
 # with OMP_WAIT_POLICY=passive; each on a quiet machine and beside one busy process (--load).
+# The OpenMP path exists only in a build configured with -DGRADEL_OPENMP_COMPARISON=ON.
+if grep -q '^GRADEL_OPENMP_COMPARISON:BOOL=ON' "$build/CMakeCache.txt" 2>/dev/null; then
+  mechanisms="team openmp-default openmp-passive"
+else
+  mechanisms=team
+fi
 {
   describe
+  [ "$mechanisms" = team ] && echo "# OpenMP rows left out: $build was configured without -DGRADEL_OPENMP_COMPARISON=ON"
   echo "# mechanism,then the gradel-bench columns"
   for load in "" --load; do
-    for mech in team openmp-default openmp-passive; do
+    for mech in $mechanisms; do
       case $mech in
         team) env=() ;;
         openmp-default) env=(GRADEL_THREADING=openmp) ;;

@@ -2,7 +2,7 @@
 # CMakeLists.txt and the standalone fuzz build (fuzz/CMakeLists.txt). Paths are relative to the
 # repository root. A new source file joins exactly one of these lists.
 
-# gradel_core: the engine. Needs Eigen and OpenMP (and zlib + the NIfTI header layouts for the
+# gradel_core: the engine. Needs Eigen (and zlib + the NIfTI header layouts for the
 # readers below); no windowing, no OpenGL, no command-line parser.
 set(GRADEL_CORE_SOURCES
   src/contacts.cpp

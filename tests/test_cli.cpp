@@ -392,3 +392,20 @@ TEST_F(CliTest, RunEnergyBlowUpInsideWallsExit3NamingTheCause) {
 }
 
 }  // namespace
+
+// `gradel study` hands its arguments to `python3 -m gradel.study` (docs/study.md), with the build
+// tree's package on the path; a study itself is tested in python/tests/test_study.py.
+TEST_F(CliTest, StudyMissingFileExit2NamingTheFile) {
+  if (!fs::exists(fs::path(GRADEL_CLI_PATH).parent_path() / "python" / "gradel"))
+    GTEST_SKIP() << "this build tree has no Python package (the sanitizer build makes only gradel and the tests)";
+  const Result r = run("study nope.json");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("nope.json: cannot read"), std::string::npos) << r.err;
+}
+
+TEST_F(CliTest, StudyWithoutPythonSaysWhatIsMissing) {
+  const Result r = run("study nope.json", "GRADEL_PYTHON=/nonexistent/python3");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("cannot start /nonexistent/python3"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("python3-distributed"), std::string::npos) << r.err;
+}

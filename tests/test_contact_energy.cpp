@@ -75,15 +75,9 @@ TEST(ContactEnergy, RestingContactDoesNotBounce) {
   m.settings.radius = 1.0;
   m.settings.restitution = 1.0;
   const Real dt = 1e-3;
-<<<<<<< HEAD
-  const Vec3 xPrev(0, 1.0, 0);                 // on the surface
-  const StepStart start{Vec3(0.2, 0, 0), dt};  // sliding, no normal speed
-  Vec3 v(0.2, -0.03, 0);                       // a = -30 m/s^2 gained this step
-=======
   const Vec3 xPrev(0, 1.0, 0);                       // on the surface
   const StepStart start{Vec3(0.2, 0, 0), dt, true};  // sliding, no normal speed; symplectic Euler
   Vec3 v(0.2, -0.03, 0);                             // a = -30 m/s^2 gained this step
->>>>>>> h15soak
   Vec3 x = xPrev + dt * v;
   resolveManipulator(m, xPrev, x, v, 3, true, &start);
   EXPECT_GE(m.signedDistance(x, nullptr), 0.0);

@@ -81,15 +81,6 @@ std::unique_ptr<BuiltScene> runStiff(const std::string& file, Real duration) {
 }
 using test::centroid;
 
-<<<<<<< HEAD
-=======
-Vec3 centroid(const World& w) {
-  Vec3 c = Vec3::Zero();
-  for (const Vec3& x : w.state().positions) c += x;
-  return c / Real(w.state().positions.size());
-}
-
->>>>>>> h15soak
 TEST(Implicit, StrikeSceneStiffAtFrameStepIsStableAndSendsTheBallAway) {
   auto b = runStiff("strike.json", 0.5);
   EXPECT_GT(centroid(*b->world).x(), 0.15);  // starts at 0.06
