@@ -696,8 +696,7 @@ void readSimulation(Fields f, Scene& scene) {
   const Real maxFraction = s.dtPeriod == PeriodRule::Element ? 0.1 : 0.3;
   s.dtFraction = f.number("dt_fraction", s.dtFraction, Bound{0, maxFraction, true, false}, "");
   s.damping = f.number("damping", s.damping, kNonNegative, "1/s");
-  s.gravity = f.vec("gravity", s.gravity, "m/s^2");
-  if (scene.dim == 2) s.gravity.z() = 0;
+  s.gravity = f.vec("gravity", s.gravity, "m/s^2");  // World projects it into a 2D body's plane
   scene.output.duration = f.number("duration", scene.output.duration, kPositive, "s");
   scene.output.frameInterval = f.number("frame_interval", scene.output.frameInterval, kPositive, "s");
   s.threads = f.optInteger("threads", 1, 1024).value_or(s.threads);

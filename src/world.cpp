@@ -483,8 +483,7 @@ void World::stepImplicit(bool sweep) {
 void World::stepLargeStep() {
   const int substeps = sim_.largeStepSubsteps;
   if (!largeStep_) largeStep_ = std::make_unique<LargeStepSolver>(*model_, dt_ / substeps, pinSet_.vertices);
-  Vec3 g = sim_.gravity;
-  if (model_->dim == 2) g.z() = 0;
+  const Vec3 g = sim_.gravity;  // projected into a 2D body's plane by the constructor
   const bool contacts = !manipulators_.empty() || domain_.enabled;
   const Real tNext = state_.time + dt_;
   if (contacts) {
