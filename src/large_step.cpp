@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "gradel/element.h"
+#include "gradel/integration.h"
 
 namespace gradel {
 
@@ -166,7 +167,7 @@ LargeStepReport LargeStepSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v
     }
   }
   if (damping > 0) {
-    const Real damp = 1.0 / (1.0 + damping * dt_);
+    const Real damp = dampingFactor(damping, dt_);  // integration.h
     Real removed = 0;
     for (size_t i = 0; i < V; ++i) removed += 0.5 * m.mass[i] * v[i].squaredNorm() * (1 - damp * damp), v[i] *= damp;
     budget_ -= removed;

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "gradel/element.h"
+#include "gradel/integration.h"
 #include "gradel/rotation_fit.h"
 
 namespace gradel {
@@ -164,7 +165,7 @@ void ProjectiveSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vec
     s.addElementTerms(x, q, rotationIterations);
     s.solveInto(x);
   }
-  const Real damp = 1.0 / (1.0 + damping * dt);
+  const Real damp = dampingFactor(damping, dt);  // integration.h
   for (size_t i = 0; i < V; ++i) v[i] = (x[i] - x0[i]) / dt * damp;
   s.heldRows.clear();
 }
