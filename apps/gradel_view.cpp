@@ -26,6 +26,7 @@
 #include <nlohmann/json.hpp>
 
 #include "gradel/render/draw_list.h"
+#include "gradel/render/manipulator_drag.h"
 #include "gradel/render/render_command.h"
 #include "gradel/render/renderer.h"
 #include "gradel/scene.h"
@@ -138,12 +139,12 @@ class Viewer {
       const long n = std::max(1L, std::lround(want / w.dt()));
       const auto start = Clock::now();
       for (long k = 0; k < n; ++k) {
-        feedDrag(double(k + 1) / double(n), want);
+        if (drag_) feedDrag(*built_.world, *drag_, double(k + 1) / double(n), want);
         w.step();
         ++steps;
         if (std::chrono::duration<double>(Clock::now() - start).count() > kStepBudgetSeconds && k + 1 < n) {
           behind_ = true;  // drop the rest: the simulation runs slower than real time
-          feedDrag(1.0, want);
+          if (drag_) feedDrag(*built_.world, *drag_, 1.0, want);
           break;
         }
       }
@@ -279,7 +280,7 @@ class Viewer {
         scene_.body.shape = presetShape(shapes[shapeIndex_], sizeVoxels_, scene_.dim, bodyExtent_ / sizeVoxels_);
         scene_.body.source = nullptr;
       }
-      keepPoses();
+      keepManipulatorPoses(*built_.world, scene_);
       try {
         rebuild(false);
         status_.clear();
@@ -305,8 +306,10 @@ class Viewer {
     lastX_ = x, lastY_ = y;
     shift_ = (mods & GLFW_MOD_SHIFT) != 0;
     if (button == GLFW_MOUSE_BUTTON_LEFT) {
-      if (const std::optional<size_t> m = pick(x, y)) {
-        grab(*m);
+      int width, height;
+      glfwGetWindowSize(window_, &width, &height);
+      if (const std::optional<size_t> m = pickManipulator(camera_, *built_.world, x, y, width, height)) {
+        drag_ = grabManipulator(camera_, *built_.world, *m, x, y, width, height);
         mode_ = Mode::Drag;
       } else {
         mode_ = Mode::Orbit;
@@ -324,19 +327,8 @@ class Viewer {
     if (mode_ == Mode::Orbit) camera_.orbit(dx, dy);
     if (mode_ == Mode::Pan) camera_.pan(dx, dy, height);
     if (mode_ == Mode::Drag && drag_) {
-      if (shift_ && !camera_.flat) {
-        moveDepth(-dy * pixelSize(height));
-        return;
-      }
-      // In the plane through the grab point facing the camera.
-      Vec3 o, d;
-      camera_.ray(x, y, width, height, &o, &d);
-      const Vec3 n = camera_.flat ? Vec3(0, 0, 1) : (camera_.eye() - camera_.target).normalized();
-      const Real denom = d.dot(n);
-      if (std::abs(denom) < 1e-9) return;
-      const Real t = (drag_->planePoint - o).dot(n) / denom;
-      drag_->to = o + t * d - drag_->grabOffset;
-      if (camera_.flat) drag_->to.z() = 0;
+      if (shift_ && !camera_.flat) return dragInDepth(camera_, *drag_, -dy * pixelSize(camera_, height));
+      dragInPlane(camera_, *drag_, x, y, width, height);
     }
   }
 
@@ -345,7 +337,7 @@ class Viewer {
     if (mode_ == Mode::Drag && drag_ && !camera_.flat) {
       int width, height;
       glfwGetWindowSize(window_, &width, &height);
-      moveDepth(dy * 10 * pixelSize(height));
+      dragInDepth(camera_, *drag_, dy * 10 * pixelSize(camera_, height));
       return;
     }
     camera_.zoom(dy);
@@ -371,83 +363,10 @@ class Viewer {
 
  private:
   enum class Mode { None, Orbit, Pan, Drag };
-  struct Drag {
-    size_t index;
-    Vec3 from, to;    // [m] manipulator centre at the start of this frame / wanted now
-    Vec3 planePoint;  // [m] where the drag plane passes
-    Vec3 grabOffset;  // [m] grab point minus centre
-  };
-
   static bool finite(const World& w) {
     for (const Vec3& p : w.state().positions)
       if (!p.allFinite()) return false;
     return true;
-  }
-
-  Real pixelSize(int height) const {
-    return camera_.flat ? 2 * camera_.distance / height : 2 * camera_.distance * std::tan(camera_.fovY / 2) / height;
-  }
-
-  void moveDepth(Real metres) {
-    const Vec3 toward = (camera_.eye() - camera_.target).normalized();
-    drag_->to += metres * toward;
-    drag_->planePoint += metres * toward;
-  }
-
-  // The manipulator under the cursor (nearest hit of its bounding sphere).
-  std::optional<size_t> pick(double x, double y) const {
-    int width, height;
-    glfwGetWindowSize(window_, &width, &height);
-    Vec3 o, d;
-    camera_.ray(x, y, width, height, &o, &d);
-    std::optional<size_t> best;
-    Real bestT = 1e30;
-    const auto& ms = built_.world->manipulators();
-    for (size_t i = 0; i < ms.size(); ++i) {
-      const Vec3 c = ms[i].position;
-      Real r = ms[i].settings.radius;
-      if (ms[i].settings.shape == ManipulatorShape::Cylinder) r = std::hypot(r, ms[i].settings.halfLength);
-      if (camera_.flat) {
-        const Vec3 q = o - c;
-        if (std::hypot(q.x(), q.y()) <= r && (o - c).norm() < bestT) best = i, bestT = (o - c).norm();
-        continue;
-      }
-      const Real b = (c - o).dot(d), h = (c - o).squaredNorm() - b * b;
-      if (h <= r * r && b > 0 && b < bestT) best = i, bestT = b;
-    }
-    return best;
-  }
-
-  void grab(size_t i) {
-    Manipulator& m = built_.world->manipulators()[i];
-    // A scripted manipulator becomes the user's from now on.
-    m.settings.path.keys.clear();
-    int width, height;
-    glfwGetWindowSize(window_, &width, &height);
-    Vec3 o, d;
-    camera_.ray(lastX_, lastY_, width, height, &o, &d);
-    const Vec3 n = camera_.flat ? Vec3(0, 0, 1) : (camera_.eye() - camera_.target).normalized();
-    const Real t = std::abs(d.dot(n)) < 1e-9 ? 0 : (m.position - o).dot(n) / d.dot(n);
-    const Vec3 hit = o + t * d;
-    drag_ = Drag{i, m.position, m.position, m.position,
-                 camera_.flat ? Vec3(hit - m.position).cwiseProduct(Vec3(1, 1, 0)) : Vec3(hit - m.position)};
-  }
-
-  // Moves the dragged manipulator a fraction of the way through this frame's motion, with the
-  // velocity of that motion (the contacts use it for the bounce, sec. 3.5).
-  void feedDrag(double fraction, double frameSimSeconds) {
-    if (!drag_) return;
-    const Vec3 p = drag_->from + fraction * (drag_->to - drag_->from);
-    const Vec3 v = frameSimSeconds > 0 ? Vec3((drag_->to - drag_->from) / frameSimSeconds) : Vec3::Zero();
-    built_.world->setManipulatorPose(drag_->index, p, v);
-  }
-
-  // Before a rebuild: manipulators the user moved keep their place as a one-key path.
-  void keepPoses() {
-    const auto& ms = built_.world->manipulators();
-    for (size_t i = 0; i < ms.size() && i < scene_.manipulators.size(); ++i)
-      if (ms[i].settings.path.keys.empty())
-        scene_.manipulators[i].path.keys = {Keyframe{0, ms[i].position, std::nullopt}};
   }
 
   void addManipulator(ManipulatorShape shape) {
@@ -466,7 +385,7 @@ class Viewer {
     Vec3 p = c + Vec3(side * (0.5 * bodyExtent_ + m.radius + 0.05), 0, 0);
     if (scene_.dim == 2) p.z() = 0;
     m.path.keys = {Keyframe{0, p, std::nullopt}};
-    keepPoses();
+    keepManipulatorPoses(*built_.world, scene_);
     scene_.manipulators.push_back(m);
   }
 
@@ -477,7 +396,7 @@ class Viewer {
   Camera camera_;
   ViewOptions view_;
   Rates rates_;
-  std::optional<Drag> drag_;
+  std::optional<ManipulatorDrag> drag_;
   Mode mode_ = Mode::None;
   double lastX_ = 0, lastY_ = 0;
   bool shift_ = false, paused_ = false, stepOnce_ = false, behind_ = false;

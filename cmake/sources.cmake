@@ -60,6 +60,7 @@ set(GRADEL_RENDER_SOURCES
   src/image.cpp
   src/render/camera.cpp
   src/render/draw_list.cpp
+  src/render/manipulator_drag.cpp
   src/render/offscreen.cpp
   src/render/render_command.cpp
   src/render/renderer.cpp)

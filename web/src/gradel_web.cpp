@@ -17,6 +17,7 @@
 
 #include "gradel/render/camera.h"
 #include "gradel/render/draw_list.h"
+#include "gradel/render/manipulator_drag.h"
 #include "gradel/scene.h"
 #include "gradel/shared/scene_presets.h"
 
@@ -61,7 +62,7 @@ class Demo {
       s.body.shape = presetShape(shape, size, s.dim, bodyExtent_ / size);
       s.body.source = nullptr;
       s.body.layout = parseLayoutKind(layout);
-      keepPoses(s);
+      keepManipulatorPoses(*built_.world, s);
       install(buildScene(s));
       scene_ = std::move(s);
       return "";
@@ -86,12 +87,12 @@ class Demo {
     const double start = nowMs();
     long k = 0;
     while (k < n) {
-      feedDrag(double(k + 1) / double(n), want);
+      if (drag_) feedDrag(*built_.world, *drag_, double(k + 1) / double(n), want);
       w.step();
       ++k;
       if (nowMs() - start > budgetMs && k < n) {
         behind_ = true;
-        feedDrag(1.0, want);
+        if (drag_) feedDrag(*built_.world, *drag_, 1.0, want);
         break;
       }
     }
@@ -134,8 +135,8 @@ class Demo {
   bool pointerDown(double x, double y, int button, int width, int height) {
     lastX_ = x, lastY_ = y;
     if (button != 0) return mode_ = Mode::Pan, false;
-    if (const std::optional<size_t> m = pick(x, y, width, height)) {
-      grab(*m, x, y, width, height);
+    if (const std::optional<size_t> m = pickManipulator(camera_, *built_.world, x, y, width, height)) {
+      drag_ = grabManipulator(camera_, *built_.world, *m, x, y, width, height);
       mode_ = Mode::Drag;
       return true;
     }
@@ -148,15 +149,8 @@ class Demo {
     if (mode_ == Mode::Orbit) camera_.orbit(dx, dy);
     if (mode_ == Mode::Pan) camera_.pan(dx, dy, height);
     if (mode_ != Mode::Drag || !drag_) return;
-    if (depth && !camera_.flat) return moveDepth(-dy * pixelSize(height));
-    // In the plane through the grab point facing the camera.
-    Vec3 o, d;
-    camera_.ray(x, y, width, height, &o, &d);
-    const Vec3 n = planeNormal();
-    if (std::abs(d.dot(n)) < 1e-9) return;
-    const Real t = (drag_->planePoint - o).dot(n) / d.dot(n);
-    drag_->to = o + t * d - drag_->grabOffset;
-    if (camera_.flat) drag_->to.z() = 0;
+    if (depth && !camera_.flat) return dragInDepth(camera_, *drag_, -dy * pixelSize(camera_, height));
+    dragInPlane(camera_, *drag_, x, y, width, height);
   }
   void pointerUp() {
     drag_.reset();
@@ -164,7 +158,8 @@ class Demo {
   }
   /// Wheel: zooms, or moves a held manipulator towards / away from the camera.
   void wheel(double steps, int height) {
-    if (mode_ == Mode::Drag && drag_ && !camera_.flat) return moveDepth(steps * 10 * pixelSize(height));
+    if (mode_ == Mode::Drag && drag_ && !camera_.flat)
+      return dragInDepth(camera_, *drag_, steps * 10 * pixelSize(camera_, height));
     camera_.zoom(steps);
   }
   /// Frames the scene, its centre moved `panX` CSS pixels right (beside the page's panel).
@@ -219,13 +214,6 @@ class Demo {
 
  private:
   enum class Mode { None, Orbit, Pan, Drag };
-  struct Drag {
-    size_t index;
-    Vec3 from, to;    // [m] manipulator centre at the start of this frame / wanted now
-    Vec3 planePoint;  // [m] where the drag plane passes
-    Vec3 grabOffset;  // [m] grab point minus centre
-  };
-
   static val floatArray(const float* f, int n) {
     val a = val::global("Float32Array").new_(n);
     for (int i = 0; i < n; ++i) a.set(i, f[i]);
@@ -239,75 +227,13 @@ class Demo {
     if (mode_ == Mode::Drag) mode_ = Mode::None;
   }
 
-  Vec3 planeNormal() const {
-    return camera_.flat ? Vec3(0, 0, 1) : Vec3((camera_.eye() - camera_.target).normalized());
-  }
-  Real pixelSize(int height) const {
-    return camera_.flat ? 2 * camera_.distance / height : 2 * camera_.distance * std::tan(camera_.fovY / 2) / height;
-  }
-  void moveDepth(Real metres) {
-    const Vec3 toward = (camera_.eye() - camera_.target).normalized();
-    drag_->to += metres * toward;
-    drag_->planePoint += metres * toward;
-  }
-
-  // The manipulator under the cursor (nearest hit of its bounding sphere).
-  std::optional<size_t> pick(double x, double y, int width, int height) const {
-    Vec3 o, d;
-    camera_.ray(x, y, width, height, &o, &d);
-    std::optional<size_t> best;
-    Real bestT = 1e30;
-    const auto& ms = built_.world->manipulators();
-    for (size_t i = 0; i < ms.size(); ++i) {
-      const Vec3 c = ms[i].position;
-      Real r = ms[i].settings.radius;
-      if (ms[i].settings.shape == ManipulatorShape::Cylinder) r = std::hypot(r, ms[i].settings.halfLength);
-      if (camera_.flat) {
-        const Vec3 q = o - c;
-        if (std::hypot(q.x(), q.y()) <= r && q.norm() < bestT) best = i, bestT = q.norm();
-        continue;
-      }
-      const Real b = (c - o).dot(d), h = (c - o).squaredNorm() - b * b;
-      if (h <= r * r && b > 0 && b < bestT) best = i, bestT = b;
-    }
-    return best;
-  }
-
-  void grab(size_t i, double x, double y, int width, int height) {
-    Manipulator& m = built_.world->manipulators()[i];
-    m.settings.path.keys.clear();  // a scripted manipulator becomes the user's from now on
-    Vec3 o, d;
-    camera_.ray(x, y, width, height, &o, &d);
-    const Vec3 n = planeNormal();
-    const Real t = std::abs(d.dot(n)) < 1e-9 ? 0 : (m.position - o).dot(n) / d.dot(n);
-    Vec3 offset = o + t * d - m.position;
-    if (camera_.flat) offset.z() = 0;
-    drag_ = Drag{i, m.position, m.position, m.position, offset};
-  }
-
-  // Moves the dragged manipulator a fraction of the way through this frame's motion, with the
-  // velocity of that motion (the contacts use it for the bounce, sec. 3.5).
-  void feedDrag(double fraction, double frameSimSeconds) {
-    if (!drag_) return;
-    const Vec3 p = drag_->from + fraction * (drag_->to - drag_->from);
-    const Vec3 v = frameSimSeconds > 0 ? Vec3((drag_->to - drag_->from) / frameSimSeconds) : Vec3::Zero();
-    built_.world->setManipulatorPose(drag_->index, p, v);
-  }
-
-  // Before a rebuild: manipulators the user moved keep their place as a one-key path.
-  void keepPoses(Scene& s) const {
-    const auto& ms = built_.world->manipulators();
-    for (size_t i = 0; i < ms.size() && i < s.manipulators.size(); ++i)
-      if (ms[i].settings.path.keys.empty()) s.manipulators[i].path.keys = {Keyframe{0, ms[i].position, std::nullopt}};
-  }
-
   Scene scene_, original_;
   BuiltScene built_;
   BodyView body_;
   DrawList list_;
   Camera camera_;
   ViewOptions view_;
-  std::optional<Drag> drag_;
+  std::optional<ManipulatorDrag> drag_;
   Mode mode_ = Mode::None;
   double lastX_ = 0, lastY_ = 0;
   bool behind_ = false, diverged_ = false;
