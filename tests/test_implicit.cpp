@@ -13,13 +13,7 @@
 namespace gradel {
 namespace {
 
-SimulationSettings implicitSettings(Real dt = 1.0 / 60.0) {
-  SimulationSettings s;
-  s.integrator = IntegratorKind::Implicit;
-  s.dt = dt;
-  s.damping = 0;
-  return s;
-}
+SimulationSettings implicitSettings(Real dt = 1.0 / 60.0) { return test::frameStep(IntegratorKind::Implicit, dt); }
 
 TEST(Implicit, ParseIntegratorKindImplicitRoundTrips) {
   EXPECT_EQ(parseIntegratorKind("implicit"), IntegratorKind::Implicit);

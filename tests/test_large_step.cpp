@@ -13,13 +13,7 @@
 namespace gradel {
 namespace {
 
-SimulationSettings largeStep(Real dt = 1.0 / 60.0) {
-  SimulationSettings s;
-  s.integrator = IntegratorKind::LargeStep;
-  s.dt = dt;
-  s.damping = 0;
-  return s;
-}
+SimulationSettings largeStep(Real dt = 1.0 / 60.0) { return test::frameStep(IntegratorKind::LargeStep, dt); }
 
 TEST(LargeStep, ParseRoundTripsAndDtAutoIsOneFrame) {
   EXPECT_EQ(parseIntegratorKind("large_step"), IntegratorKind::LargeStep);

@@ -38,6 +38,16 @@ inline SimulationSettings isolated() {
   return s;
 }
 
+/// Settings of a frame-size step with `kind` (an implicit integrator): dt = 1/60 s unless given,
+/// no damping, gravity on.
+inline SimulationSettings frameStep(IntegratorKind kind, Real dt = 1.0 / 60.0) {
+  SimulationSettings s;
+  s.integrator = kind;
+  s.dt = dt;
+  s.damping = 0;
+  return s;
+}
+
 /// Perturbs positions and velocities with a seeded RNG (a deformed, moving, spinning body).
 inline void perturb(World& w, Real posAmp, Real velAmp, unsigned seed) {
   std::mt19937 rng(seed);
