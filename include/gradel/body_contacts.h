@@ -1,0 +1,191 @@
+// Soft-soft contact (issue 12): a surface vertex of one body never ends a step inside another
+// body, and (behind a setting) a body folding onto itself does not pass through itself.
+//
+// Each body brings a contact surface: the closed, crack-free voxel display surface of surface.h
+// (buildDisplaySurface(..., SurfaceKind::Voxel)), whose corners are model vertices, with its ids
+// shifted to the world's vertex numbering (several bodies are one combined state; a body owns the
+// vertices [vertexBegin, vertexEnd)). The stage runs after the positions of a step are known:
+//
+//   broad phase  per body, one pass over its surface vertices: the bounding box of their
+//                positions and the largest distance one of them moved in the step. Per pair of
+//                bodies whose boxes overlap (grown by the search radius r below), only the
+//                triangles that reach into the overlap go into a hashed grid (cells of two
+//                thicknesses, a sorted array of (cell, triangle)) and only the surface vertices in
+//                the overlap are looked up, so the narrow phase grows with the contact area.
+//   narrow phase the nearest triangle of the other body within r = thickness + the largest
+//                distances both bodies' surfaces moved in the step; inside when the vertex lies
+//                behind the nearest feature's angle-weighted pseudo-normal (the face normal in a
+//                face, the sum of its faces' normals on an edge, the angle-weighted sum at a
+//                corner: Baerentzen & Aanaes 2005), the sign test that is exact for a closed
+//                surface. A vertex that started the step outside (every step ends with none
+//                inside) cannot end it deeper than r, so its nearest triangle is always among the
+//                ones looked at: no deep case is missed, whatever the step (a frame step too).
+//   response     the vertex and the point of the touched face (barycentric weights w) are pushed
+//                apart along the normal until the vertex is `skin` outside: the correction is
+//                split by inverse mass (generalised inverse mass W = 1/m_p + sum w_k^2 / m_k),
+//                the face's share spread over its corners by w_k / m_k, so the sum of m dx is
+//                zero. Then equal and opposite impulses on the relative velocity at the contact:
+//                the approaching normal part leaves at restitution times the speed at which it
+//                approached at the start of the step (a contact that was resting or receding then
+//                does not bounce: no energy pumped into resting stacks, as contacts.h), and
+//                Coulomb friction removes up to friction times the normal impulse from the
+//                sliding; friction also undoes the tangential slip of the step up to friction x
+//                depth (as the manipulators, contacts.cpp frictionSlipCorrection). Linear momentum
+//                is conserved to rounding (every impulse J on the vertex has -w_k J on the face's
+//                corners, sum w_k = 1).
+//                The projections run Gauss-Seidel over the contacts, then the detection runs
+//                again (a corrected face can move under a neighbour), up to kRounds rounds; a
+//                vertex still inside then (contradicting contacts where two coarse staircases
+//                cross, each vertex behind a face of the other) goes back to where it was
+//                relative to its face at the start of the step.
+//                Where the nearest face does not face the vertex (its normal along the vertex's
+//                own), the vertex is pushed out of the nearest face that does, if one is about as
+//                near: the risers of interlocking staircases otherwise push both ways at once.
+//   self-contact (off by default) a surface vertex against the faces of its own body that share
+//                no element with it and are not in its ring of surface faces: it is in contact
+//                when it crossed the face's plane within the step (in front at the start, behind
+//                at the end, by less than r) and ends over the face. (The pseudo-normal test
+//                needs the nearest face, which for a vertex on its own surface is adjacent.)
+//
+// Everything runs serially in a fixed order (pairs of bodies in index order, vertices in id order,
+// ties between triangles broken by id): the result does not depend on the thread count.
+// 3D only: a 2D body's display surface is a flat region, not a closed surface.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "gradel/surface.h"
+#include "gradel/types.h"
+
+namespace gradel {
+
+/// Scene key "body_contact" (docs/scenes.md).
+struct BodyContactSettings {
+  Real restitution = 0.5;    ///< [-] of body-body contacts (as the walls' default); 0 = no bounce.
+  Real friction = 0.0;       ///< [-] Coulomb coefficient between bodies.
+  bool selfContact = false;  ///< Also a body against its own non-adjacent faces.
+};
+
+/// Checks the settings; InputError naming "body_contact.<key>".
+void validate(const BodyContactSettings& s);
+
+/// One body's contact surface (rest data: built once, read-only). Vertex ids are the world's.
+struct ContactBody {
+  uint32_t vertexBegin = 0, vertexEnd = 0;         ///< The body's vertices [begin, end).
+  Real thickness = 0;                              ///< [m] about the body's voxel size: grid cell and search band.
+  /// Its boundary vertices (world ids, ascending): the surface's corners and the model's other
+  /// onSurface vertices (inside a merged polygon of a coarse element's face).
+  std::vector<uint32_t> vertices;
+  std::vector<std::array<uint32_t, 3>> triangles;  ///< World vertex ids, CCW from outside (closed surface).
+  // Per boundary vertex (index into `vertices`): its triangles (CSR), for the pseudo-normals (a
+  // vertex inside a polygon: the triangles that hold it at rest).
+  std::vector<uint32_t> vertexTriStart, vertexTris;
+  // Self-contact only: per surface vertex, the world ids of the vertices near it (of its elements
+  // and its ring of surface faces), ascending (CSR); a face with a corner among them is adjacent.
+  std::vector<uint32_t> nearStart, near;
+
+  /// Index of a world vertex id in `vertices`, or kNone.
+  uint32_t surfaceIndex(uint32_t vertex) const;
+  static constexpr uint32_t kNone = 0xffffffffu;
+};
+
+/// The elements of a body, compressed rows: element e's vertices are verts[start[e]] .. verts[start[e+1] - 1],
+/// for e in [begin, end); a vertex's world id is verts[p] + shift (shift = 0 when `verts` holds world ids
+/// already, as in a combined model, or the body's vertex offset for a model of its own).
+struct ElementRows {
+  const uint32_t* start = nullptr;
+  const uint32_t* verts = nullptr;
+  size_t begin = 0, end = 0;
+  uint32_t shift = 0;
+};
+
+/// Builds a body's contact surface from its voxel display surface (model vertex ids of the body,
+/// shifted by vertexBegin), its rest positions and onSurface flags (RestModel; indexed from the
+/// body's first vertex) and, for self-contact, its elements. `thickness` is the body's voxel size.
+/// Throws std::invalid_argument if the surface is 2D or a corner lies outside [vertexBegin, vertexEnd).
+ContactBody buildContactBody(const DisplaySurface& surface, uint32_t vertexBegin, uint32_t vertexEnd, Real thickness,
+                             const Vec3* rest, const uint8_t* onSurface, const ElementRows& elements);
+
+/// The combined state the stage reads and corrects (world vertex ids; all arrays of one length).
+struct BodyContactState {
+  Vec3* positions = nullptr;                 ///< [m] end of the step: corrected in place.
+  Vec3* velocities = nullptr;                ///< [m/s] end of the step: corrected in place.
+  const Vec3* previousPositions = nullptr;   ///< [m] start of the step.
+  const Vec3* previousVelocities = nullptr;  ///< [m/s] start of the step (the bounce).
+  const Real* invMass = nullptr;             ///< [1/kg] 0 = immovable (pinned).
+};
+
+/// What one call found.
+struct BodyContactStats {
+  size_t candidates = 0;  ///< Vertex lookups in the narrow phase (all rounds).
+  size_t contacts = 0;    ///< Vertex-face contacts resolved.
+  Real maxDepth = 0;      ///< [m] deepest vertex found, before correction.
+  int rounds = 0;         ///< Detection rounds run.
+};
+
+/// The stage: contact surfaces of the bodies and the per-step scratch.
+class BodyContacts {
+ public:
+  BodyContacts() = default;
+  BodyContacts(std::vector<ContactBody> bodies, const BodyContactSettings& settings);
+
+  /// Resolves every body-body (and, if on, self) contact of the step, in place.
+  BodyContactStats resolve(const BodyContactState& state);
+
+  const std::vector<ContactBody>& bodies() const { return bodies_; }
+  const BodyContactSettings& settings() const { return settings_; }
+  bool empty() const { return bodies_.size() < 2 && !settings_.selfContact; }
+
+  static constexpr int kRounds = 8;       ///< Detection rounds per step at most.
+  static constexpr int kIterations = 4;   ///< Gauss-Seidel sweeps over the contacts per round.
+
+  struct Contact {
+    uint32_t vertex;                ///< World id of the vertex.
+    std::array<uint32_t, 3> face;   ///< World ids of the touched face's corners.
+    std::array<Real, 3> w;          ///< Barycentric weights of the contact point on the face.
+    Vec3 n;                         ///< Unit normal, out of the face's body.
+    Real depth;                     ///< [m] how far inside, before correction.
+  };
+  /// The contacts the last resolve() found (all rounds, in order).
+  const std::vector<Contact>& contacts() const { return contacts_; }
+
+ private:
+  struct Box {
+    Vec3 lo, hi;
+  };
+  void detectPair(size_t a, size_t b, const BodyContactState& s, BodyContactStats& stats);
+  void detectSelf(size_t a, const BodyContactState& s, BodyContactStats& stats);
+  void buildGrid(const ContactBody& faces, const Box& region, const Vec3* x);
+  template <class F>
+  void forCandidateTriangles(const Vec3& lo, const Vec3& hi, F&& f);
+
+  std::vector<ContactBody> bodies_;
+  BodyContactSettings settings_;
+  Real skin_ = 0;  ///< [m] a corrected vertex ends this far outside.
+  // scratch
+  std::vector<Box> bounds_;
+  std::vector<Real> moved_;  ///< Per body: the largest distance a surface vertex moved in the step [m].
+  std::vector<Contact> contacts_, round_;
+  std::vector<std::pair<uint64_t, uint32_t>> grid_;  ///< (cell key, triangle), sorted.
+  Vec3 gridOrigin_{0, 0, 0};
+  Real gridCell_ = 1;
+  std::vector<uint32_t> candidates_;
+  std::vector<uint32_t> vertexContact_;  ///< Per world vertex touched: a contact already found this round.
+};
+
+/// Winding number of a closed triangle surface (world ids into x) about p: 1 inside, 0 outside
+/// (the sum of the faces' signed solid angles / 4 pi). Exact for any surface, O(faces): for tests
+/// and measurements, not the step.
+Real windingNumber(const Vec3& p, const std::vector<std::array<uint32_t, 3>>& triangles, const Vec3* x);
+
+/// Closest point on triangle (a, b, c) to p: barycentric weights (sum 1) and the feature it lies
+/// on: 0 = inside the face, 1..3 = on an edge (1: ab, 2: bc, 3: ca), 4..6 = at a corner (a, b, c).
+struct ClosestPoint {
+  std::array<Real, 3> w;
+  int feature;
+};
+ClosestPoint closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+
+}  // namespace gradel

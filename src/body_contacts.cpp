@@ -1,0 +1,479 @@
+#include "gradel/body_contacts.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+
+namespace gradel {
+
+void validate(const BodyContactSettings& s) {
+  if (!(s.restitution >= 0 && s.restitution <= 1))
+    throw InputError("body_contact.restitution: expected a number in [0, 1], got " + std::to_string(s.restitution));
+  if (!(s.friction >= 0 && std::isfinite(s.friction)))
+    throw InputError("body_contact.friction: expected a finite number >= 0, got " + std::to_string(s.friction));
+}
+
+uint32_t ContactBody::surfaceIndex(uint32_t vertex) const {
+  auto it = std::lower_bound(vertices.begin(), vertices.end(), vertex);
+  return it != vertices.end() && *it == vertex ? uint32_t(it - vertices.begin()) : kNone;
+}
+
+namespace {
+
+// Compressed rows from per-row lists (each sorted and without repeats).
+void toRows(std::vector<std::vector<uint32_t>>& lists, std::vector<uint32_t>& start, std::vector<uint32_t>& items) {
+  start.assign(1, 0);
+  items.clear();
+  for (std::vector<uint32_t>& l : lists) {
+    std::sort(l.begin(), l.end());
+    l.erase(std::unique(l.begin(), l.end()), l.end());
+    items.insert(items.end(), l.begin(), l.end());
+    start.push_back(uint32_t(items.size()));
+  }
+}
+
+}  // namespace
+
+ContactBody buildContactBody(const DisplaySurface& surface, uint32_t vertexBegin, uint32_t vertexEnd, Real thickness,
+                             const Vec3* rest, const uint8_t* onSurface, const ElementRows& elements) {
+  if (surface.dim != 3) throw std::invalid_argument("buildContactBody: body contact needs a 3D body");
+  if (!(thickness > 0)) throw std::invalid_argument("buildContactBody: thickness must be > 0");
+  ContactBody b;
+  b.vertexBegin = vertexBegin, b.vertexEnd = vertexEnd, b.thickness = thickness;
+  auto world = [&](uint32_t s) {
+    const uint64_t v = uint64_t(surface.modelVertex.at(s)) + vertexBegin;
+    if (v >= vertexEnd) throw std::invalid_argument("buildContactBody: a surface corner lies outside the body");
+    return uint32_t(v);
+  };
+  for (const auto& t : surface.triangles) b.triangles.push_back({world(t[0]), world(t[1]), world(t[2])});
+  std::vector<uint8_t> corner(vertexEnd - vertexBegin, 0);
+  for (const auto& t : b.triangles)
+    for (uint32_t v : t) corner[v - vertexBegin] = 1;
+  // Every vertex on the boundary (onSurface): the display surface's corners, and the vertices
+  // inside its merged polygons (the middle of a coarse element's face), which move too.
+  for (uint32_t i = 0; i < corner.size(); ++i)
+    if (corner[i] || onSurface[i]) b.vertices.push_back(vertexBegin + i);
+
+  const size_t S = b.vertices.size();
+  std::vector<std::vector<uint32_t>> tris(S), near(S);
+  for (uint32_t t = 0; t < b.triangles.size(); ++t)
+    for (uint32_t v : b.triangles[t]) {
+      const uint32_t s = b.surfaceIndex(v);
+      tris[s].push_back(t);
+      near[s].insert(near[s].end(), b.triangles[t].begin(), b.triangles[t].end());  // the ring of faces
+    }
+  // A vertex inside a polygon takes the triangles that hold it at rest (for its normal and ring).
+  std::unordered_map<uint64_t, uint32_t> inner;  // rest lattice point -> surface index
+  auto key = [&](const Vec3& p) {
+    const Vec3 q = (p - rest[0]) / thickness;
+    auto c = [](Real v) { return uint64_t(int64_t(std::llround(v)) + (int64_t(1) << 20)) & 0x1fffff; };
+    return c(q.x()) << 42 | c(q.y()) << 21 | c(q.z());
+  };
+  for (uint32_t s = 0; s < S; ++s)
+    if (!corner[b.vertices[s] - vertexBegin]) inner.emplace(key(rest[b.vertices[s] - vertexBegin]), s);
+  if (!inner.empty())
+    for (uint32_t t = 0; t < b.triangles.size(); ++t) {
+      const auto& tri = b.triangles[t];
+      const Vec3 &p0 = rest[tri[0] - vertexBegin], &p1 = rest[tri[1] - vertexBegin], &p2 = rest[tri[2] - vertexBegin];
+      const Vec3 lo = (p0.cwiseMin(p1).cwiseMin(p2) - rest[0]) / thickness;
+      const Vec3 hi = (p0.cwiseMax(p1).cwiseMax(p2) - rest[0]) / thickness;
+      for (long z = std::lround(lo.z()); z <= std::lround(hi.z()); ++z)
+        for (long y = std::lround(lo.y()); y <= std::lround(hi.y()); ++y)
+          for (long x = std::lround(lo.x()); x <= std::lround(hi.x()); ++x) {
+            auto it = inner.find(key(rest[0] + thickness * Vec3(Real(x), Real(y), Real(z))));
+            if (it == inner.end()) continue;
+            const Vec3& p = rest[b.vertices[it->second] - vertexBegin];
+            const ClosestPoint cp = closestPointOnTriangle(p, p0, p1, p2);
+            if ((p - (cp.w[0] * p0 + cp.w[1] * p1 + cp.w[2] * p2)).norm() > 1e-9 * thickness) continue;
+            tris[it->second].push_back(t);
+            near[it->second].insert(near[it->second].end(), tri.begin(), tri.end());
+          }
+    }
+  toRows(tris, b.vertexTriStart, b.vertexTris);
+  // The vertices of every element at a surface vertex (self-contact adjacency).
+  for (size_t e = elements.begin; e < elements.end; ++e) {
+    const uint32_t p0 = elements.start[e], p1 = elements.start[e + 1];
+    for (uint32_t p = p0; p < p1; ++p) {
+      const uint32_t s = b.surfaceIndex(elements.verts[p] + elements.shift);
+      if (s == ContactBody::kNone) continue;
+      for (uint32_t q = p0; q < p1; ++q) near[s].push_back(elements.verts[q] + elements.shift);
+    }
+  }
+  for (uint32_t s = 0; s < S; ++s) near[s].push_back(b.vertices[s]);
+  toRows(near, b.nearStart, b.near);
+  return b;
+}
+
+ClosestPoint closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  // Voronoi regions of the corners, then the edges, then the face (the projection), each tested
+  // with dot products of the edges against p's offsets from the corners.
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const Real d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return {{1, 0, 0}, 4};
+  const Vec3 bp = p - b;
+  const Real d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return {{0, 1, 0}, 5};
+  const Real vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+    const Real v = d1 / (d1 - d3);
+    return {{1 - v, v, 0}, 1};
+  }
+  const Vec3 cp = p - c;
+  const Real d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return {{0, 0, 1}, 6};
+  const Real vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+    const Real w = d2 / (d2 - d6);
+    return {{1 - w, 0, w}, 3};
+  }
+  const Real va = d3 * d6 - d5 * d4;
+  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) {
+    const Real w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return {{0, 1 - w, w}, 2};
+  }
+  const Real sum = va + vb + vc;
+  if (!(sum > 0)) return {{1, 0, 0}, 4};  // degenerate (flat) triangle: its first corner
+  const Real v = vb / sum, w = vc / sum;
+  return {{1 - v - w, v, w}, 0};
+}
+
+Real windingNumber(const Vec3& p, const std::vector<std::array<uint32_t, 3>>& triangles, const Vec3* x) {
+  // Van Oosterom & Strackee's solid angle of each triangle seen from p.
+  Real sum = 0;
+  for (const auto& t : triangles) {
+    const Vec3 a = x[t[0]] - p, b = x[t[1]] - p, c = x[t[2]] - p;
+    const Real la = a.norm(), lb = b.norm(), lc = c.norm();
+    const Real num = a.dot(b.cross(c));
+    const Real den = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
+    sum += 2 * std::atan2(num, den);
+  }
+  return sum / (4 * M_PI);
+}
+
+namespace {
+
+Vec3 faceNormal(const std::array<uint32_t, 3>& t, const Vec3* x) {
+  return (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]);
+}
+
+Vec3 unit(const Vec3& v) {
+  const Real n = v.norm();
+  return n > 0 ? Vec3(v / n) : Vec3::Zero();
+}
+
+// The angle-weighted pseudo-normal (not normalised) at surface vertex s of the body.
+Vec3 vertexPseudoNormal(const ContactBody& body, uint32_t s, const Vec3* x) {
+  const uint32_t a = body.vertices[s];
+  Vec3 n = Vec3::Zero();
+  for (uint32_t k = body.vertexTriStart[s]; k < body.vertexTriStart[s + 1]; ++k) {
+    const auto& u = body.triangles[body.vertexTris[k]];
+    const int i = u[0] == a ? 0 : (u[1] == a ? 1 : (u[2] == a ? 2 : -1));
+    if (i < 0) {  // a vertex inside the face (buildContactBody)
+      n += unit(faceNormal(u, x));
+      continue;
+    }
+    const Vec3 e1 = x[u[size_t((i + 1) % 3)]] - x[a], e2 = x[u[size_t((i + 2) % 3)]] - x[a];
+    const Real angle = std::atan2(e1.cross(e2).norm(), e1.dot(e2));
+    n += angle * unit(faceNormal(u, x));
+  }
+  return n;
+}
+
+// The angle-weighted pseudo-normal (not normalised) of the feature of triangle t that the closest
+// point lies on (closestPointOnTriangle's feature), from the body's faces around it.
+Vec3 pseudoNormal(const ContactBody& body, uint32_t t, int feature, const Vec3* x) {
+  const auto& tri = body.triangles[t];
+  if (feature == 0) return unit(faceNormal(tri, x));
+  if (feature <= 3) {  // an edge: every face holding both of its ends
+    const uint32_t a = tri[size_t(feature - 1)], b = tri[size_t(feature % 3)];
+    const uint32_t s = body.surfaceIndex(a);
+    Vec3 n = Vec3::Zero();
+    for (uint32_t k = body.vertexTriStart[s]; k < body.vertexTriStart[s + 1]; ++k) {
+      const auto& u = body.triangles[body.vertexTris[k]];
+      if (u[0] == b || u[1] == b || u[2] == b) n += unit(faceNormal(u, x));
+    }
+    return n;
+  }
+  return vertexPseudoNormal(body, body.surfaceIndex(tri[size_t(feature - 4)]), x);
+}
+
+// Generalised inverse mass of a contact: vertex plus the face's point with weights w.
+Real contactInvMass(const BodyContacts::Contact& c, const Real* im) {
+  return im[c.vertex] + c.w[0] * c.w[0] * im[c.face[0]] + c.w[1] * c.w[1] * im[c.face[1]] +
+         c.w[2] * c.w[2] * im[c.face[2]];
+}
+
+// Applies the impulse-like change j along a direction d (per unit generalised mass): the vertex
+// moves by im_p j d, the face's corners by -w_k im_k j d. Used for positions and velocities.
+void applyPair(const BodyContacts::Contact& c, const Real* im, Vec3* y, const Vec3& jd) {
+  y[c.vertex] += im[c.vertex] * jd;
+  for (int k = 0; k < 3; ++k) y[c.face[size_t(k)]] -= c.w[size_t(k)] * im[c.face[size_t(k)]] * jd;
+}
+
+Vec3 relative(const BodyContacts::Contact& c, const Vec3* y) {
+  return y[c.vertex] - (c.w[0] * y[c.face[0]] + c.w[1] * y[c.face[1]] + c.w[2] * y[c.face[2]]);
+}
+
+constexpr Real kSkin = 1e-6;  // [thickness] a corrected vertex ends this far outside
+
+}  // namespace
+
+BodyContacts::BodyContacts(std::vector<ContactBody> bodies, const BodyContactSettings& settings)
+    : bodies_(std::move(bodies)), settings_(settings) {
+  validate(settings_);
+  Real thinnest = std::numeric_limits<Real>::infinity();
+  for (const ContactBody& b : bodies_) thinnest = std::min(thinnest, b.thickness);
+  skin_ = kSkin * thinnest;
+  bounds_.resize(bodies_.size());
+  moved_.resize(bodies_.size());
+}
+
+void BodyContacts::buildGrid(const ContactBody& faces, const Box& region, const Vec3* x) {
+  grid_.clear();
+  constexpr Real kMaxCells = 1 << 20;
+  const Real extent = (region.hi - region.lo).maxCoeff();
+  gridCell_ = std::max(gridCell_, extent / kMaxCells);
+  gridOrigin_ = region.lo;
+  const Real inv = 1 / gridCell_;
+  auto cellOf = [&](Real v, int a) {
+    return int64_t(std::clamp(std::floor((v - gridOrigin_[a]) * inv), Real(0), kMaxCells - 1));
+  };
+  for (uint32_t t = 0; t < faces.triangles.size(); ++t) {
+    const auto& tri = faces.triangles[t];
+    const Vec3 lo = x[tri[0]].cwiseMin(x[tri[1]]).cwiseMin(x[tri[2]]);
+    const Vec3 hi = x[tri[0]].cwiseMax(x[tri[1]]).cwiseMax(x[tri[2]]);
+    if ((hi.array() < region.lo.array()).any() || (lo.array() > region.hi.array()).any()) continue;
+    if (!lo.allFinite() || !hi.allFinite()) continue;
+    const int64_t i0 = cellOf(lo.x(), 0), i1 = cellOf(hi.x(), 0), j0 = cellOf(lo.y(), 1), j1 = cellOf(hi.y(), 1),
+                  k0 = cellOf(lo.z(), 2), k1 = cellOf(hi.z(), 2);
+    for (int64_t k = k0; k <= k1; ++k)
+      for (int64_t j = j0; j <= j1; ++j)
+        for (int64_t i = i0; i <= i1; ++i) grid_.push_back({uint64_t(k) << 42 | uint64_t(j) << 21 | uint64_t(i), t});
+  }
+  std::sort(grid_.begin(), grid_.end());
+}
+
+template <class F>
+void BodyContacts::forCandidateTriangles(const Vec3& lo, const Vec3& hi, F&& f) {
+  constexpr Real kMaxCells = 1 << 20;
+  const Real inv = 1 / gridCell_;
+  auto cellOf = [&](Real v, int a) {
+    return int64_t(std::clamp(std::floor((v - gridOrigin_[a]) * inv), Real(0), kMaxCells - 1));
+  };
+  const int64_t i0 = cellOf(lo.x(), 0), i1 = cellOf(hi.x(), 0), j0 = cellOf(lo.y(), 1), j1 = cellOf(hi.y(), 1),
+                k0 = cellOf(lo.z(), 2), k1 = cellOf(hi.z(), 2);
+  candidates_.clear();
+  for (int64_t k = k0; k <= k1; ++k)
+    for (int64_t j = j0; j <= j1; ++j) {
+      // The cells of a row (i0..i1) are adjacent keys: one search per row.
+      const uint64_t row = uint64_t(k) << 42 | uint64_t(j) << 21;
+      auto it = std::lower_bound(grid_.begin(), grid_.end(), std::pair<uint64_t, uint32_t>(row | uint64_t(i0), 0));
+      for (; it != grid_.end() && it->first <= (row | uint64_t(i1)); ++it) candidates_.push_back(it->second);
+    }
+  std::sort(candidates_.begin(), candidates_.end());
+  candidates_.erase(std::unique(candidates_.begin(), candidates_.end()), candidates_.end());
+  for (uint32_t t : candidates_) f(t);
+}
+
+// Surface vertices of body a against the faces of body b (the pseudo-normal test, see the header).
+void BodyContacts::detectPair(size_t a, size_t b, const BodyContactState& s, BodyContactStats& stats) {
+  const ContactBody& A = bodies_[a];
+  const ContactBody& B = bodies_[b];
+  const Real r = std::max(A.thickness, B.thickness) + moved_[a] + moved_[b];
+  // The vertices of a within r of b's box; the faces of b that reach within r of those.
+  Box q{bounds_[a].lo.cwiseMax(bounds_[b].lo - Vec3::Constant(r)),
+        bounds_[a].hi.cwiseMin(bounds_[b].hi + Vec3::Constant(r))};
+  if ((q.lo.array() > q.hi.array()).any()) return;
+  const Box region{q.lo - Vec3::Constant(r), q.hi + Vec3::Constant(r)};
+  gridCell_ = std::max(2 * B.thickness, r);
+  buildGrid(B, region, s.positions);
+  if (grid_.empty()) return;
+  const Vec3* x = s.positions;
+  for (uint32_t i = 0; i < A.vertices.size(); ++i) {
+    const uint32_t v = A.vertices[i];
+    const Vec3& p = x[v];
+    if ((p.array() < q.lo.array()).any() || (p.array() > q.hi.array()).any()) continue;
+    ++stats.candidates;
+    Real best = r * r;
+    uint32_t bestTri = ContactBody::kNone;
+    ClosestPoint bestCp{};
+    forCandidateTriangles(p - Vec3::Constant(r), p + Vec3::Constant(r), [&](uint32_t t) {
+      const auto& tri = B.triangles[t];
+      const ClosestPoint cp = closestPointOnTriangle(p, x[tri[0]], x[tri[1]], x[tri[2]]);
+      const Vec3 c = cp.w[0] * x[tri[0]] + cp.w[1] * x[tri[1]] + cp.w[2] * x[tri[2]];
+      const Real d2 = (p - c).squaredNorm();
+      if (d2 < best) best = d2, bestTri = t, bestCp = cp;  // candidates ascend: ties keep the lowest id
+    });
+    if (bestTri == ContactBody::kNone) continue;
+    const auto& tri = B.triangles[bestTri];
+    const Vec3 c = bestCp.w[0] * x[tri[0]] + bestCp.w[1] * x[tri[1]] + bestCp.w[2] * x[tri[2]];
+    const Vec3 pn = pseudoNormal(B, bestTri, bestCp.feature, x);
+    if (!((p - c).dot(pn) < 0)) continue;  // in front of the nearest feature: outside
+    // The push: out of the nearest face that faces the vertex (its normal against the vertex's
+    // own normal). Where two staircases interlock, the nearest face can be the riser of a step
+    // that the vertex's body lies against on the same side (both normals along +x, say): pushing
+    // each vertex out through such faces moves the two bodies into each other and never ends.
+    const Vec3 nv = vertexPseudoNormal(A, i, x);
+    const Real dist = std::sqrt(best);
+    Vec3 n = dist > 0 ? Vec3((c - p) / dist) : unit(pn);
+    if (n.squaredNorm() == 0) continue;
+    if (faceNormal(tri, x).dot(nv) >= 0) {
+      // Only a face about as near: a far one would move the vertex far (and its face with it).
+      const Real reach = dist + 0.5 * B.thickness;
+      Real bestFacing = reach * reach;
+      uint32_t facing = ContactBody::kNone;
+      ClosestPoint facingCp{};
+      for (uint32_t t : candidates_) {
+        const auto& u = B.triangles[t];
+        const Vec3 fn = unit(faceNormal(u, x));
+        if (!(fn.dot(nv) < 0)) continue;
+        const ClosestPoint cp = closestPointOnTriangle(p, x[u[0]], x[u[1]], x[u[2]]);
+        const Vec3 cu = cp.w[0] * x[u[0]] + cp.w[1] * x[u[1]] + cp.w[2] * x[u[2]];
+        if (!(fn.dot(p - cu) < 0)) continue;  // in front of its plane: no push out of it
+        const Real d2 = (p - cu).squaredNorm();
+        if (d2 < bestFacing) bestFacing = d2, facing = t, facingCp = cp;
+      }
+      if (facing != ContactBody::kNone) {
+        const auto& u = B.triangles[facing];
+        const Vec3 fn = unit(faceNormal(u, x));
+        const Vec3 cu = facingCp.w[0] * x[u[0]] + facingCp.w[1] * x[u[1]] + facingCp.w[2] * x[u[2]];
+        const Real depth = -fn.dot(p - cu);
+        round_.push_back({v, u, facingCp.w, fn, depth});
+        stats.maxDepth = std::max(stats.maxDepth, depth);
+        continue;
+      }
+    }
+    round_.push_back({v, tri, bestCp.w, n, dist});
+    stats.maxDepth = std::max(stats.maxDepth, dist);
+  }
+}
+
+// Surface vertices of body a against its own faces that are not adjacent (see the header).
+void BodyContacts::detectSelf(size_t a, const BodyContactState& s, BodyContactStats& stats) {
+  const ContactBody& A = bodies_[a];
+  const Real r = A.thickness + 2 * moved_[a];
+  const Box region{bounds_[a].lo - Vec3::Constant(r), bounds_[a].hi + Vec3::Constant(r)};
+  gridCell_ = std::max(2 * A.thickness, r);
+  buildGrid(A, region, s.positions);
+  const Vec3 *x = s.positions, *x0 = s.previousPositions;
+  for (uint32_t i = 0; i < A.vertices.size(); ++i) {
+    const uint32_t v = A.vertices[i];
+    const Vec3& p = x[v];
+    const uint32_t* nearBegin = A.near.data() + A.nearStart[i];
+    const uint32_t* nearEnd = A.near.data() + A.nearStart[i + 1];
+    auto isNear = [&](uint32_t u) { return std::binary_search(nearBegin, nearEnd, u); };
+    ++stats.candidates;
+    Real bestS = -r;
+    uint32_t bestTri = ContactBody::kNone;
+    std::array<Real, 3> bestW{};
+    Vec3 bestN;
+    forCandidateTriangles(p - Vec3::Constant(r), p + Vec3::Constant(r), [&](uint32_t t) {
+      const auto& tri = A.triangles[t];
+      if (isNear(tri[0]) || isNear(tri[1]) || isNear(tri[2])) return;
+      const Vec3 n1 = unit(faceNormal(tri, x));
+      const Real s1 = n1.dot(p - x[tri[0]]);
+      if (!(s1 < 0 && s1 > bestS)) return;  // behind the face's plane now, the shallowest first
+      const Real s0 = unit(faceNormal(tri, x0)).dot(x0[v] - x0[tri[0]]);
+      if (!(s0 >= 0)) return;  // it was behind at the start already: it did not cross the face
+      const Vec3 q = p - s1 * n1;  // its foot on the face's plane
+      const ClosestPoint cp = closestPointOnTriangle(q, x[tri[0]], x[tri[1]], x[tri[2]]);
+      const Vec3 c = cp.w[0] * x[tri[0]] + cp.w[1] * x[tri[1]] + cp.w[2] * x[tri[2]];
+      if ((q - c).squaredNorm() > kSkin * kSkin * A.thickness * A.thickness) return;  // ends beside the face
+      bestS = s1, bestTri = t, bestW = cp.w, bestN = n1;
+    });
+    if (bestTri == ContactBody::kNone) continue;
+    round_.push_back({v, A.triangles[bestTri], bestW, bestN, -bestS});
+    stats.maxDepth = std::max(stats.maxDepth, -bestS);
+  }
+}
+
+BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
+  BodyContactStats stats;
+  contacts_.clear();
+  if (empty()) return stats;
+  Vec3* x = s.positions;
+  Vec3* v = s.velocities;
+  const Real* im = s.invMass;
+  for (int round = 0; round < kRounds; ++round) {
+    // Broad phase: each body's surface box now and how far its surface moved in the step.
+    for (size_t b = 0; b < bodies_.size(); ++b) {
+      Box box{Vec3::Constant(std::numeric_limits<Real>::infinity()),
+              Vec3::Constant(-std::numeric_limits<Real>::infinity())};
+      Real moved2 = 0;
+      for (uint32_t u : bodies_[b].vertices) {
+        box.lo = box.lo.cwiseMin(x[u]), box.hi = box.hi.cwiseMax(x[u]);
+        moved2 = std::max(moved2, (x[u] - s.previousPositions[u]).squaredNorm());
+      }
+      bounds_[b] = box, moved_[b] = std::sqrt(moved2);
+    }
+    round_.clear();
+    for (size_t a = 0; a < bodies_.size(); ++a)
+      for (size_t b = 0; b < bodies_.size(); ++b)
+        if (a != b) detectPair(a, b, s, stats);
+    if (settings_.selfContact)
+      for (size_t a = 0; a < bodies_.size(); ++a) detectSelf(a, s, stats);
+    stats.rounds = round + 1;
+    if (round_.empty()) break;
+    if (round + 1 == kRounds) {
+      // Still inside after every round: contacts that contradict each other (two vertices each
+      // inside the other body behind faces they are corners of, where coarse staircases cross).
+      // Each such vertex and its face point go back to where they were relative to each other at
+      // the start of the step, when the vertex was outside (split by inverse mass, as above).
+      for (int it = 0; it < kIterations; ++it)
+        for (const Contact& c : round_) {
+          const Real W = contactInvMass(c, im);
+          if (W > 0) applyPair(c, im, x, (relative(c, s.previousPositions) - relative(c, x)) / W);
+        }
+      contacts_.insert(contacts_.end(), round_.begin(), round_.end());
+      break;
+    }
+    // Positions, Gauss-Seidel over every contact found so far (a later round's contacts and an
+    // earlier round's act together): out to the skin along n, split by inverse mass; friction
+    // undoes the tangential slip of the step up to friction x depth (once, when first found).
+    const size_t first = contacts_.size();
+    contacts_.insert(contacts_.end(), round_.begin(), round_.end());
+    for (int it = 0; it < kIterations; ++it)
+      for (size_t k = 0; k < contacts_.size(); ++k) {
+        const Contact& c = contacts_[k];
+        const Real W = contactInvMass(c, im);
+        if (!(W > 0)) continue;
+        const Real gap = c.n.dot(relative(c, x)) - skin_;
+        if (gap >= 0) continue;
+        applyPair(c, im, x, (-gap / W) * c.n);
+        if (it == 0 && k >= first && settings_.friction > 0) {
+          Vec3 slip = relative(c, x) - relative(c, s.previousPositions);
+          slip -= slip.dot(c.n) * c.n;
+          const Real len = slip.norm(), allowed = settings_.friction * -gap;
+          if (len > 0) applyPair(c, im, x, (-(len <= allowed ? Real(1) : allowed / len) / W) * slip);
+        }
+      }
+  }
+  // Velocities: equal and opposite impulses on the relative velocity at each contact.
+  const Real e = settings_.restitution, mu = settings_.friction;
+  for (const Contact& c : contacts_) {
+    const Real W = contactInvMass(c, im);
+    if (!(W > 0)) continue;
+    const Vec3 rel = relative(c, v);
+    const Real vn = rel.dot(c.n);
+    if (vn >= 0) continue;
+    // The bounce: restitution times the speed at which the contact approached at the start of
+    // the step; nothing for one that was resting or receding then (contacts.h, rule 1).
+    const Real u0 = s.previousVelocities ? relative(c, s.previousVelocities).dot(c.n) : vn;
+    const Real out = u0 < 0 ? e * std::min(-u0, -vn) : Real(0);
+    const Real jn = (out - vn) / W;
+    applyPair(c, im, v, jn * c.n);
+    const Vec3 vt = rel - vn * c.n;
+    const Real vtLen = vt.norm();
+    if (mu > 0 && vtLen > 0) {
+      const Real jt = std::min(vtLen / W, mu * jn);
+      applyPair(c, im, v, (-jt / vtLen) * vt);
+    }
+  }
+  stats.contacts = contacts_.size();
+  return stats;
+}
+
+}  // namespace gradel
