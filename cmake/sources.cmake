@@ -5,6 +5,7 @@
 # gradel_core: the engine. Needs Eigen (and zlib + the NIfTI header layouts for the
 # readers below); no windowing, no OpenGL, no command-line parser.
 set(GRADEL_CORE_SOURCES
+  src/bodies.cpp
   src/contacts.cpp
   src/divergence.cpp
   src/element.cpp
@@ -71,6 +72,7 @@ set(GRADEL_CLI_RENDER_SOURCES apps/render_cli.cpp)
 
 # gradel_tests (GRADEL_BUILD_TESTS): GoogleTest + rapidcheck, one file per engine part.
 set(GRADEL_TEST_SOURCES
+  tests/test_bodies.cpp
   tests/test_broad_phase.cpp
   tests/test_cantilever.cpp
   tests/test_cli.cpp
