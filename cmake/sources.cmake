@@ -5,6 +5,7 @@
 # gradel_core: the engine. Needs Eigen (and zlib + the NIfTI header layouts for the
 # readers below); no windowing, no OpenGL, no command-line parser.
 set(GRADEL_CORE_SOURCES
+  src/bodies.cpp
   src/body_contacts.cpp
   src/contacts.cpp
   src/divergence.cpp
@@ -72,6 +73,7 @@ set(GRADEL_CLI_RENDER_SOURCES apps/render_cli.cpp)
 
 # gradel_tests (GRADEL_BUILD_TESTS): GoogleTest + rapidcheck, one file per engine part.
 set(GRADEL_TEST_SOURCES
+  tests/test_bodies.cpp
   tests/test_body_contacts.cpp
   tests/test_broad_phase.cpp
   tests/test_cantilever.cpp

@@ -47,8 +47,12 @@ inline ElementRows elementRows(const Vec3* x, const StagePair* pair, uint32_t n)
 ElementStageRest::ElementStageRest(const RestModel& m)
     : elements(m.numElements()), pairs(m.numPairs() + kPrefetchPairs, StagePair{{0, 0, 0, 0}, 0}) {
   const size_t V = m.numVertices(), E = m.numElements();
-  const Real h = m.voxelSize;
+  // Each element's lattice is its body's (bodies.h): h per body; a model without bodies (made
+  // by hand) is one body of m.voxelSize. Only this set-up reads h; the passes do not.
+  size_t body = 0;
   for (size_t e = 0; e < E; ++e) {
+    while (body < m.bodies.size() && e >= m.bodies[body].elementEnd) ++body;
+    const Real h = body < m.bodies.size() ? m.bodies[body].voxelSize : m.voxelSize;
     const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
     // The same summation order as the model's rest offsets (model.cpp), so X - C reproduces them.
     Vec3 c = Vec3::Zero(), residue = Vec3::Zero();

@@ -1,6 +1,9 @@
 #include "gradel/model.h"
 
+#include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 #include <limits>
 
 #include "gradel/settings_check.h"
@@ -142,13 +145,28 @@ RestModel buildRestModel(const Layout& layout, const VoxelVolume& volume, const 
   buildElements(layout, m);
   vertexPeriod(m);
   markSurfaceVertices(layout, volume, m);
+  m.bodies.assign(1, wholeModelBody(m));
   return m;
+}
+
+BodyRange wholeModelBody(const RestModel& m) {
+  BodyRange b;
+  b.vertexEnd = uint32_t(m.numVertices()), b.elementEnd = uint32_t(m.numElements());
+  b.voxelSize = m.voxelSize, b.origin = m.origin, b.material = m.material, b.dim = m.dim;
+  return b;
+}
+
+size_t RestModel::bodyOfVertex(size_t v) const {
+  const auto it = std::upper_bound(bodies.begin(), bodies.end(), v,
+                                   [](size_t x, const BodyRange& b) { return x < b.vertexEnd; });
+  if (it == bodies.end()) throw std::out_of_range("RestModel::bodyOfVertex: no body holds vertex " + std::to_string(v));
+  return size_t(it - bodies.begin());
 }
 
 size_t RestModel::memoryBytes() const {
   auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
   return sizeof(*this) + bytes(restPositions) + bytes(mass) + bytes(invMass) + bytes(onSurface) + bytes(stiffness) +
-         bytes(size) + bytes(level) + bytes(elemStart) + bytes(elemVerts) + bytes(restOffsets);
+         bytes(size) + bytes(level) + bytes(elemStart) + bytes(elemVerts) + bytes(restOffsets) + bytes(bodies);
 }
 
 }  // namespace gradel

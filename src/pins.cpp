@@ -68,7 +68,14 @@ void loadPinMasks(std::vector<PinSettings>& pins) {
   }
 }
 
-PinSet selectPins(const std::vector<PinSettings>& pins, const std::vector<Vec3>& restPositions) {
+PinSet selectPins(const std::vector<PinSettings>& pins, const std::vector<Vec3>& restPositions,
+                  const std::vector<std::array<uint32_t, 2>>& bodyVertices) {
+  std::vector<std::array<uint32_t, 2>> bodies = bodyVertices;
+  if (bodies.empty()) bodies.push_back({0, uint32_t(restPositions.size())});
+  for (size_t p = 0; p < pins.size(); ++p)
+    if (pins[p].body >= bodies.size())
+      throw InputError("pins[" + std::to_string(p) + "].body: " + std::to_string(pins[p].body) +
+                       " is out of range (expected a body index below " + std::to_string(bodies.size()) + ")");
   PinSet s;
   std::vector<size_t> held(pins.size(), 0);
   std::vector<std::unique_ptr<LoadedMask>> masks(pins.size());
@@ -83,6 +90,8 @@ PinSet selectPins(const std::vector<PinSettings>& pins, const std::vector<Vec3>&
   for (size_t i = 0; i < restPositions.size(); ++i) {
     const Vec3& x = restPositions[i];
     for (size_t p = 0; p < pins.size(); ++p) {
+      const std::array<uint32_t, 2>& range = bodies[pins[p].body];
+      if (i < range[0] || i >= range[1]) continue;
       bool in = false;
       if (masks[p]) {
         in = masks[p]->holds(x);
@@ -102,7 +111,8 @@ PinSet selectPins(const std::vector<PinSettings>& pins, const std::vector<Vec3>&
   for (size_t p = 0; p < pins.size(); ++p)
     if (held[p] == 0)
       throw InputError("pins[" + std::to_string(p) + "]: the " + (masks[p] ? "mask" : "box") +
-                       " holds no vertex of the body");
+                       " holds no vertex of " +
+                       (bodyVertices.size() > 1 ? "body " + std::to_string(pins[p].body) : std::string("the body")));
   return s;
 }
 

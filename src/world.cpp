@@ -1,6 +1,7 @@
 #include "gradel/world.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -56,9 +57,20 @@ PeriodRule parsePeriodRule(const std::string& name) {
 
 const char* periodRuleName(PeriodRule r) { return r == PeriodRule::Element ? "element" : "vertex"; }
 
+namespace {
+// A model made by hand without RestModel::bodies is one body.
+std::shared_ptr<const RestModel> withBodies(std::shared_ptr<const RestModel> model) {
+  if (!model) throw std::invalid_argument("World: no model");
+  if (!model->bodies.empty()) return model;
+  auto m = std::make_shared<RestModel>(*model);
+  m->bodies.push_back(wholeModelBody(*m));
+  return m;
+}
+}  // namespace
+
 World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& sim, const DomainSettings& domain,
              std::vector<ManipulatorSettings> manipulators)
-    : model_(model ? std::move(model) : throw std::invalid_argument("World: no model")),
+    : model_(withBodies(std::move(model))),
       stageRest_(std::make_unique<const ElementStageRest>(*model_)), sim_(sim), domain_(domain),
       scratch_(std::make_unique<StepScratch>()) {
   validate(sim_);
@@ -399,7 +411,9 @@ void World::step() {
 }
 
 void World::setPins(std::vector<PinSettings> pins) {
-  pinSet_ = selectPins(pins, model_->restPositions);
+  std::vector<std::array<uint32_t, 2>> bodies;
+  for (const BodyRange& b : model_->bodies) bodies.push_back({b.vertexBegin, b.vertexEnd});
+  pinSet_ = selectPins(pins, model_->restPositions, bodies);
   pins_ = std::move(pins);
   projective_.reset(), largeStep_.reset();  // the implicit systems eliminate the pinned vertices: refactor
   applyPins(state_.time);
@@ -621,23 +635,45 @@ std::vector<Real> World::vertexStress(const std::vector<Real>& elementStress) co
 }
 
 Metrics World::metrics(std::vector<Real>* elementStress) const {
+  const std::vector<Metrics> each = bodyMetrics(elementStress);
+  if (each.size() == 1) return each[0];
+  // The world's figures: sums in body order, extremes over the bodies.
+  Metrics r = each[0];
+  for (size_t k = 1; k < each.size(); ++k) {
+    const Metrics& b = each[k];
+    r.kineticEnergy += b.kineticEnergy, r.elasticEnergy += b.elasticEnergy, r.gravityEnergy += b.gravityEnergy;
+    r.linearMomentum += b.linearMomentum, r.angularMomentum += b.angularMomentum;
+    r.maxStress = std::max(r.maxStress, b.maxStress), r.maxPenetration = std::max(r.maxPenetration, b.maxPenetration);
+    r.minElementDet = std::min(r.minElementDet, b.minElementDet);
+  }
+  return r;
+}
+
+std::vector<Metrics> World::bodyMetrics(std::vector<Real>* elementStress) const {
+  if (elementStress) elementStress->assign(model_->numElements(), 0.0);
+  std::vector<Metrics> r;
+  for (const BodyRange& b : model_->bodies) r.push_back(metricsOf(b, elementStress));
+  return r;
+}
+
+Metrics World::metricsOf(const BodyRange& body, std::vector<Real>* elementStress) const {
   const RestModel& m = *model_;
   Metrics r;
-  if (elementStress) elementStress->assign(m.numElements(), 0.0);
   r.time = state_.time;
   const Vec3 g = sim_.gravity;
+  const size_t v0 = body.vertexBegin;
 
-  // Elastic forces and energy at the current positions.
-  std::vector<Vec3> forces(m.numVertices(), Vec3::Zero());
+  // Elastic forces and energy at the current positions (the body's elements touch only its vertices).
+  std::vector<Vec3> forces(body.numVertices(), Vec3::Zero());
   std::vector<Vec3> f;
   r.minElementDet = std::numeric_limits<Real>::infinity();
-  for (size_t e = 0; e < m.numElements(); ++e) {
+  for (size_t e = body.elementBegin; e < body.elementEnd; ++e) {
     const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
     f.resize(n);
     Quat q = state_.rotations[e];
     const ElementResult er = elementForces(m.dim, state_.positions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n),
                                            m.stiffness[e], q, f.data(), 20);
-    for (uint32_t i = 0; i < n; ++i) forces[m.elemVerts[b + i]] += f[i];
+    for (uint32_t i = 0; i < n; ++i) forces[m.elemVerts[b + i] - v0] += f[i];
     r.elasticEnergy += er.energy;
     const Real stress = std::sqrt(er.sumSqDisp / n) / m.size[e];
     if (elementStress) (*elementStress)[e] = stress;
@@ -651,10 +687,10 @@ Metrics World::metrics(std::vector<Real>* elementStress) const {
   // does. This is what makes the measured energy of an undamped run flat to O(dt^2) rather
   // than swing by O(omega dt). Forward Euler's velocity is already synchronous.
   const bool staggered = sim_.integrator == IntegratorKind::SymplecticEuler;
-  for (size_t i = 0; i < m.numVertices(); ++i) {
+  for (size_t i = body.vertexBegin; i < body.vertexEnd; ++i) {
     const Vec3& x = state_.positions[i];
     Vec3 v = state_.velocities[i];
-    if (staggered) v += 0.5 * dt_ * (forces[i] * m.invMass[i] + g);
+    if (staggered) v += 0.5 * dt_ * (forces[i - v0] * m.invMass[i] + g);
     r.kineticEnergy += 0.5 * m.mass[i] * v.squaredNorm();
     r.gravityEnergy -= m.mass[i] * g.dot(x);
     r.linearMomentum += m.mass[i] * v;

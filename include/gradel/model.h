@@ -10,11 +10,30 @@
 
 namespace gradel {
 
+/// One body's share of a model (a World steps several bodies as one combined model,
+/// bodies.h): its vertices [vertexBegin, vertexEnd) and elements [elementBegin, elementEnd)
+/// (whose pairs are elemStart[elementBegin] .. elemStart[elementEnd]), and the body's lattice
+/// and material.
+struct BodyRange {
+  uint32_t vertexBegin = 0, vertexEnd = 0;
+  uint32_t elementBegin = 0, elementEnd = 0;
+  Real voxelSize = 1;  ///< [m] the body's voxel edge.
+  Vec3 origin{0, 0, 0};  ///< [m] world position of the body's lattice point (0, 0, 0) at rest.
+  MaterialSettings material;
+  int dim = 3;
+  uint32_t numVertices() const { return vertexEnd - vertexBegin; }
+  uint32_t numElements() const { return elementEnd - elementBegin; }
+};
+
 struct RestModel {
   int dim = 3;
-  Real voxelSize = 1;  ///< [m]
-  MaterialSettings material;
-  Vec3 origin{0, 0, 0};  ///< [m] world position of lattice point (0, 0, 0) at rest.
+  // Body 0's lattice and material (for a one-body model, the body's); per body: `bodies`.
+  Real voxelSize = 1;  ///< [m] body 0's voxel edge.
+  MaterialSettings material;  ///< Body 0's material.
+  Vec3 origin{0, 0, 0};  ///< [m] world position of body 0's lattice point (0, 0, 0) at rest.
+  /// The bodies, in vertex and element order (buildRestModel: one, covering everything;
+  /// combineRestModels: one per combined model). Never empty for a built model.
+  std::vector<BodyRange> bodies;
 
   // ---- per vertex ----
   std::vector<Vec3> restPositions;  ///< [m] origin + lattice * voxelSize (buildRestModel).
@@ -43,7 +62,14 @@ struct RestModel {
   /// Bytes held by all arrays of the model (capacity, not size).
   size_t memoryBytes() const;
   size_t numPairs() const { return elemVerts.size(); }
+  size_t numBodies() const { return bodies.size(); }
+  /// The body that holds vertex v (bodies are contiguous and ascending; a binary search).
+  size_t bodyOfVertex(size_t v) const;
 };
+
+/// One body covering every vertex and element of `m`, with m's lattice and material (what
+/// buildRestModel puts into RestModel::bodies).
+BodyRange wholeModelBody(const RestModel& m);
 
 /// Builds the rest model. `origin` is the world position [m] of lattice point (0,0,0); a 2D
 /// body lies in the plane z = 0 (origin's z is dropped). Throws InputError for invalid material

@@ -34,6 +34,7 @@ struct PinSettings {
   Vec3 max{0, 0, 0};  ///< [m] upper corner (closed box: vertices on its faces are pinned).
   std::shared_ptr<const PinMask> mask;  ///< When set, selects the vertices instead of the box.
   Path path;  ///< Keyframe `position` = offset [m] of the pinned vertices from rest; empty = fixed.
+  uint32_t body = 0;  ///< The body whose vertices it selects (RestModel::bodies; bodies.h).
 };
 
 /// The pinned vertices of a model: ids (ascending) and, per id, the index of the pin that holds it
@@ -48,7 +49,11 @@ struct PinSet {
 /// first). Reads no file (a mask whose source was not read by loadPinMasks is an error). Throws
 /// InputError when a pin holds no vertex, its box is inverted, or its mask is malformed or empty
 /// (messages "pins[i]: ..." and "pins[i].mask: ...", the latter naming the mask's file).
-PinSet selectPins(const std::vector<PinSettings>& pins, const std::vector<Vec3>& restPositions);
+/// `bodyVertices` lists each body's vertex range [begin, end) (RestModel::bodies); a pin selects
+/// only among its body's vertices ("pins[i].body: ..." when there is no such body). Empty: one
+/// body of every vertex.
+PinSet selectPins(const std::vector<PinSettings>& pins, const std::vector<Vec3>& restPositions,
+                  const std::vector<std::array<uint32_t, 2>>& bodyVertices = {});
 
 /// Reads every mask's file (PinMask::source) into PinMask::volume, once, before the pins reach a
 /// World (buildScene does this; World::setPins reads no file). Throws InputError

@@ -1,4 +1,4 @@
-// A simulated body: rest model (shared, immutable) + runtime state + manipulators + walls,
+// A simulated world of one or more bodies (bodies.h: one combined rest model): rest model (shared, immutable) + runtime state + manipulators + walls,
 // advanced by named stages (Box2D style): element frames (eq. 1, per element) -> per vertex:
 // gather the elastic force, integrate (eqs. 2-3), contacts (element_stage.h). Every stage runs
 // over an index range; threads only split ranges and never change the order in which any sum is
@@ -99,6 +99,10 @@ class World {
   /// The same, and, when elementStress is given, elementStress() from the same pass over the
   /// elements (what a written frame needs: one reference-kernel pass per frame, not two).
   Metrics metrics(std::vector<Real>* elementStress) const;
+  /// The same figures per body (RestModel::bodies, bodies.h), over its vertices and elements;
+  /// metrics() is their sum (energies, momenta) and extremes. maxContactDepth is the world's.
+  /// elementStress as metrics().
+  std::vector<Metrics> bodyMetrics(std::vector<Real>* elementStress = nullptr) const;
   /// FNV-1a hash of the positions and velocities (bitwise): equal states give equal hashes.
   uint64_t stateHash() const;
   /// Bytes held by the world: rest model, state, scratch and manipulators (capacities).
@@ -110,6 +114,7 @@ class World {
   void stageElementFrames(size_t begin, size_t end);
   Real stageVertices(size_t begin, size_t end, const ContactBounds* contacts);
   ContactBounds contactBounds() const;
+  Metrics metricsOf(const BodyRange& body, std::vector<Real>* elementStress) const;
   void prepareTeam(int members);
   void stageContacts(size_t begin, size_t end);
   Real resolveVertexContacts(const Vec3& previous, const Vec3& previousVelocity, Vec3& x, Vec3& v) const;
