@@ -634,10 +634,10 @@ std::vector<Real> World::vertexStress(const std::vector<Real>& elementStress) co
   return sum;
 }
 
-Metrics World::metrics(std::vector<Real>* elementStress) const {
-  const std::vector<Metrics> each = bodyMetrics(elementStress);
-  if (each.size() == 1) return each[0];
-  // The world's figures: sums in body order, extremes over the bodies.
+Metrics World::metrics(std::vector<Real>* elementStress) const { return combineMetrics(bodyMetrics(elementStress)); }
+
+Metrics combineMetrics(const std::vector<Metrics>& each) {
+  if (each.empty()) throw std::invalid_argument("combineMetrics: no bodies");
   Metrics r = each[0];
   for (size_t k = 1; k < each.size(); ++k) {
     const Metrics& b = each[k];

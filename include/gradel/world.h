@@ -45,6 +45,10 @@ struct Metrics {
   Real minElementDet = 0;         ///< [-] min det of the elements' deformation estimate (< 0: inverted).
 };
 
+/// The figures of several bodies together: energies and momenta summed in order, the largest
+/// stress and penetration, the smallest determinant; time and maxContactDepth the first's.
+Metrics combineMetrics(const std::vector<Metrics>& bodies);
+
 class World {
  public:
   World(std::shared_ptr<const RestModel> model, const SimulationSettings& sim, const DomainSettings& domain,
