@@ -295,7 +295,7 @@ int runScene(const RunOptions& o) {
   // Several bodies: one file per body and frame, all listed per time in run.pvd (parts), and
   // per frame a metrics row per body and one for the world (docs/scenes.md, "Output").
   const bool several = built.numBodies() > 1;
-  gradel::MetricsCsv csv(dir.file("metrics.csv"), several);
+  gradel::MetricsCsv csv(dir.file("metrics.csv"), world.manipulators().size(), several);
   std::vector<gradel::PvdFrame> pvd;
   Real maxPenetration = 0, maxStress = 0;
   gradel::Metrics last;
@@ -306,10 +306,11 @@ int runScene(const RunOptions& o) {
     std::vector<gradel::Real> elementStress;
     // One pass over the elements per frame.
     const std::vector<gradel::Metrics> each = world.bodyMetrics(&elementStress);
-    const gradel::Metrics m = gradel::combineMetrics(each);
+    gradel::Metrics m = gradel::combineMetrics(each);
+    m.contactForces = world.averageContactForces();  // what the bodies exert together (World::metrics)
     if (auto diverged = guard.check(m, cause)) throw Diverged(*diverged);
     if (several) {
-      for (size_t i = 0; i < each.size(); ++i) csv.append(built.body(i).name, each[i]);
+      for (size_t i = 0; i < each.size(); ++i) csv.append(built.body(i).name, each[i], /*forces=*/false);
       csv.append("all", m);
     } else {
       csv.append(m);

@@ -233,16 +233,27 @@ void writePvd(const fs::path& file, const std::vector<PvdFrame>& frames) {
 
 // ---- metrics ----------------------------------------------------------------------
 
-const char* MetricsCsv::header() {
-  return "time,kinetic_energy,elastic_energy,gravity_energy,px,py,pz,Lx,Ly,Lz,max_stress,max_penetration,"
-         "max_contact_depth,min_element_det";
+std::string MetricsCsv::header(size_t manipulators, bool bodyColumn) {
+  std::string h = std::string(bodyColumn ? "body," : "") +
+      "time,kinetic_energy,elastic_energy,gravity_energy,px,py,pz,Lx,Ly,Lz,max_stress,max_penetration,"
+      "max_contact_depth,min_element_det";
+  auto forceColumns = [&](const std::string& p) {
+    for (const char* c : {"fx", "fy", "fz", "tx", "ty", "tz"}) h += "," + p + c;
+  };
+  for (size_t k = 0; k < manipulators; ++k) forceColumns("m" + std::to_string(k) + "_");
+  forceColumns("wall_");
+  return h;
 }
 
-std::string MetricsCsv::bodyHeader() { return std::string("body,") + header(); }
+std::string MetricsCsv::row(const std::string& body, const Metrics& m, size_t manipulators, bool forces) {
+  return body + "," + row(m, manipulators, forces);
+}
 
-std::string MetricsCsv::row(const std::string& body, const Metrics& m) { return body + "," + row(m); }
-
-std::string MetricsCsv::row(const Metrics& m) {
+std::string MetricsCsv::row(const Metrics& m, size_t manipulators, bool forces) {
+  const ContactForces& cf = m.contactForces;
+  if (forces && cf.manipulators.size() != manipulators)
+    throw std::invalid_argument("MetricsCsv::row: " + std::to_string(cf.manipulators.size()) +
+                                " manipulators' forces for a header of " + std::to_string(manipulators));
   const double v[] = {m.time,
                       m.kineticEnergy,
                       m.elasticEnergy,
@@ -262,13 +273,24 @@ std::string MetricsCsv::row(const Metrics& m) {
     if (i) out += ',';
     appendNumber(out, v[i]);
   }
+  auto appendForce = [&](const ContactForce& f) {
+    for (int c = 0; c < 3; ++c) out += ',', appendNumber(out, f.force[c]);
+    for (int c = 0; c < 3; ++c) out += ',', appendNumber(out, f.torque[c]);
+  };
+  if (!forces) {
+    out.append(6 * (manipulators + 1), ',');
+    return out;
+  }
+  for (const ContactForce& f : cf.manipulators) appendForce(f);
+  appendForce(cf.walls);
   return out;
 }
 
-MetricsCsv::MetricsCsv(const fs::path& file, bool bodyColumn) : path_(file), bodyColumn_(bodyColumn) {
+MetricsCsv::MetricsCsv(const fs::path& file, size_t manipulators, bool bodyColumn)
+    : path_(file), manipulators_(manipulators), bodyColumn_(bodyColumn) {
   file_ = std::fopen(file.c_str(), "wb");
   if (!file_) throwWriteError(file, errno);
-  std::fputs(bodyColumn ? bodyHeader().c_str() : header(), file_);
+  std::fputs(header(manipulators, bodyColumn).c_str(), file_);
   std::fputc('\n', file_);
 }
 
@@ -278,12 +300,12 @@ MetricsCsv::~MetricsCsv() {
 
 void MetricsCsv::append(const Metrics& m) {
   if (bodyColumn_) throw std::logic_error("MetricsCsv::append without a body in a file with a body column");
-  writeLine(row(m));
+  writeLine(row(m, manipulators_));
 }
 
-void MetricsCsv::append(const std::string& body, const Metrics& m) {
+void MetricsCsv::append(const std::string& body, const Metrics& m, bool forces) {
   if (!bodyColumn_) throw std::logic_error("MetricsCsv::append with a body in a file without a body column");
-  writeLine(row(body, m));
+  writeLine(row(body, m, manipulators_, forces));
 }
 
 void MetricsCsv::writeLine(std::string line) {

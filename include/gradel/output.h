@@ -69,29 +69,35 @@ class MetricsCsv {
  public:
   /// The header line (no newline):
   /// time,kinetic_energy,elastic_energy,gravity_energy,px,py,pz,Lx,Ly,Lz,max_stress,
-  /// max_penetration,max_contact_depth,min_element_det
-  static const char* header();
-  /// "body," + header().
-  static std::string bodyHeader();
-  /// One data line (no newline).
-  static std::string row(const Metrics& m);
+  /// max_penetration,max_contact_depth,min_element_det, then the frame-averaged contact forces
+  /// (Metrics::contactForces) the bodies exert: per manipulator k = 0, 1, ...
+  /// m<k>_fx,m<k>_fy,m<k>_fz [N],m<k>_tx,m<k>_ty,m<k>_tz [N m] (about its centre), then the walls
+  /// wall_fx,wall_fy,wall_fz,wall_tx,wall_ty,wall_tz (torque about the origin). With a body
+  /// column, "body," first.
+  static std::string header(size_t manipulators = 0, bool bodyColumn = false);
+  /// One data line (no newline); std::invalid_argument if m has forces for another number of
+  /// manipulators. Without `forces` the force fields are left empty (a body's row: the forces are
+  /// the world's, on the "all" row).
+  static std::string row(const Metrics& m, size_t manipulators = 0, bool forces = true);
   /// One data line with the body column first.
-  static std::string row(const std::string& body, const Metrics& m);
+  static std::string row(const std::string& body, const Metrics& m, size_t manipulators = 0, bool forces = true);
 
   /// Creates the file and writes the header (with the body column when asked). Throws IoError on
   /// I/O errors.
-  explicit MetricsCsv(const std::filesystem::path& file, bool bodyColumn = false);
+  explicit MetricsCsv(const std::filesystem::path& file, size_t manipulators = 0, bool bodyColumn = false);
   ~MetricsCsv();
   MetricsCsv(const MetricsCsv&) = delete;
   MetricsCsv& operator=(const MetricsCsv&) = delete;
 
   void append(const Metrics& m);                           ///< Without a body column.
-  void append(const std::string& body, const Metrics& m);  ///< With a body column.
+  /// With a body column; `forces` false leaves the force fields empty (per-body rows).
+  void append(const std::string& body, const Metrics& m, bool forces = true);
   /// Flushes and closes; throws IoError if any write failed (disk full, ...).
   void close();
 
  private:
   std::filesystem::path path_;
+  size_t manipulators_ = 0;
   std::FILE* file_ = nullptr;
   int err_ = 0;  ///< errno of the first failed append.
   bool bodyColumn_ = false;
