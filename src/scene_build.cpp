@@ -18,8 +18,16 @@ BuiltScene buildScene(const Scene& scene, const SizeLimits& limits) {
   }
   checkLayoutSize(b.volume, scene.body.layout, limits, scene.body.sizeKey);
   b.layout = buildLayout(b.volume, scene.body.layout);
-  auto model =
-      std::make_shared<RestModel>(buildRestModel(b.layout, b.volume, scene.body.material, scene.body.position));
+  std::shared_ptr<RestModel> model;
+  try {
+    model =
+        std::make_shared<RestModel>(buildRestModel(b.layout, b.volume, scene.body.material, scene.body.position));
+  } catch (const InputError& e) {
+    // A label of the volume without a material: name the volume file and the scene key.
+    const std::string m = e.what();
+    if (m.rfind("regions: ", 0) != 0) throw;
+    throw InputError((scene.body.source ? scene.body.source->describe() : std::string("body")) + ": material." + m);
+  }
   b.model = model;
   const Vec3& origin = model->origin;
   if (!latticeMesh.triangles.empty() && scene.dim == 3) {
