@@ -62,6 +62,7 @@ set(GRADEL_RENDER_SOURCES
   src/image.cpp
   src/render/camera.cpp
   src/render/draw_list.cpp
+  src/render/layout_picture.cpp
   src/render/manipulator_drag.cpp
   src/render/offscreen.cpp
   src/render/render_command.cpp
@@ -101,6 +102,7 @@ set(GRADEL_TEST_SOURCES
   tests/test_model.cpp
   tests/test_output.cpp
   tests/test_pins.cpp
+  tests/test_regions.cpp
   tests/test_rotation_fit.cpp
   tests/test_scene_io.cpp
   tests/test_scenes.cpp

@@ -16,6 +16,8 @@ gzip mtime 0), so re-running gives the same bytes.
   ct.nii.gz      the same scan as NIfTI-1, stored uint16 = HU + 1024 with scl_inter = -1024
   ct.raw         the scan's bone mask, 40^3 uint8 (0 / 1), headerless
   mushroom.vox   a 16 x 16 x 16 MagicaVoxel model (z-up): a stalk and a cap
+  phantom.nrrd   a 24 x 12 x 24 label map, uint8, gzip encoding: a block of soft tissue (label 1)
+                 holding a stiff ellipsoidal inclusion (label 2) just under its top face, centred
 """
 import gzip
 import io
@@ -193,6 +195,22 @@ def nifti_bytes(hu):
     return gz(bytes(hdr) + b"\0\0\0\0" + data)
 
 
+def phantom_labels(nx=24, ny=12, nz=24):
+    """Labels on an nx x ny x nz grid, index [x, y, z]: 1 tissue, 2 the inclusion."""
+    x, y, z = np.meshgrid(np.arange(nx) + 0.5, np.arange(ny) + 0.5, np.arange(nz) + 0.5, indexing="ij")
+    labels = np.ones((nx, ny, nz), dtype=np.uint8)
+    inside = ((x - nx / 2) / 5.0) ** 2 + ((y - 6.5) / 3.5) ** 2 + ((z - nz / 2) / 5.0) ** 2 <= 1
+    labels[inside] = 2
+    return labels
+
+
+def label_nrrd_bytes(labels):
+    data = np.ascontiguousarray(np.transpose(labels, (2, 1, 0))).astype("u1").tobytes()
+    head = ("NRRD0004\n# gradel sample: label map, 1 soft tissue, 2 stiff inclusion\ntype: uint8\ndimension: 3\n"
+            "sizes: %d %d %d\nspacings: 1 1 1\nencoding: gzip\n\n" % labels.shape)
+    return head.encode() + gz(data)
+
+
 def mushroom():
     pts = []
     for x in range(16):
@@ -231,6 +249,7 @@ def main():
     bone = (hu >= 300).astype(np.uint8)
     write("ct.raw", np.ascontiguousarray(np.transpose(bone, (2, 1, 0))).tobytes())
     write("mushroom.vox", vox_bytes(mushroom(), (16, 16, 16)))
+    write("phantom.nrrd", label_nrrd_bytes(phantom_labels()))
 
 
 if __name__ == "__main__":

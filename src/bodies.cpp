@@ -24,7 +24,7 @@ RestModel combineRestModels(const std::vector<std::shared_ptr<const RestModel>>&
   c.voxelSize = first.voxelSize, c.material = first.material, c.origin = first.origin;
   auto reserve = [](auto& v, size_t n) { v.reserve(n); };
   reserve(c.restPositions, V), reserve(c.mass, V), reserve(c.invMass, V), reserve(c.onSurface, V);
-  reserve(c.stiffness, E), reserve(c.size, E), reserve(c.level, E), reserve(c.elemStart, E + 1);
+  reserve(c.stiffness, E), reserve(c.size, E), reserve(c.level, E), reserve(c.elementMaterial, E), reserve(c.elemStart, E + 1);
   reserve(c.elemVerts, P), reserve(c.restOffsets, P);
   auto append = [](auto& to, const auto& from) { to.insert(to.end(), from.begin(), from.end()); };
   c.elemStart.push_back(0);
@@ -39,6 +39,12 @@ RestModel combineRestModels(const std::vector<std::shared_ptr<const RestModel>>&
     for (size_t e = 1; e < m.elemStart.size(); ++e) c.elemStart.push_back(p0 + m.elemStart[e]);
     for (uint32_t v : m.elemVerts) c.elemVerts.push_back(v0 + v);
     append(c.restOffsets, m.restOffsets);
+    // Materials per region (model.h): each model's table appended, its element indices offset.
+    if (c.materials.size() + m.materials.size() > 65535)
+      throw std::invalid_argument("combineRestModels: more than 65535 materials");
+    const uint16_t k0 = uint16_t(c.materials.size());
+    append(c.materials, m.materials), append(c.materialLabel, m.materialLabel);
+    for (uint16_t k : m.elementMaterial) c.elementMaterial.push_back(uint16_t(k0 + k));
     // A model made by hand, without bodies, is one body.
     for (BodyRange b : m.bodies.empty() ? std::vector<BodyRange>{wholeModelBody(m)} : m.bodies) {
       b.vertexBegin += v0, b.vertexEnd += v0, b.elementBegin += e0, b.elementEnd += e0;

@@ -27,18 +27,25 @@ struct Placed {
   int32_t cellSize;  ///< Cell edge [voxels].
   Int3 origin;       ///< Lower block corner [voxels].
   uint8_t mask;      ///< Filled cells, bit cx + 2cy + 4cz.
+  uint16_t label;    ///< The region label of every cell of the element (1 in a binary volume).
 };
 
-/// Read-only view of one level's working volume: n[0] x n[1] x n[2] cells, x fastest,
-/// 0 = empty, anything else = filled. Out-of-grid cells (including the padding of odd sizes)
-/// read as empty.
+/// Read-only view of one level's working volume: n[0] x n[1] x n[2] cells, x fastest, each
+/// holding its label (0 = empty). `T` is uint8_t for a binary volume's level 0 (any non-zero
+/// byte is label 1) and uint16_t for labels. Out-of-grid cells (including the padding of odd
+/// sizes) read as empty.
+template <class T>
 struct GridView {
   std::array<int, 3> n;
-  const uint8_t* cells;
+  const T* cells;
 
-  bool at(int i, int j, int k) const {
-    if (i < 0 || j < 0 || k < 0 || i >= n[0] || j >= n[1] || k >= n[2]) return false;
-    return cells[size_t(i) + size_t(n[0]) * (size_t(j) + size_t(n[1]) * size_t(k))] != 0;
+  uint16_t at(int i, int j, int k) const {
+    if (i < 0 || j < 0 || k < 0 || i >= n[0] || j >= n[1] || k >= n[2]) return 0;
+    const T v = cells[size_t(i) + size_t(n[0]) * (size_t(j) + size_t(n[1]) * size_t(k))];
+    if constexpr (sizeof(T) == 1)
+      return v != 0 ? 1 : 0;
+    else
+      return v;
   }
 };
 
@@ -50,51 +57,77 @@ int cellCoord(int c, int axis) { return (c >> axis) & 1; }
 /// Scans one level in 2x2x2 groups (2x2 in 2D; odd sizes are padded with empty cells), appends
 /// the elements it places to `out` in (z, y, x) block order, and returns the next level's working
 /// volume (each group -> one cell). `kind` selects the rule (sec. 3.2 step 1):
-///   Gradational: a group with a filled cell gets an element if it is partly filled or one of its
-///     cells is a surface cell (an empty face neighbour at this level, possibly in another group);
+///   Gradational: a group with a filled cell gets an element if it is partly filled, holds two
+///     labels, or one of its cells is a surface cell (a face neighbour, possibly in another group,
+///     that is empty or of another label: a border between two regions counts as surface);
 ///   Uniform: every group with a filled cell gets one;
 ///   Voxel: every filled cell becomes its own single-cell element.
-/// Decisions read the level's volume as it was at the start of the scan, so they do not depend
-/// on scan order; the groups that got elements are "emptied" (step 2) by writing 0 into the next
-/// level (step 3), where a cell is 1 iff its group was full and got no element.
-std::vector<uint8_t> scanLevel(const GridView& g, int dim, int level, LayoutKind kind, std::vector<Placed>& out,
-                               std::array<int, 3>& nextDims) {
+/// A placed group holding several labels becomes one element per label (its cells of that label,
+/// in the order of each label's first cell), so no element mixes two regions; with one label this
+/// is the paper's one element per group. Decisions read the level's volume as it was at the start
+/// of the scan, so they do not depend on scan order; the groups that got elements are "emptied"
+/// (step 2) by writing 0 into the next level (step 3), where a cell holds the group's label iff the
+/// group was full of one label and got no element.
+template <class T>
+std::vector<uint16_t> scanLevel(const GridView<T>& g, int dim, int level, LayoutKind kind, std::vector<Placed>& out,
+                                std::array<int, 3>& nextDims) {
   const int groupsZ = dim == 3 ? (g.n[2] + 1) / 2 : 1;
   nextDims = {(g.n[0] + 1) / 2, (g.n[1] + 1) / 2, groupsZ};
-  std::vector<uint8_t> next(size_t(nextDims[0]) * size_t(nextDims[1]) * size_t(nextDims[2]), 0);
+  std::vector<uint16_t> next(size_t(nextDims[0]) * size_t(nextDims[1]) * size_t(nextDims[2]), 0);
   const int cs = 1 << level;  // cell edge [voxels]
   const int cells = cellCount(dim);
   const uint8_t full = fullMask(dim);
   size_t nextIndex = 0;
+  uint16_t lab[8];
   for (int gz = 0; gz < nextDims[2]; ++gz)
     for (int gy = 0; gy < nextDims[1]; ++gy)
       for (int gx = 0; gx < nextDims[0]; ++gx, ++nextIndex) {
         const int bx = 2 * gx, by = 2 * gy, bz = dim == 3 ? 2 * gz : 0;  // first cell of the group
         uint8_t mask = 0;
-        for (int c = 0; c < cells; ++c)
-          if (g.at(bx + cellCoord(c, 0), by + cellCoord(c, 1), bz + cellCoord(c, 2))) mask |= uint8_t(1u << c);
+        uint16_t first = 0;  // label of the group's first filled cell
+        bool mixed = false;  // two labels in the group
+        for (int c = 0; c < cells; ++c) {
+          lab[c] = g.at(bx + cellCoord(c, 0), by + cellCoord(c, 1), bz + cellCoord(c, 2));
+          if (lab[c] == 0) continue;
+          mask |= uint8_t(1u << c);
+          if (first == 0) first = lab[c];
+          mixed = mixed || lab[c] != first;
+        }
         if (mask == 0) continue;
         const Int3 origin(bx * cs, by * cs, bz * cs);
         if (kind == LayoutKind::Voxel) {
           for (int c = 0; c < cells; ++c)
-            if (mask & (1u << c)) out.push_back({uint8_t(level), cs, origin, uint8_t(1u << c)});
+            if (mask & (1u << c)) out.push_back({uint8_t(level), cs, origin, uint8_t(1u << c), lab[c]});
           continue;
         }
-        bool place = kind == LayoutKind::Uniform || mask != full;
-        // A full group: inner face neighbours are filled, so only the outward neighbour of each
-        // cell on each axis can make it a surface cell.
+        bool place = kind == LayoutKind::Uniform || mask != full || mixed;
+        // A full group of one label: inner face neighbours are of its label, so only the outward
+        // neighbour of each cell on each axis can make it a surface cell (empty or another label).
         for (int c = 0; c < cells && !place; ++c) {
           const int i = bx + cellCoord(c, 0), j = by + cellCoord(c, 1), k = bz + cellCoord(c, 2);
           const int di = cellCoord(c, 0) ? 1 : -1, dj = cellCoord(c, 1) ? 1 : -1, dk = cellCoord(c, 2) ? 1 : -1;
-          place = !g.at(i + di, j, k) || !g.at(i, j + dj, k) || (dim == 3 && !g.at(i, j, k + dk));
+          place = g.at(i + di, j, k) != first || g.at(i, j + dj, k) != first ||
+                  (dim == 3 && g.at(i, j, k + dk) != first);
         }
         if (place) {
-          out.push_back({uint8_t(level), cs, origin, mask});
+          if (!mixed) {
+            out.push_back({uint8_t(level), cs, origin, mask, first});
+            continue;
+          }
+          uint8_t done = 0;  // cells already given to an element
+          for (int c = 0; c < cells; ++c) {
+            if (!(mask & ~done & (1u << c))) continue;
+            uint8_t part = 0;
+            for (int d = c; d < cells; ++d)
+              if (lab[d] == lab[c]) part |= uint8_t(1u << d);
+            done |= part;
+            out.push_back({uint8_t(level), cs, origin, part, lab[c]});
+          }
         } else {
-          // Step 3 of sec. 3.2: an unplaced group can only be full (a partial one always gets an
-          // element), so halving never meets a mixed group.
-          assert(mask == full);
-          next[nextIndex] = 1;
+          // Step 3 of sec. 3.2: an unplaced group can only be full of one label (a partial or
+          // mixed one always gets an element), so halving never meets a mixed group.
+          assert(mask == full && !mixed);
+          next[nextIndex] = first;
         }
       }
   return next;
@@ -106,14 +139,17 @@ std::vector<Placed> place(const VoxelVolume& volume, LayoutKind kind) {
   const int dim = volume.dim();
   std::array<int, 3> dims = volume.dims();
   std::array<int, 3> nextDims{};
-  std::vector<uint8_t> next = scanLevel({dims, volume.data().data()}, dim, 0, kind, out, nextDims);
+  std::vector<uint16_t> next =
+      volume.hasLabels()
+          ? scanLevel(GridView<uint16_t>{dims, volume.labels().data()}, dim, 0, kind, out, nextDims)
+          : scanLevel(GridView<uint8_t>{dims, volume.data().data()}, dim, 0, kind, out, nextDims);
   if (kind != LayoutKind::Gradational) return out;
   // Gradational: halve and repeat until the working volume is empty (steps 3-5). Every level
   // places at least its outermost filled cells, so this terminates after ~log2(size) levels.
-  for (int level = 1; std::any_of(next.begin(), next.end(), [](uint8_t v) { return v != 0; }); ++level) {
-    const std::vector<uint8_t> cur = std::move(next);
+  for (int level = 1; std::any_of(next.begin(), next.end(), [](uint16_t v) { return v != 0; }); ++level) {
+    const std::vector<uint16_t> cur = std::move(next);
     dims = nextDims;
-    next = scanLevel({dims, cur.data()}, dim, level, kind, out, nextDims);
+    next = scanLevel(GridView<uint16_t>{dims, cur.data()}, dim, level, kind, out, nextDims);
   }
   return out;
 }
@@ -355,6 +391,7 @@ Layout buildLayout(const VoxelVolume& volume, LayoutKind kind) {
   L.cellSize.reserve(placed.size());
   L.origin.reserve(placed.size());
   L.cellMask.reserve(placed.size());
+  L.label.reserve(placed.size());
   L.elemStart.reserve(placed.size() + 1);
   L.elemStart.push_back(0);
   L.elemVerts.reserve(placed.size() * size_t(cells));
@@ -390,6 +427,7 @@ Layout buildLayout(const VoxelVolume& volume, LayoutKind kind) {
     L.cellSize.push_back(e.cellSize);
     L.origin.push_back(e.origin);
     L.cellMask.push_back(e.mask);
+    L.label.push_back(e.label);
   }
   return L;
 }

@@ -16,6 +16,24 @@ Scaling parseScaling(const std::string& name) {
 
 const char* scalingName(Scaling s) { return s == Scaling::Paper ? "paper" : "consistent"; }
 
+MaterialSettings regionMaterial(const MaterialSettings& m, uint16_t label) {
+  MaterialSettings out = m;
+  out.regions.clear();
+  for (const RegionMaterial& r : m.regions)
+    if (r.label == label) {
+      out.youngsModulus = r.youngsModulus;
+      out.density = r.density;
+      out.paperK = r.paperK;
+      return out;
+    }
+  if (label == 1) return out;
+  std::string known;
+  for (const RegionMaterial& r : m.regions) known += (known.empty() ? "" : ", ") + std::to_string(r.label);
+  throw InputError("regions: label " + std::to_string(label) + " of the volume has no entry (expected one with \"label\": " +
+                   std::to_string(label) + "; the table has " + (known.empty() ? std::string("none") : known) +
+                   ", and label 1 takes the body's own fields)");
+}
+
 // 2D bodies are slabs one voxel thick: a lattice voxel's volume is h^3 in both.
 Real paperVertexMass(const MaterialSettings& m, Real h) {
   const Real voxelVolume = h * h * h;

@@ -19,12 +19,43 @@ void placeVertices(const Layout& layout, const Vec3& origin, RestModel& m) {
     m.restPositions[i] = origin + layout.vertices[i].cast<Real>() * layout.voxelSize;
 }
 
-// Step 2: lumped masses (material.h's rules), their inverses and the total.
+// Step 2a: the materials table, one entry per label of the layout (ascending), and each
+// element's entry.
+void assignMaterials(const Layout& layout, RestModel& m) {
+  const size_t E = layout.numElements();
+  const bool labelled = layout.label.size() == E;  // a hand-made Layout may carry no labels: all 1
+  std::vector<uint8_t> seen(65536, 0);
+  if (labelled)
+    for (uint16_t l : layout.label) seen[l] = 1;
+  else
+    seen[1] = 1;
+  std::vector<uint16_t> index(65536, 0);
+  for (size_t l = 1; l < seen.size(); ++l)
+    if (seen[l]) {
+      index[l] = uint16_t(m.materials.size());
+      m.materials.push_back(regionMaterial(m.material, uint16_t(l)));
+      m.materialLabel.push_back(uint16_t(l));
+    }
+  m.elementMaterial.resize(E);
+  for (size_t e = 0; e < E; ++e) m.elementMaterial[e] = index[labelled ? layout.label[e] : 1];
+}
+
+// Step 2b: lumped masses (material.h's rules, each element's cells with its own density), their
+// inverses and the total.
 void lumpMasses(const Layout& layout, RestModel& m) {
   const int D = layout.dim;
   const size_t V = layout.numVertices();
-  if (m.material.scaling == Scaling::Paper) {
-    m.mass.assign(V, paperVertexMass(m.material, layout.voxelSize));
+  if (m.material.scaling == Scaling::Paper && m.materials.size() == 1) {
+    m.mass.assign(V, paperVertexMass(m.materials[0], layout.voxelSize));
+  } else if (m.material.scaling == Scaling::Paper) {
+    // One voxel's mass per vertex; a vertex on a border between regions takes the lightest of
+    // the elements that own it (the shorter period, so dt = auto stays on the safe side).
+    m.mass.assign(V, std::numeric_limits<Real>::infinity());
+    for (size_t e = 0; e < layout.numElements(); ++e) {
+      const Real mv = paperVertexMass(m.materials[m.elementMaterial[e]], layout.voxelSize);
+      for (uint32_t p = layout.elemStart[e]; p < layout.elemStart[e + 1]; ++p)
+        if (layout.pairIsOwn[p]) m.mass[layout.elemVerts[p]] = std::min(m.mass[layout.elemVerts[p]], mv);
+    }
   } else {
     // Each filled cell (the whole block for a full element) gives its mass in equal parts to
     // its corners; those are always model vertices (an element's own vertices).
@@ -33,7 +64,7 @@ void lumpMasses(const Layout& layout, RestModel& m) {
     for (size_t e = 0; e < layout.numElements(); ++e) {
       const bool full = layout.isFull(e);
       const int cs = full ? 2 * layout.cellSize[e] : layout.cellSize[e];
-      const Real cornerMass = cellCornerMass(m.material, layout.voxelSize, cs, D);
+      const Real cornerMass = cellCornerMass(m.materials[m.elementMaterial[e]], layout.voxelSize, cs, D);
       const int cells = D == 3 ? 8 : 4;
       for (int c = 0; c < (full ? 1 : cells); ++c) {
         if (!full && !(layout.cellMask[e] >> c & 1)) continue;
@@ -79,7 +110,7 @@ void buildElements(const Layout& layout, RestModel& m) {
       minMass = std::min(minMass, m.mass[m.elemVerts[p]]);
     }
     m.size[e] = (layout.kind == LayoutKind::Voxel ? 1 : 2) * layout.cellSize[e] * layout.voxelSize;
-    m.stiffness[e] = elementStiffness(m.material, layout.dim, layout.voxelSize, layout.regionVoxels(e), m.size[e],
+    m.stiffness[e] = elementStiffness(m.materials[m.elementMaterial[e]], layout.dim, layout.voxelSize, layout.regionVoxels(e), m.size[e],
                                       &m.restOffsets[b], n);
     // The lightest vertex bounds the element's period from below.
     smallest = std::min(smallest, springPeriod(minMass, m.stiffness[e]));
@@ -141,6 +172,7 @@ RestModel buildRestModel(const Layout& layout, const VoxelVolume& volume, const 
   if (m.dim == 2) m.origin.z() = 0;  // a 2D body lies in the plane z = 0
   if (!m.origin.allFinite()) throw InputError("origin: must be finite");
   placeVertices(layout, m.origin, m);
+  assignMaterials(layout, m);
   lumpMasses(layout, m);
   buildElements(layout, m);
   vertexPeriod(m);
@@ -166,7 +198,8 @@ size_t RestModel::bodyOfVertex(size_t v) const {
 size_t RestModel::memoryBytes() const {
   auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
   return sizeof(*this) + bytes(restPositions) + bytes(mass) + bytes(invMass) + bytes(onSurface) + bytes(stiffness) +
-         bytes(size) + bytes(level) + bytes(elemStart) + bytes(elemVerts) + bytes(restOffsets) + bytes(bodies);
+         bytes(size) + bytes(level) + bytes(elementMaterial) + bytes(elemStart) + bytes(elemVerts) +
+         bytes(restOffsets) + bytes(bodies) + bytes(materials) + bytes(materialLabel);
 }
 
 }  // namespace gradel

@@ -199,6 +199,12 @@ void writeVtu(const fs::path& file, const RestModel& model, const State& state, 
   out += "      <CellData Scalars=\"level\">\n";
   appendDataArray(out, "level", 1, level, encoding);
   appendDataArray(out, "element_id", 1, elementId, encoding);
+  if (model.materials.size() > 1 && model.elementMaterial.size() == NE) {
+    // A body of several materials: each element's region label (material.regions).
+    std::vector<int64_t> region(ne);
+    for (size_t e = 0; e < ne; ++e) region[e] = model.materialLabel[model.elementMaterial[e0 + e]];
+    appendDataArray(out, "region", 1, region, encoding);
+  }
   if (!elementStress.empty()) appendDataArray(out, "element_stress", 1, cellStress, encoding);
   out += "      </CellData>\n";
   out += "      <Points>\n";

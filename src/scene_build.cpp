@@ -24,7 +24,15 @@ void buildBody(const BodySettings& settings, int dim, const SizeLimits& limits, 
   }
   checkLayoutSize(b.volume, settings.layout, limits, settings.sizeKey);
   b.layout = buildLayout(b.volume, settings.layout);
-  auto model = std::make_shared<RestModel>(buildRestModel(b.layout, b.volume, settings.material, settings.position));
+  std::shared_ptr<RestModel> model;
+  try {
+    model = std::make_shared<RestModel>(buildRestModel(b.layout, b.volume, settings.material, settings.position));
+  } catch (const InputError& e) {
+    // A label of the volume without a material: name the volume file and the scene key.
+    const std::string m = e.what();
+    if (m.rfind("regions: ", 0) != 0) throw;
+    throw InputError((settings.source ? settings.source->describe() : settings.name) + ": material." + m);
+  }
   b.model = model;
   const Vec3& origin = model->origin;
   if (!latticeMesh.triangles.empty() && dim == 3) {

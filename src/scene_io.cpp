@@ -530,6 +530,7 @@ Primitive readPrimitive(Fields& f) {
       p.axis = f.choice("axis", {"x", "y", "z"}, 2);
     }
   }
+  p.label = uint16_t(f.optInteger("label", 1, 65535).value_or(p.label));
   f.finish();
   return p;
 }
@@ -568,6 +569,14 @@ std::shared_ptr<const VolumeSource> readSource(Fields f, int dim, Real voxelSize
   if (!grey) {
     f.forbid("threshold", greyOnly);
     f.forbid("range", greyOnly);
+    f.forbid("labels", "only grey-level formats (nrrd, nifti, raw) hold labels; " + name + " files are binary");
+  }
+  if (const json* l = f.take("labels")) {
+    if (!l->is_boolean()) f.failWrongType("labels", *l, "true or false");
+    spec.grey.labels = l->get<bool>();
+    if (spec.grey.labels)
+      for (const char* key : {"threshold", "range"})
+        f.forbid(key, "\"labels\": true keeps every value as a label (0 empty); no threshold or range");
   }
   spec.grey.threshold = f.optNumber("threshold", kAny, "");
   if (const json* r = f.take("range")) {
@@ -669,6 +678,22 @@ void readMaterial(Fields f, MaterialSettings& m) {
   m.youngsModulus = f.number("youngs_modulus", m.youngsModulus, kPositive, "Pa");
   m.density = f.number("density", m.density, kPositive, "kg/m^3");
   m.paperK = f.number("k", m.paperK, kPositive, "N");
+  // Per-label materials; a field an entry leaves out is the body's (read above).
+  std::vector<Fields> regions = f.objectArray("regions", false);
+  for (size_t i = 0; i < regions.size(); ++i) {
+    Fields& rf = regions[i];
+    RegionMaterial r;
+    r.label = uint16_t(rf.requireInteger("label", 1, 65535));
+    for (size_t j = 0; j < i; ++j)
+      if (m.regions[j].label == r.label)
+        rf.fail("label", std::to_string(r.label) + " appears twice (also in regions[" + std::to_string(j) +
+                             "]; expected one entry per label)");
+    r.youngsModulus = rf.number("youngs_modulus", m.youngsModulus, kPositive, "Pa");
+    r.density = rf.number("density", m.density, kPositive, "kg/m^3");
+    r.paperK = rf.number("k", m.paperK, kPositive, "N");
+    rf.finish();
+    m.regions.push_back(r);
+  }
   coreCheck(f, [&] { validate(m); });
   f.finish();
 }
@@ -896,6 +921,23 @@ Scene parseScene(const std::string& jsonText, const std::string& sourceName) {
   for (Fields& pf : top.objectArray("pins", false)) scene.pins.push_back(readPin(pf, scene));
   top.finish();
 
+  // A union's labels need materials (a volume file's labels are checked when it is read).
+  for (size_t k = 0; k < scene.numBodies(); ++k) {
+    const BodySettings& body = k == 0 ? scene.body : scene.moreBodies[k - 1];
+    if (body.source) continue;
+    // The body's key path ("body" or "bodies[k]"), from the key that set its grid.
+    const std::string key = body.sizeKey.substr(0, body.sizeKey.rfind('.'));
+    const auto& prims = body.shape.primitives;
+    for (size_t i = 0; i < prims.size(); ++i) {
+      try {
+        (void)regionMaterial(body.material, prims[i].label);
+      } catch (const InputError&) {
+        failAt(ctx, key + ".primitives[" + std::to_string(i) + "].label",
+               std::to_string(prims[i].label) + " has no material (expected an entry with \"label\": " +
+                   std::to_string(prims[i].label) + " in material.regions)");
+      }
+    }
+  }
   return scene;
 }
 

@@ -71,6 +71,17 @@ void validate(const MaterialSettings& s) {
   positive("youngs_modulus", s.youngsModulus);
   positive("density", s.density);
   positive("k", s.paperK);
+  for (size_t i = 0; i < s.regions.size(); ++i) {
+    const RegionMaterial& r = s.regions[i];
+    const std::string at = "regions[" + std::to_string(i) + "].";
+    if (r.label == 0) fail((at + "label").c_str(), "must be in [1, 65535] (0 is empty space)", 0);
+    for (size_t j = 0; j < i; ++j)
+      if (s.regions[j].label == r.label)
+        fail((at + "label").c_str(), "appears twice (also regions[" + std::to_string(j) + "])", r.label);
+    positive((at + "youngs_modulus").c_str(), r.youngsModulus);
+    positive((at + "density").c_str(), r.density);
+    positive((at + "k").c_str(), r.paperK);
+  }
 }
 
 }  // namespace gradel

@@ -1,5 +1,6 @@
 #include "gradel/shapes.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace gradel {
@@ -28,19 +29,24 @@ VoxelVolume rasterize(const ShapeSpec& spec) {
     if (p.kind == PrimitiveKind::Cylinder && spec.dim == 2)
       throw InputError("shape: cylinder is a 3D shape; use box or sphere (disk) in 2D");
     if (p.axis < 0 || p.axis > 2) throw InputError("shape: cylinder axis must be x, y or z");
+    if (p.label == 0) throw InputError("shape: a primitive's label must be in [1, 65535] (0 is empty space)");
   }
+  const bool labelled =
+      std::any_of(spec.primitives.begin(), spec.primitives.end(), [](const Primitive& p) { return p.label != 1; });
   for (int k = 0; k < vol.nz(); ++k)
     for (int j = 0; j < vol.ny(); ++j)
       for (int i = 0; i < vol.nx(); ++i) {
         const Vec3 c(i + 0.5, j + 0.5, spec.dim == 3 ? k + 0.5 : 0.0);
+        uint16_t label = 0;
         for (const Primitive& p : spec.primitives) {
           Primitive q = p;
           if (spec.dim == 2) q.center.z() = 0, q.min.z() = -1, q.max.z() = 1;
           if (q.contains(c)) {
-            vol.set(i, j, k, true);
-            break;
+            label = p.label;
+            if (!labelled) break;  // binary: the first hit decides; labelled: the last one does
           }
         }
+        if (label != 0) vol.setLabel(i, j, k, label);
       }
   if (vol.countFilled() == 0) throw InputError("shape: the volume is empty (no voxel inside any primitive)");
   return vol;

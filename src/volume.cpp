@@ -25,6 +25,37 @@ bool VoxelVolume::isSurface(int i, int j, int k) const {
   return false;
 }
 
+void VoxelVolume::set(int i, int j, int k, bool v) {
+  const size_t n = index(i, j, k);
+  data_[n] = v ? 1 : 0;
+  if (!labels_.empty()) labels_[n] = v ? (labels_[n] != 0 ? labels_[n] : uint16_t(1)) : uint16_t(0);
+}
+
+void VoxelVolume::setLabel(int i, int j, int k, uint16_t label) {
+  const size_t n = index(i, j, k);
+  data_[n] = label != 0 ? 1 : 0;
+  if (labels_.empty() && label <= 1) return;  // still binary
+  enableLabels()[n] = label;
+}
+
+std::vector<uint16_t>& VoxelVolume::enableLabels() {
+  if (labels_.empty()) {
+    labels_.resize(data_.size());
+    for (size_t n = 0; n < data_.size(); ++n) labels_[n] = data_[n] != 0 ? 1 : 0;
+  }
+  return labels_;
+}
+
+std::vector<uint16_t> VoxelVolume::labelsPresent() const {
+  if (labels_.empty()) return countFilled() > 0 ? std::vector<uint16_t>{1} : std::vector<uint16_t>{};
+  std::vector<uint8_t> seen(65536, 0);
+  for (uint16_t l : labels_) seen[l] = 1;
+  std::vector<uint16_t> out;
+  for (size_t l = 1; l < seen.size(); ++l)
+    if (seen[l]) out.push_back(uint16_t(l));
+  return out;
+}
+
 size_t VoxelVolume::countFilled() const {
   size_t c = 0;
   for (uint8_t v : data_) c += v != 0;

@@ -18,14 +18,14 @@
 //   belongs to that element.
 //
 // Placement (sec. 3.2), `gradational`: at each level, a group gets an element if it holds a
-//   surface cell (a filled cell with an empty face neighbour at that level; see volume.h) or an
-//   empty cell (partly filled group); those cells are then emptied, the volume is halved, the
+//   surface cell (a filled cell with an empty face neighbour, or one of another label, at that
+//   level; see volume.h) or an empty cell (partly filled group) or two labels; those cells are then emptied, the volume is halved, the
 //   element size doubles; repeat until the volume is empty. `uniform`: every group with a filled
 //   voxel at level 0 is an element. `voxel`: one element per filled voxel.
 //
 // Numbering: vertices are sorted by lattice coordinate (z, then y, then x); elements by level,
-//   then block origin (z, y, x), then (voxel layout only, where up to 8 elements share a block)
-//   by cell index. Each element's vertex list is sorted by vertex id.
+//   then block origin (z, y, x), then (where several elements share a block: the voxel layout,
+//   and blocks holding two labels) by their lowest cell index. Each element's vertex list is sorted by vertex id.
 #pragma once
 
 #include <array>
@@ -56,6 +56,7 @@ struct Layout {
   std::vector<int32_t> cellSize;  ///< Cell edge [voxels]: 2^L (1 for the voxel layout).
   std::vector<Int3> origin;       ///< Lower corner of the 2x2x2 block [voxels].
   std::vector<uint8_t> cellMask;  ///< Filled cells of the block (bit cx + 2cy + 4cz).
+  std::vector<uint16_t> label;    ///< Region label of every voxel of the element (1 for a binary volume).
 
   // ---- element -> vertex lists, compressed rows ----
   std::vector<uint32_t> elemStart;  ///< Size elements + 1; pairs of element e are [elemStart[e], elemStart[e+1]).

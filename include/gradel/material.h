@@ -20,9 +20,16 @@
 //   the element's size (its block edge s_e in metres), f_i = k (M R0_i - r_i) / s_e, i.e.
 //   k_e = k / s_e with k in newtons. Coarse elements are softer per metre; kept to reproduce
 //   Table 1.
+//
+// Regions (docs/layout.md, docs/scenes.md `material.regions`): a labelled volume (volume.h) gives
+//   each element one label (layout.h: no element mixes two), and each label its own Young's
+//   modulus, density and paper k. The scaling is the body's. Label 1 without an entry of its own
+//   takes the body's fields, so a binary volume (every voxel label 1) is the one-material body.
 #pragma once
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "gradel/types.h"
 
@@ -32,12 +39,27 @@ enum class Scaling { Consistent, Paper };
 Scaling parseScaling(const std::string& name);  ///< "consistent" | "paper"; InputError otherwise.
 const char* scalingName(Scaling s);
 
+/// The material of the voxels of one label (a region of a labelled volume).
+struct RegionMaterial {
+  uint16_t label = 2;          ///< Region label, 1..65535 (volume.h).
+  Real youngsModulus = 1.0e5;  ///< [Pa] as MaterialSettings::youngsModulus.
+  Real density = 1000.0;       ///< [kg/m^3] as MaterialSettings::density.
+  Real paperK = 10000.0;       ///< [N] as MaterialSettings::paperK.
+};
+
 struct MaterialSettings {
   Scaling scaling = Scaling::Consistent;  ///< See above.
   Real youngsModulus = 1.0e5;             ///< [Pa] consistent scaling: Young's-modulus-like E (soft rubber / gel).
   Real density = 1000.0;                  ///< [kg/m^3] both scalings (paper: mass per voxel = density * h^3).
   Real paperK = 10000.0;                  ///< [N] paper scaling: force per unit strain (the paper's k).
+  std::vector<RegionMaterial> regions;    ///< Per-label materials, distinct labels; label 1 without
+                                          ///< an entry takes the fields above.
 };
+
+/// The material of the voxels of `label`: its entry of `m.regions` (with m's scaling), else for
+/// label 1 the fields of m; `regions` of the result is empty. InputError
+/// "regions: label L has no entry (...)" for another label without an entry.
+MaterialSettings regionMaterial(const MaterialSettings& m, uint16_t label);
 
 // ---- the rules, as pure functions (src/material.cpp); buildRestModel applies them (model.h) ----
 

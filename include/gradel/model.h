@@ -29,7 +29,7 @@ struct RestModel {
   int dim = 3;
   // Body 0's lattice and material (for a one-body model, the body's); per body: `bodies`.
   Real voxelSize = 1;  ///< [m] body 0's voxel edge.
-  MaterialSettings material;  ///< Body 0's material.
+  MaterialSettings material;  ///< Body 0's material as given (with its per-label `regions`).
   Vec3 origin{0, 0, 0};  ///< [m] world position of body 0's lattice point (0, 0, 0) at rest.
   /// The bodies, in vertex and element order (buildRestModel: one, covering everything;
   /// combineRestModels: one per combined model). Never empty for a built model.
@@ -45,6 +45,11 @@ struct RestModel {
   std::vector<Real> stiffness;  ///< k_e [N/m], see material.h.
   std::vector<Real> size;       ///< [m] block edge 2 * cellSize * h (voxel layout: h); normalises stress.
   std::vector<uint8_t> level;   ///< Layout level (0 = finest).
+  std::vector<uint16_t> elementMaterial;  ///< Index into `materials` of the element's region.
+
+  // ---- materials per region (material.h regionMaterial): one per label of the layout ----
+  std::vector<MaterialSettings> materials;  ///< Ascending label; the stiffness and masses above come from them.
+  std::vector<uint16_t> materialLabel;      ///< The label of each entry of `materials` ({1} for a binary volume).
 
   // ---- element -> vertex (compressed rows) ----
   std::vector<uint32_t> elemStart;  ///< Size elements + 1.
@@ -72,8 +77,11 @@ struct RestModel {
 BodyRange wholeModelBody(const RestModel& m);
 
 /// Builds the rest model. `origin` is the world position [m] of lattice point (0,0,0); a 2D
-/// body lies in the plane z = 0 (origin's z is dropped). Throws InputError for invalid material
-/// parameters (validate(MaterialSettings)) or a non-finite origin.
+/// body lies in the plane z = 0 (origin's z is dropped). Each element takes the material of its
+/// label (layout.label, material.h regionMaterial): its stiffness from that material's rules and
+/// its cells' masses from that material's density. Throws InputError for invalid material
+/// parameters (validate(MaterialSettings)), a label of the layout without a material
+/// ("regions: label 3 ..."), or a non-finite origin.
 RestModel buildRestModel(const Layout& layout, const VoxelVolume& volume, const MaterialSettings& material,
                          const Vec3& origin);
 

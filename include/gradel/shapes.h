@@ -1,7 +1,9 @@
 // Procedural voxel shapes: box, sphere (disk in 2D), capped cylinder, and unions of them.
 //
 // Primitives are given in lattice units (voxels). A voxel is filled when its centre
-// (i + 0.5, j + 0.5, k + 0.5) lies inside (or on) any primitive of the union.
+// (i + 0.5, j + 0.5, k + 0.5) lies inside (or on) any primitive of the union. Each primitive
+// carries a region label (volume.h, default 1); where primitives overlap, the last one listed
+// gives the voxel its label (paint order: a stiff inclusion is listed after the tissue around it).
 #pragma once
 
 #include <string>
@@ -21,6 +23,7 @@ struct Primitive {
   Real radius = 0;       ///< Sphere / cylinder radius [voxels].
   Real halfLength = 0;   ///< Cylinder: half the length along its axis [voxels].
   int axis = 2;          ///< Cylinder axis: 0 = x, 1 = y, 2 = z.
+  uint16_t label = 1;    ///< Region label of the voxels it covers (1..65535); later primitives win.
 
   bool contains(const Vec3& p) const;
 };
@@ -33,7 +36,7 @@ struct ShapeSpec {
   std::vector<Primitive> primitives;    ///< Union; at least one.
 };
 
-/// Rasterises the union. Throws InputError for a bad spec or an empty result.
+/// Rasterises the union (labelled when a primitive's label is not 1). Throws InputError for a bad spec or an empty result.
 VoxelVolume rasterize(const ShapeSpec& spec);
 
 /// The CLI's presets, inscribed in a size^dim grid: "box" (the full grid), "sphere" (disk in

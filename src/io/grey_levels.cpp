@@ -58,6 +58,55 @@ void convertSlice(const uint8_t* in, size_t n, bool swap, const SampleLayout& la
   }
 }
 
+// Labels: the value itself, which must be an integer in [0, 65535]; NaN is empty. Returns false
+// (and writes 0) for any other value, which the caller reports with the sample's index.
+inline bool labelOf(double v, SampleStats& s, uint16_t& label) {
+  label = 0;
+  if (std::isnan(v)) return true;
+  if (!s.any) s.min = s.max = v, s.any = true;
+  s.min = std::min(s.min, v);
+  s.max = std::max(s.max, v);
+  if (!(v >= 0 && v <= 65535) || v != std::floor(v)) return false;
+  label = uint16_t(v);
+  return true;
+}
+
+// Converts n samples of type T into labels at `lab` and fill bytes at `out`; returns the index
+// of the first value that is no label (that value in `bad`), or n.
+template <class T>
+size_t convertLabels(const uint8_t* in, size_t n, bool swap, const SampleLayout& layout, bool scaled,
+                     SampleStats& stats, uint8_t* out, uint16_t* lab, double& bad) {
+  for (size_t i = 0; i < n; ++i) {
+    double v = loadSample<T>(in + i * sizeof(T), swap);
+    if (scaled) v = layout.scale * v + layout.offset;
+    if (!labelOf(v, stats, lab[i])) return bad = v, i;
+    out[i] = lab[i] != 0 ? 1 : 0;
+  }
+  return n;
+}
+
+// Calls f(T{}) with T the C++ type of `type`: the type switch stays out of the per-sample loops.
+template <class F>
+void withSampleType(ScalarType type, F&& f) {
+  switch (type) {
+    case ScalarType::Int8: return f(int8_t{});
+    case ScalarType::UInt8: return f(uint8_t{});
+    case ScalarType::Int16: return f(int16_t{});
+    case ScalarType::UInt16: return f(uint16_t{});
+    case ScalarType::Int32: return f(int32_t{});
+    case ScalarType::UInt32: return f(uint32_t{});
+    case ScalarType::Int64: return f(int64_t{});
+    case ScalarType::UInt64: return f(uint64_t{});
+    case ScalarType::Float32: return f(float{});
+    case ScalarType::Float64: return f(double{});
+  }
+}
+
+[[noreturn]] void failLabel(const ByteStream& in, size_t index, double v) {
+  in.fail("labels: sample " + std::to_string(index) + " is " + numberText(v) +
+          " (expected an integer label in [0, 65535]: 0 empty, 1..65535 a region)");
+}
+
 }  // namespace
 
 ScalarType parseScalarType(const std::string& name) {
@@ -80,6 +129,7 @@ size_t scalarTypeBytes(ScalarType t) {
 }
 
 std::string GreyRule::describe() const {
+  if (labels) return "labels (non-zero)";
   if (threshold) return "threshold " + numberText(*threshold);
   if (rangeLo) return "range [" + numberText(*rangeLo) + ", " + numberText(*rangeHi) + "]";
   return "non-zero";
@@ -98,6 +148,7 @@ SampleStats readGreyLevels(ByteStream& in, const SampleLayout& layout, const Gre
   // A slice, or the whole data when smaller (small volumes need no 1 MiB buffer).
   std::vector<uint8_t> buf(std::min<uint64_t>(kSlice - kSlice % bytes, uint64_t(count) * bytes));
   uint8_t* out = volume.data().data();
+  uint16_t* lab = rule.labels ? volume.enableLabels().data() : nullptr;
   SampleStats stats;
   size_t done = 0;
   while (done < count) {
@@ -105,18 +156,16 @@ SampleStats readGreyLevels(ByteStream& in, const SampleLayout& layout, const Gre
     in.readExact(buf.data(), n * bytes, "voxel data (" + std::to_string(count) + " samples)");
     const uint8_t* in8 = buf.data();
     uint8_t* o = out + done;
-    switch (layout.type) {
-      case ScalarType::Int8: convertSlice<int8_t>(in8, n, swap, layout, scaled, rule, stats, o); break;
-      case ScalarType::UInt8: convertSlice<uint8_t>(in8, n, swap, layout, scaled, rule, stats, o); break;
-      case ScalarType::Int16: convertSlice<int16_t>(in8, n, swap, layout, scaled, rule, stats, o); break;
-      case ScalarType::UInt16: convertSlice<uint16_t>(in8, n, swap, layout, scaled, rule, stats, o); break;
-      case ScalarType::Int32: convertSlice<int32_t>(in8, n, swap, layout, scaled, rule, stats, o); break;
-      case ScalarType::UInt32: convertSlice<uint32_t>(in8, n, swap, layout, scaled, rule, stats, o); break;
-      case ScalarType::Int64: convertSlice<int64_t>(in8, n, swap, layout, scaled, rule, stats, o); break;
-      case ScalarType::UInt64: convertSlice<uint64_t>(in8, n, swap, layout, scaled, rule, stats, o); break;
-      case ScalarType::Float32: convertSlice<float>(in8, n, swap, layout, scaled, rule, stats, o); break;
-      case ScalarType::Float64: convertSlice<double>(in8, n, swap, layout, scaled, rule, stats, o); break;
-    }
+    size_t bad = n;
+    double badValue = 0;
+    withSampleType(layout.type, [&](auto tag) {
+      using T = decltype(tag);
+      if (lab)
+        bad = convertLabels<T>(in8, n, swap, layout, scaled, stats, o, lab + done, badValue);
+      else
+        convertSlice<T>(in8, n, swap, layout, scaled, rule, stats, o);
+    });
+    if (bad < n) failLabel(in, done + bad, badValue);
     done += n;
   }
   return stats;
@@ -125,6 +174,7 @@ SampleStats readGreyLevels(ByteStream& in, const SampleLayout& layout, const Gre
 SampleStats readGreyLevelsText(ByteStream& in, const GreyRule& rule, VoxelVolume& volume) {
   const size_t count = volume.size();
   uint8_t* out = volume.data().data();
+  uint16_t* lab = rule.labels ? volume.enableLabels().data() : nullptr;
   SampleStats stats;
   size_t done = 0;
   std::string token;
@@ -136,7 +186,13 @@ SampleStats readGreyLevelsText(ByteStream& in, const GreyRule& rule, VoxelVolume
     const auto r = std::from_chars(token.data(), token.data() + token.size(), v);
     if (r.ec != std::errc() || r.ptr != token.data() + token.size())
       in.fail("ascii sample " + std::to_string(done) + ": '" + token.substr(0, 20) + "' is not a number");
-    out[done++] = classify(v, rule, stats);
+    if (lab) {
+      if (!labelOf(v, stats, lab[done])) failLabel(in, done, v);
+      out[done] = lab[done] != 0 ? 1 : 0;
+      ++done;
+    } else {
+      out[done++] = classify(v, rule, stats);
+    }
     token.clear();
   };
   while (in.read(&c, 1) == 1) {

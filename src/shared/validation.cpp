@@ -32,11 +32,29 @@ Scene barScene(const BarSpec& bar, const SimulationSettings& sim, bool clamped) 
   box.min = Vec3::Zero();
   box.max = Vec3(bar.along, bar.across, bar.across);
   shape.primitives = {box};
+  if (bar.split != BarSplit::None) {
+    Primitive second = box;  // painted over the first half's label 1 (shapes.h: later primitives win)
+    if (bar.split == BarSplit::Series)
+      second.min.x() = bar.along / 2;
+    else
+      second.min.y() = bar.across / 2;
+    second.label = 2;
+    shape.primitives.push_back(second);
+  }
   s.body.layout = bar.layout;
   s.body.material = bar.material;
   s.simulation = sim;
   if (clamped) s.pins = {facePin(bar, 0)};
   return s;
+}
+
+Real mixtureModulus(BarSplit split, Real E1, Real E2) {
+  switch (split) {
+    case BarSplit::Series: return 2 / (1 / E1 + 1 / E2);
+    case BarSplit::Parallel: return (E1 + E2) / 2;
+    case BarSplit::None: break;
+  }
+  return E1;
 }
 
 Real beamTipSag(Real L, Real a, Real rho, Real E, Real g) {

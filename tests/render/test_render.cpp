@@ -8,9 +8,11 @@
 
 #include "gradel/image.h"
 #include "gradel/render/draw_list.h"
+#include "gradel/render/layout_picture.h"
 #include "gradel/render/offscreen.h"
 #include "gradel/render/renderer.h"
 #include "gradel/scene.h"
+#include "gradel/shapes.h"
 
 namespace gradel::render {
 namespace {
@@ -185,6 +187,56 @@ TEST(ViewerWindow, ScreenshotShowsBodyAndPanel) {
   EXPECT_GT(body, 1000) << "the body is visible";
   EXPECT_GT(panel, 100) << "the ImGui panel is drawn";
   fs::remove(shot);
+}
+
+// The picture of docs/layout.md (materials per region): a 2D block of tissue (label 1) with a
+// round inclusion (label 2). Pure pixels, no OpenGL. With GRADEL_DOC_IMAGES=DIR set it also
+// writes DIR/layout-regions.png (the committed docs/img/layout-regions.png).
+TEST(LayoutPicture, TwoLabelsShowOneColourPerElementAndTheirBorder) {
+  ShapeSpec s;
+  s.dim = 2;
+  s.dims = {48, 32, 1};
+  Primitive tissue, inclusion;
+  tissue.kind = PrimitiveKind::Box;
+  tissue.max = Vec3(48, 32, 1);
+  inclusion.kind = PrimitiveKind::Sphere;
+  inclusion.center = Vec3(21, 15, 0);
+  inclusion.radius = 9.5;
+  inclusion.label = 2;
+  s.primitives = {tissue, inclusion};
+  const VoxelVolume v = rasterize(s);
+  const Layout L = buildLayout(v, LayoutKind::Gradational);
+  const int p = 12;
+  const Image img = layoutPicture(L, 0, p);
+  ASSERT_EQ(img.width, 50 * p);
+  ASSERT_EQ(img.height, 34 * p);
+  // The centre pixel of voxel (x, y): y up, one voxel of margin.
+  auto centre = [&](int x, int y) { return img.pixel((x + 1) * p + p / 2, img.height - 1 - ((y + 1) * p + p / 2)); };
+  EXPECT_GT(centre(21, 15)[2], centre(21, 15)[0]);  // label 2: blue
+  EXPECT_GT(centre(40, 28)[0], centre(40, 28)[2]);  // label 1: red
+  // Along the row y = 15, from the inclusion's centre outwards: a black line two pixels wide on
+  // each side where the labels meet (before the first voxel of label 1).
+  int first = 21;
+  while (v.label(first, 15, 0) == 2) ++first;
+  const int edge = (first + 1) * p, row = img.height - 1 - ((15 + 1) * p + p / 2);
+  for (int dx : {-2, -1, 0, 1}) {
+    const uint8_t* q = img.pixel(edge + dx, row);
+    EXPECT_EQ(q[0] + q[1] + q[2], 0) << dx;
+  }
+  // Every voxel of an element has the element's colour at its centre.
+  for (size_t e = 0; e < L.numElements(); ++e) {
+    const int c = L.cellSize[e];
+    const uint8_t* ref = nullptr;
+    for (int bit = 0; bit < 4; ++bit) {
+      if (!(L.cellMask[e] >> bit & 1)) continue;
+      for (int y = L.origin[e].y() + (bit >> 1) * c; y < L.origin[e].y() + (bit >> 1) * c + c; ++y)
+        for (int x = L.origin[e].x() + (bit & 1) * c; x < L.origin[e].x() + (bit & 1) * c + c; ++x) {
+          if (!ref) ref = centre(x, y);
+          EXPECT_TRUE(std::equal(ref, ref + 3, centre(x, y))) << "element " << e << " voxel " << x << "," << y;
+        }
+    }
+  }
+  if (const char* dir = std::getenv("GRADEL_DOC_IMAGES")) writePng((fs::path(dir) / "layout-regions.png").string(), img);
 }
 
 }  // namespace

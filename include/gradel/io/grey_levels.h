@@ -1,5 +1,6 @@
 // Grey-level volumes (CT, MRI, label maps) become binary: a voxel is filled when its value
-// passes a threshold or lies in a range. Shared by the NRRD, NIfTI and raw readers, which
+// passes a threshold or lies in a range; or, with `labels`, keep their integer values as region
+// labels (volume.h: 0 empty, 1..65535 a region). Shared by the NRRD, NIfTI and raw readers, which
 // convert their samples slice by slice straight into the VoxelVolume (no full-size copy of the
 // grey levels is ever held).
 #pragma once
@@ -26,6 +27,10 @@ size_t scalarTypeBytes(ScalarType t);
 struct GreyRule {
   std::optional<double> threshold;         ///< value >= threshold is filled [the file's units].
   std::optional<double> rangeLo, rangeHi;  ///< rangeLo <= value <= rangeHi is filled (both or neither).
+  /// Keep the values as labels: every value (after scaling) must be an integer in [0, 65535]
+  /// (0 = empty, NaN = empty); anything else is an InputError naming the sample. Not with
+  /// threshold or range.
+  bool labels = false;
 
   bool filled(double v) const {
     if (threshold) return v >= *threshold;
@@ -50,8 +55,8 @@ struct SampleStats {
   bool any = false;
 };
 
-/// Reads volume.size() samples (x fastest) from `in` and sets volume voxels by `rule`. NaN is
-/// empty. Reads in 1 MiB slices. Throws InputError when the data ends early.
+/// Reads volume.size() samples (x fastest) from `in` and sets volume voxels by `rule` (with
+/// `rule.labels`, their labels: VoxelVolume::enableLabels). NaN is empty. Reads in 1 MiB slices. Throws InputError when the data ends early.
 SampleStats readGreyLevels(ByteStream& in, const SampleLayout& layout, const GreyRule& rule, VoxelVolume& volume);
 
 /// Same, for whitespace-separated text samples (NRRD "ascii" encoding).

@@ -11,12 +11,18 @@
 
 namespace gradel {
 
+/// Two materials in one bar (materials per region): `Series` makes the far half (x >= L/2)
+/// label 2, `Parallel` the upper half of the section (y >= a/2); the rest is label 1. The
+/// materials are BarSpec::material (label 1) and its `regions` entry for label 2.
+enum class BarSplit { None, Series, Parallel };
+
 struct BarSpec {
   int across = 2;     ///< Voxels across the square section (y and z).
   int along = 16;     ///< Voxels along the bar (x).
   Real width = 0.02;  ///< [m] edge of the section a; voxel size = width / across.
   LayoutKind layout = LayoutKind::Uniform;
   MaterialSettings material;
+  BarSplit split = BarSplit::None;
   Real voxelSize() const { return width / across; }
   Real length() const { return along * voxelSize(); }  ///< [m] L.
 };
@@ -30,6 +36,11 @@ Scene barScene(const BarSpec& bar, const SimulationSettings& sim, bool clamped =
 /// 1.875^2 / (2 pi L^2) sqrt(E I / (rho A)) [Hz].
 Real beamTipSag(Real L, Real a, Real rho, Real E, Real g = 9.81);
 Real beamFrequency(Real L, Real a, Real rho, Real E);
+
+/// The stretch modulus [Pa] of a bar of two equal halves of moduli E1 and E2: in series
+/// (Reuss) 2 / (1/E1 + 1/E2), in parallel (Voigt) (E1 + E2) / 2; E1 for BarSplit::None. Exact for
+/// a Poisson-ratio-0 material such as the element model's.
+Real mixtureModulus(BarSplit split, Real E1, Real E2);
 
 /// Effective Young's modulus [Pa] of the bar's element model: both end faces pinned, the far one
 /// moved by `strain` L along x, static equilibrium (projective.h solveStatic), E = F L / (A dL)
