@@ -235,8 +235,8 @@ py::array stateView(py::object self, std::vector<Vec3>& v, size_t begin = 0, siz
 
 const BodyRange& bodyRange(Simulation& s, size_t body) {
   if (body >= s.built.numBodies())
-    throw py::index_error("no body " + std::to_string(body) + " (the scene has " +
-                          std::to_string(s.built.numBodies()) + ")");
+    throw py::index_error("no body " + std::to_string(body) + " (the scene has " + std::to_string(s.built.numBodies()) +
+                          ")");
   return s.built.range(body);
 }
 

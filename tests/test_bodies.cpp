@@ -114,7 +114,7 @@ TEST(MultiBody, SeparatedBodiesEvolveBitIdenticallyToEachAlone) {
       both.state().positions[i] = wa.state().positions[i], both.state().velocities[i] = wa.state().velocities[i];
     for (size_t i = 0; i < b.model->numVertices(); ++i)
       both.state().positions[VA + i] = wb.state().positions[i],
-                              both.state().velocities[VA + i] = wb.state().velocities[i];
+                                  both.state().velocities[VA + i] = wb.state().velocities[i];
     for (int s = 0; s < 300; ++s) wa.step(), wb.step(), both.step();
     EXPECT_GT(both.metrics().maxContactDepth + wa.state().velocities[0].norm(), 0);  // it moved
     size_t differ = 0;
@@ -270,7 +270,8 @@ TEST(MultiBodyScene, StateHashIsTheSameAtOneAndTwoThreads) {
     "domain": { "min": [-1, 0, -1], "max": [1, 1, 1] },
     "manipulators": [ { "type": "sphere", "radius": 0.03,
                         "path": [ { "t": 0, "position": [-0.3, 0.18, 0.08] }, { "t": 0.05, "position": [0.3, 0.18, 0.08] } ] } ]
-  })", kFile);
+  })",
+                       kFile);
   uint64_t hash[2];
   for (int t : {1, 2}) {
     s.simulation.threads = t;
@@ -290,8 +291,8 @@ TEST(MultiBodyScene, RunWritesPerBodyFramesPvdPartsAndMetricsRows) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   std::ofstream(dir / "two.json") << kTwoBalls;
-  const std::string cmd = "cd '" + dir.string() + "' && '" + std::string(GRADEL_CLI_PATH) +
-                          "' run two.json --out res > out.txt 2> err.txt";
+  const std::string cmd =
+      "cd '" + dir.string() + "' && '" + std::string(GRADEL_CLI_PATH) + "' run two.json --out res > out.txt 2> err.txt";
   ASSERT_EQ(std::system(cmd.c_str()), 0);
   auto read = [](const fs::path& p) {
     std::ifstream in(p);
