@@ -709,8 +709,9 @@ void readBodies(Fields& top, Scene& scene) {
     b.name = "body" + std::to_string(i);
     if (auto name = f.optString("name")) {
       if (!isSafeName(*name))
-        f.fail("name", "\"" + shown(*name) +
-                           "\" is not usable in a file name (expected 1-100 of A-Z a-z 0-9 _ - ., not starting with .)");
+        f.fail("name",
+               "\"" + shown(*name) +
+                   "\" is not usable in a file name (expected 1-100 of A-Z a-z 0-9 _ - ., not starting with .)");
       for (size_t j = 0; j < i; ++j)
         if (bodies[j].name == *name)
           f.fail("name", "\"" + shown(*name) + "\" is the name of bodies[" + std::to_string(j) +

@@ -91,9 +91,8 @@ std::shared_ptr<const RestModel> withBodies(std::shared_ptr<const RestModel> mod
 
 World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& sim, const DomainSettings& domain,
              std::vector<ManipulatorSettings> manipulators)
-    : model_(withBodies(std::move(model))),
-      stageRest_(std::make_unique<const ElementStageRest>(*model_)), sim_(sim), domain_(domain),
-      scratch_(std::make_unique<StepScratch>()) {
+    : model_(withBodies(std::move(model))), stageRest_(std::make_unique<const ElementStageRest>(*model_)), sim_(sim),
+      domain_(domain), scratch_(std::make_unique<StepScratch>()) {
   validate(sim_);
   validate(domain_, model_->dim);
   if (model_->dim == 2) sim_.gravity.z() = 0;  // a 2D body moves in its plane: the one place gravity is projected

@@ -2,9 +2,15 @@
 // side, and bodies that do not touch move exactly as each would alone.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 
 #include "gradel/bodies.h"
+#include "gradel/output.h"
 #include "test_support.h"
 
 using namespace gradel;
@@ -108,7 +114,7 @@ TEST(MultiBody, SeparatedBodiesEvolveBitIdenticallyToEachAlone) {
       both.state().positions[i] = wa.state().positions[i], both.state().velocities[i] = wa.state().velocities[i];
     for (size_t i = 0; i < b.model->numVertices(); ++i)
       both.state().positions[VA + i] = wb.state().positions[i],
-                              both.state().velocities[VA + i] = wb.state().velocities[i];
+                                  both.state().velocities[VA + i] = wb.state().velocities[i];
     for (int s = 0; s < 300; ++s) wa.step(), wb.step(), both.step();
     EXPECT_GT(both.metrics().maxContactDepth + wa.state().velocities[0].norm(), 0);  // it moved
     size_t differ = 0;
@@ -264,7 +270,8 @@ TEST(MultiBodyScene, StateHashIsTheSameAtOneAndTwoThreads) {
     "domain": { "min": [-1, 0, -1], "max": [1, 1, 1] },
     "manipulators": [ { "type": "sphere", "radius": 0.03,
                         "path": [ { "t": 0, "position": [-0.3, 0.18, 0.08] }, { "t": 0.05, "position": [0.3, 0.18, 0.08] } ] } ]
-  })", kFile);
+  })",
+                       kFile);
   uint64_t hash[2];
   for (int t : {1, 2}) {
     s.simulation.threads = t;
@@ -274,4 +281,63 @@ TEST(MultiBodyScene, StateHashIsTheSameAtOneAndTwoThreads) {
     hash[t - 1] = b.world->stateHash();
   }
   EXPECT_EQ(hash[0], hash[1]);
+}
+
+// `gradel run` of a two-body scene: one .vtu per body and frame, run.pvd listing both per
+// timestep as parts, metrics.csv with a body column (a row per body and one "all" per frame).
+TEST(MultiBodyScene, RunWritesPerBodyFramesPvdPartsAndMetricsRows) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("gradel-bodies-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "two.json") << kTwoBalls;
+  const std::string cmd =
+      "cd '" + dir.string() + "' && '" + std::string(GRADEL_CLI_PATH) + "' run two.json --out res > out.txt 2> err.txt";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  auto read = [](const fs::path& p) {
+    std::ifstream in(p);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  };
+  const fs::path res = dir / "res";
+  // Frames at 0, 0.005 and 0.01 s for each body.
+  for (const char* body : {"left", "body1"})
+    for (int f = 0; f < 3; ++f) EXPECT_TRUE(fs::exists(res / frameFileName(size_t(f), body))) << body << " " << f;
+  EXPECT_FALSE(fs::exists(res / frameFileName(0)));
+  const std::string pvd = read(res / "run.pvd");
+  EXPECT_NE(pvd.find(R"(timestep="0.005" group="" part="1" name="body1" file="body1_00001.vtu")"), std::string::npos)
+      << pvd;
+  EXPECT_NE(pvd.find(R"(timestep="0.005" group="" part="0" name="left" file="left_00001.vtu")"), std::string::npos)
+      << pvd;
+  // Each body's file holds its own vertices: the box's 5^3 lattice points.
+  const std::string box = read(res / "body1_00000.vtu");
+  EXPECT_NE(box.find(R"(NumberOfPoints="125" NumberOfCells="64")"), std::string::npos);
+  // metrics.csv: header with "body", 3 frames x (2 bodies + all); the total is the sum.
+  std::istringstream csv(read(res / "metrics.csv"));
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, MetricsCsv::bodyHeader());
+  std::vector<std::vector<std::string>> rows;
+  while (std::getline(csv, line)) {
+    std::vector<std::string> cells;
+    std::stringstream ls(line);
+    for (std::string c; std::getline(ls, c, ',');) cells.push_back(c);
+    rows.push_back(cells);
+  }
+  ASSERT_EQ(rows.size(), 9u);
+  for (size_t f = 0; f < 3; ++f) {
+    EXPECT_EQ(rows[3 * f][0], "left");
+    EXPECT_EQ(rows[3 * f + 1][0], "body1");
+    EXPECT_EQ(rows[3 * f + 2][0], "all");
+    // px (column 5): the ball moves at +0.5 m/s, the box is pinned on one face and moves at -0.5
+    // m/s elsewhere; the total is their sum.
+    const double a = std::stod(rows[3 * f][5]), b = std::stod(rows[3 * f + 1][5]), all = std::stod(rows[3 * f + 2][5]);
+    EXPECT_GT(a, 0);
+    EXPECT_DOUBLE_EQ(all, a + b);
+  }
+  const std::string out = read(dir / "out.txt");
+  EXPECT_NE(out.find("\"bodies\": 2"), std::string::npos) << out;
+  EXPECT_NE(out.find("\"frames\": 3"), std::string::npos) << out;
+  fs::remove_all(dir);
 }

@@ -2,6 +2,7 @@
 // no GPU) and, for the viewer, in a window under Xvfb. No OpenGL = failure, never a skip.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <set>
@@ -139,6 +140,33 @@ TEST(RenderHeadless, WireframeShowsMoreLevelsForALargerSphere) {
   EXPECT_EQ(small, smallLevels);
   EXPECT_EQ(large, largeLevels);
   EXPECT_GT(large, small);
+}
+
+// Several bodies: the body view holds every body's surfaces and outlines in the world's vertex
+// ids (each body's moved by its first vertex), so both bodies are drawn where they are.
+TEST(RenderHeadless, EveryBodyIsInTheBodyViewAtItsWorldVertices) {
+  const Scene scene = parseScene(R"({"bodies": [{"shape": "sphere", "size": 6},
+      {"shape": "box", "size": 3, "layout": "voxel", "voxel_size": 0.02, "position": [0.2, 0, 0]}]})",
+                                 "two");
+  const BuiltScene built = buildScene(scene);
+  const BodyView all = makeBodyView(built);
+  const RestModel& m = built.world->model();
+  const uint32_t b1 = built.range(1).vertexBegin;
+  // The box's voxel surface: 6 faces of 3 x 3 squares, all on the box's vertices at x >= 0.2.
+  size_t boxVertices = 0;
+  for (uint32_t v : all.voxel.modelVertex) {
+    ASSERT_LT(v, m.numVertices());
+    if (v < b1) continue;
+    ++boxVertices;
+    EXPECT_GE(m.restPositions[v].x(), 0.2 - 1e-12);
+  }
+  EXPECT_EQ(boxVertices, 6u * 16u - 12u * 4u + 8u);  // the 56 lattice points on the box's faces
+  size_t boxEdges = 0;
+  for (const auto& e : all.edges) boxEdges += e[0] >= b1 && e[1] >= b1;
+  EXPECT_EQ(boxEdges, 27u * 12u);  // each of the 27 voxel elements outlined by its 12 edges
+  ASSERT_TRUE(all.embedded);       // both isosurfaces, each bound to its own body's vertices
+  EXPECT_GE(*std::max_element(all.embedded->weightVertex.begin(), all.embedded->weightVertex.end()), b1);
+  EXPECT_LT(*std::min_element(all.embedded->weightVertex.begin(), all.embedded->weightVertex.end()), b1);
 }
 
 TEST(RenderHeadless, CliWritesPngFramesThatShowTheBody) {
