@@ -150,6 +150,8 @@ size_t World::addManipulator(ManipulatorSettings s, const Vec3& position) {
   m.velocity = scripted ? m.settings.path.velocity(state_.time) : Vec3::Zero();
   m.previousPosition = m.position;  // no sweep from elsewhere on its first step
   manipulators_.push_back(std::move(m));
+  stepForces_.manipulators.resize(manipulators_.size());  // no force on it before its first step
+  averageImpulse_.manipulators.resize(manipulators_.size());
   return manipulators_.size() - 1;
 }
 
