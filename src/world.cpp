@@ -287,18 +287,14 @@ Real World::resolveVertexContacts(const Vec3& previous, const Vec3& previousVelo
     for (size_t k = 0; k < K; ++k) {
       const Vec3 before = v;
       const Real d = resolveManipulator(manipulators_[k], previous, x, v, dim, bounce, &start).depth;
-      if (d > 0) {
-        addImpulse(impulse[k], mass * (v - before), x, manipulators_[k].position, dim);
-        if (surface) *surface = int(k);
-      }
+      if (d > 0 || v != before) addImpulse(impulse[k], mass * (v - before), x, manipulators_[k].position, dim);
+      if (d > 0 && surface) *surface = int(k);
       passDepth = std::max(passDepth, d);
     }
     const Vec3 before = v;
     const Real d = resolveDomain(domain_, previous, x, v, dim, bounce, &start).depth;
-    if (d > 0) {
-      addImpulse(impulse[K], mass * (v - before), x, Vec3::Zero(), dim);
-      if (surface) *surface = int(K);
-    }
+    if (d > 0 || v != before) addImpulse(impulse[K], mass * (v - before), x, Vec3::Zero(), dim);
+    if (d > 0 && surface) *surface = int(K);
     passDepth = std::max(passDepth, d);
     depth = std::max(depth, passDepth);
     if (passDepth == 0 || surfaces < 2) break;
