@@ -307,9 +307,9 @@ void World::stageContacts(size_t begin, size_t end) {
   scratch_->contactSurface.resize(model_->numVertices());
   for (size_t i = begin; i < end; ++i) {
     scratch_->contactSurface[i] = -1;
-    scratch_->contactDepth[i] =
-        resolveVertexContacts(scratch_->previousPositions[i], scratch_->previousVelocities[i], state_.positions[i],
-                              state_.velocities[i], model_->mass[i], scratch_->impulse.data(), &scratch_->contactSurface[i]);
+    scratch_->contactDepth[i] = resolveVertexContacts(scratch_->previousPositions[i], scratch_->previousVelocities[i],
+                                                      state_.positions[i], state_.velocities[i], model_->mass[i],
+                                                      scratch_->impulse.data(), &scratch_->contactSurface[i]);
   }
 }
 

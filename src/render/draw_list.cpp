@@ -163,8 +163,7 @@ void addForceArrows(DrawList& list, const World& world, Real scale, int height) 
     for (const Vec3& p : m.restPositions) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
     scale = 0.5 * (hi - lo).maxCoeff() / std::max(m.totalMass * 9.81, 1e-30);
   }
-  const ContactForces f =
-      world.forceAverageTime() > 0 ? world.averageContactForces() : world.stepContactForces();
+  const ContactForces f = world.forceAverageTime() > 0 ? world.averageContactForces() : world.stepContactForces();
   const Color arrow{0.85f, 0.15f, 0.10f};
   char line[96];
   float y = float(height) - 14.0f * float(f.manipulators.size()) - 24;

@@ -69,7 +69,7 @@ TEST(DrawList, ForceArrowStartsAtTheToolAndPointsAlongItsForce) {
   v.surface = SurfaceMode::None, v.walls = false, v.manipulators = false;
   const size_t without = buildDrawList(makeBodyView(built), w, v, kW, kH).lines.size();
   v.forces = true;
-  v.forceScale = 0.01;  // 1 cm per N
+  v.forceScale = 0.01;      // 1 cm per N
   w.restartForceAverage();  // nothing averaged: the last step's force is drawn
   const DrawList list = buildDrawList(makeBodyView(built), w, v, kW, kH);
   ASSERT_EQ(list.lines.size(), without + 2 * 5);  // shaft and four head lines
