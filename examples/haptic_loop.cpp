@@ -31,10 +31,10 @@ using namespace gradel;
 namespace {
 
 struct Options {
-  int size = 52;             ///< ball diameter [voxels]: ~20,000 vertices in the gradational layout
-  Real voxel = 0.004;        ///< [m]
-  Real youngs = 2e4;         ///< [Pa] soft tissue
-  Real seconds = 2.0;        ///< [s] of device path
+  int size = 52;       ///< ball diameter [voxels]: ~20,000 vertices in the gradational layout
+  Real voxel = 0.004;  ///< [m]
+  Real youngs = 2e4;   ///< [Pa] soft tissue
+  Real seconds = 2.0;  ///< [s] of device path
   int threads = 1;
   std::string integrator = "symplectic";
   std::string csv;
@@ -51,13 +51,20 @@ Options parse(int argc, char** argv) {
       }
       return argv[++i];
     };
-    if (a == "--size") o.size = std::atoi(value());
-    else if (a == "--voxel") o.voxel = std::atof(value());
-    else if (a == "--youngs") o.youngs = std::atof(value());
-    else if (a == "--seconds") o.seconds = std::atof(value());
-    else if (a == "--threads") o.threads = std::atoi(value());
-    else if (a == "--integrator") o.integrator = value();
-    else if (a == "--csv") o.csv = value();
+    if (a == "--size")
+      o.size = std::atoi(value());
+    else if (a == "--voxel")
+      o.voxel = std::atof(value());
+    else if (a == "--youngs")
+      o.youngs = std::atof(value());
+    else if (a == "--seconds")
+      o.seconds = std::atof(value());
+    else if (a == "--threads")
+      o.threads = std::atoi(value());
+    else if (a == "--integrator")
+      o.integrator = value();
+    else if (a == "--csv")
+      o.csv = value();
     else {
       std::fprintf(stderr, "haptic_loop: unknown option %s (see the comment at the top of examples/haptic_loop.cpp)\n",
                    a.c_str());
@@ -161,8 +168,8 @@ int main(int argc, char** argv) {
       maxForce = std::max(maxForce, body.norm());
       if (csv)
         std::fprintf(csv, "%.6g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", t, device.x(),
-                     device.y(), device.z(), proxy.x(), proxy.y(), proxy.z(), body.x(), body.y(), body.z(),
-                     display.x(), display.y(), display.z(), wall[it]);
+                     device.y(), device.z(), proxy.x(), proxy.y(), proxy.z(), body.x(), body.y(), body.z(), display.x(),
+                     display.y(), display.z(), wall[it]);
     }
     if (csv && std::fclose(csv) != 0) {
       std::fprintf(stderr, "haptic_loop: cannot write %s\n", o.csv.c_str());

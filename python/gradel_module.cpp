@@ -412,8 +412,8 @@ PYBIND11_MODULE(gradel, m) {
           [](Simulation& s, size_t i, bool average) {
             WorldLock lock(s);
             if (i >= s.world().manipulators().size()) throw py::index_error("no manipulator " + std::to_string(i));
-            const ContactForce f =
-                average ? s.world().averageContactForces().manipulators[i] : s.world().stepContactForces().manipulators[i];
+            const ContactForce f = average ? s.world().averageContactForces().manipulators[i]
+                                           : s.world().stepContactForces().manipulators[i];
             return py::make_tuple(std::vector<double>{f.force.x(), f.force.y(), f.force.z()},
                                   std::vector<double>{f.torque.x(), f.torque.y(), f.torque.z()});
           },
@@ -424,7 +424,8 @@ PYBIND11_MODULE(gradel, m) {
           "wall_force",
           [](Simulation& s, bool average) {
             WorldLock lock(s);
-            const ContactForce f = average ? s.world().averageContactForces().walls : s.world().stepContactForces().walls;
+            const ContactForce f =
+                average ? s.world().averageContactForces().walls : s.world().stepContactForces().walls;
             return py::make_tuple(std::vector<double>{f.force.x(), f.force.y(), f.force.z()},
                                   std::vector<double>{f.torque.x(), f.torque.y(), f.torque.z()});
           },

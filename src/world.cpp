@@ -161,6 +161,8 @@ size_t World::addManipulator(ManipulatorSettings s, const Vec3& position) {
   m.velocity = scripted ? m.settings.path.velocity(state_.time) : Vec3::Zero();
   m.previousPosition = m.position;  // no sweep from elsewhere on its first step
   manipulators_.push_back(std::move(m));
+  stepForces_.manipulators.resize(manipulators_.size());  // no force on it before its first step
+  averageImpulse_.manipulators.resize(manipulators_.size());
   return manipulators_.size() - 1;
 }
 
@@ -296,18 +298,14 @@ Real World::resolveVertexContacts(const Vec3& previous, const Vec3& previousVelo
     for (size_t k = 0; k < K; ++k) {
       const Vec3 before = v;
       const Real d = resolveManipulator(manipulators_[k], previous, x, v, dim, bounce, &start).depth;
-      if (d > 0) {
-        addImpulse(impulse[k], mass * (v - before), x, manipulators_[k].position, dim);
-        if (surface) *surface = int(k);
-      }
+      if (d > 0 || v != before) addImpulse(impulse[k], mass * (v - before), x, manipulators_[k].position, dim);
+      if (d > 0 && surface) *surface = int(k);
       passDepth = std::max(passDepth, d);
     }
     const Vec3 before = v;
     const Real d = resolveDomain(domain_, previous, x, v, dim, bounce, &start).depth;
-    if (d > 0) {
-      addImpulse(impulse[K], mass * (v - before), x, Vec3::Zero(), dim);
-      if (surface) *surface = int(K);
-    }
+    if (d > 0 || v != before) addImpulse(impulse[K], mass * (v - before), x, Vec3::Zero(), dim);
+    if (d > 0 && surface) *surface = int(K);
     passDepth = std::max(passDepth, d);
     depth = std::max(depth, passDepth);
     if (passDepth == 0 || surfaces < 2) break;
@@ -320,9 +318,9 @@ void World::stageContacts(size_t begin, size_t end) {
   scratch_->contactSurface.resize(model_->numVertices());
   for (size_t i = begin; i < end; ++i) {
     scratch_->contactSurface[i] = -1;
-    scratch_->contactDepth[i] =
-        resolveVertexContacts(scratch_->previousPositions[i], scratch_->previousVelocities[i], state_.positions[i],
-                              state_.velocities[i], model_->mass[i], scratch_->impulse.data(), &scratch_->contactSurface[i]);
+    scratch_->contactDepth[i] = resolveVertexContacts(scratch_->previousPositions[i], scratch_->previousVelocities[i],
+                                                      state_.positions[i], state_.velocities[i], model_->mass[i],
+                                                      scratch_->impulse.data(), &scratch_->contactSurface[i]);
   }
 }
 

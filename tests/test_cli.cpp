@@ -208,8 +208,8 @@ TEST_F(CliTest, RunMetricsHaveContactForceColumns) {
   EXPECT_EQ(names[19], "m0_tz");
   EXPECT_EQ(names[20], "wall_fx");
   EXPECT_EQ(names[25], "wall_tz");
-  EXPECT_GT(std::stod(cells[15]), 0) << last;   // m0_fy: the ball pushes the sphere up
-  EXPECT_LT(std::stod(cells[21]), 0) << last;   // wall_fy: and the floor down
+  EXPECT_GT(std::stod(cells[15]), 0) << last;  // m0_fy: the ball pushes the sphere up
+  EXPECT_LT(std::stod(cells[21]), 0) << last;  // wall_fy: and the floor down
 }
 
 TEST_F(CliTest, RunDefaultOutIsOutSlashSceneName) {

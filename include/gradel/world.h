@@ -181,9 +181,9 @@ class World {
   std::vector<size_t> elementSplit_, vertexSplit_;
   std::vector<Real> memberContactDepth_;
   int teamMembers_ = 0;
-  ContactForces stepForces_;       ///< The last step's contact forces.
-  ContactForces averageImpulse_;   ///< [N s], [N m s] summed since restartForceAverage().
-  Real averageTime_ = 0;           ///< [s] since restartForceAverage().
+  ContactForces stepForces_;      ///< The last step's contact forces.
+  ContactForces averageImpulse_;  ///< [N s], [N m s] summed since restartForceAverage().
+  Real averageTime_ = 0;          ///< [s] since restartForceAverage().
 };
 
 }  // namespace gradel
