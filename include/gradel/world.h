@@ -114,7 +114,7 @@ class World {
   void stageContacts(size_t begin, size_t end);
   Real resolveVertexContacts(const Vec3& previous, const Vec3& previousVelocity, Vec3& x, Vec3& v) const;
   void moveManipulators(Real tNext);
-  void stepImplicit(bool sweep);
+  void stepImplicit(bool largeStep);
   void stepLargeStep();
   void finishFrameStep(Real tNext);
   void sweepManipulatorPaths(Real t0);
