@@ -63,7 +63,7 @@ struct ProjectiveSolver::Impl {
   SpMat A;  ///< The reduced global matrix (for the PCG's products).
   std::vector<int32_t> heldRows;
   Rhs heldTargets;
-  std::vector<Vec3> heldNormals;  ///< Per held row (empty: two-sided holds).
+  std::vector<Vec3> heldNormals;                 ///< Per held row (empty: two-sided holds).
   static constexpr int kHeldIterations = 2;      ///< PCG iterations per global solve, at most.
   static constexpr Real kHeldTolerance = 1e-12;  ///< Stop when r.z has fallen by this factor (per coordinate).
 

@@ -468,8 +468,8 @@ void World::stepImplicit(bool largeStep) {
             heldNormal.push_back((state_.positions[i] - freeEnd[i]).normalized());
     if (!held.empty()) {
       state_.positions = x0, state_.velocities = v0, state_.rotations = q0;
-      projective_->step(state_.positions, state_.velocities, state_.rotations, g, sim_.damping,
-                        sim_.implicitIterations, targets, sim_.rotationIterations, held, heldAt, heldNormal);
+      projective_->step(state_.positions, state_.velocities, state_.rotations, g, sim_.damping, sim_.implicitIterations,
+                        targets, sim_.rotationIterations, held, heldAt, heldNormal);
       if (largeStep) sweepManipulatorPaths(tNext - dt_);
       stageContacts(0, model_->numVertices());
     }

@@ -240,8 +240,7 @@ TEST(LargeStep, HeldContactVerticesSettleOnThePinnedExplicitSag) {
   ProjectiveSolver solver(m, 1.0 / 60.0, {});
   std::vector<Vec3> x = m.restPositions, v(m.numVertices(), Vec3::Zero());
   std::vector<Quat> q(m.numElements(), Quat::Identity());
-  for (int i = 0; i < 300; ++i)
-    solver.step(x, v, q, Vec3(0, -9.81, 0), 20.0, 10, {}, 4, ball.bottom, targets, normals);
+  for (int i = 0; i < 300; ++i) solver.step(x, v, q, Vec3(0, -9.81, 0), 20.0, 10, {}, 4, ball.bottom, targets, normals);
   for (size_t j = 0; j < ball.bottom.size(); ++j) EXPECT_EQ(x[ball.bottom[j]], targets[j]);
   const uint32_t t = ball.top.front();
   const Real sag = m.restPositions[t].y() - x[t].y();

@@ -41,8 +41,7 @@ TEST(Scenes, EveryShippedSceneRunsCleanly) {
     if (!scene.body.source && shape.dims[0] > 32) {
       for (int& d : shape.dims) d = std::max(1, d / 4);
       shape.voxelSize *= 4;
-      for (Primitive& p : shape.primitives)
-        p.min /= 4, p.max /= 4, p.center /= 4, p.radius /= 4, p.halfLength /= 4;
+      for (Primitive& p : shape.primitives) p.min /= 4, p.max /= 4, p.center /= 4, p.radius /= 4, p.halfLength /= 4;
       if (scene.simulation.integrator == IntegratorKind::Auto) scene.simulation.integrator = IntegratorKind::LargeStep;
     }
     BuiltScene b = buildScene(scene);
@@ -52,7 +51,8 @@ TEST(Scenes, EveryShippedSceneRunsCleanly) {
     // Nothing blows up: the kinetic energy stays below what the scene's motions could give:
     // 10 J per kg of body (a mean speed of 4.5 m/s; the 0.9 kg balls' bound was 10 J, the 125 kg
     // box of box-realtime.json falls with ~0.7 J/kg), far below a numerical explosion.
-    const Real bound = scene.body.material.scaling == Scaling::Paper ? 1e6 : 10.0 * std::max(Real(1), b.model->totalMass);
+    const Real bound =
+        scene.body.material.scaling == Scaling::Paper ? 1e6 : 10.0 * std::max(Real(1), b.model->totalMass);
     EXPECT_LT(maxKinetic, bound);
     ++count;
   }

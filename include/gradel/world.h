@@ -133,8 +133,9 @@ class World {
   std::string integratorChoice_;
   std::vector<PinSettings> pins_;
   PinSet pinSet_;
-  std::unique_ptr<ProjectiveSolver> projective_;  ///< Implicit only: built at the first step (dt, pins fixed).
-  std::unique_ptr<LargeStepSolver> largeStep_;    ///< LargeStep only: built at the first step (dt, pins fixed).
+  std::unique_ptr<ProjectiveSolver>
+      projective_;  ///< Implicit, and LargeStep near contacts: built at the first such step.
+  std::unique_ptr<LargeStepSolver> largeStep_;  ///< LargeStep only: built at the first step (dt, pins fixed).
   // Threads of the explicit step (thread_team.h): the team, its chunk queues and each member's
   // first share of the element and vertex chunks (weighted by work), made for `teamMembers_`.
   std::unique_ptr<ThreadTeam> team_;
