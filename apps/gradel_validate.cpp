@@ -641,7 +641,8 @@ fig.tight_layout(); fig.savefig(os.path.join(d, "large_step_sweep.png"), dpi=110
   if (plots) md << "\n![large step sweep](large_step_sweep.png)\n";
   md << "\nCost per step and stability (one thread). `E x100` multiplies the scene's Young's modulus by 100; the "
      << "explicit integrator's dt = auto shrinks by 10x with it, the implicit and large-step ones stay at 1/60 s (the "
-     << "large step's steps near a contact are backward-Euler steps of its own solver, contacts held in its CG).\n\n"
+     << "large step's steps near a contact are projective steps, the held vertices one-sided constraints of a "
+     << "filtered PCG).\n\n"
      << "| scene | integrator | E | elements | vertices | dt [s] | us/step | real-time factor | max KE+elastic [J] | "
         "finite |\n"
      << "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |\n";
