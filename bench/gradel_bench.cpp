@@ -9,14 +9,20 @@
 //
 //   gradel-bench [--sets real,paper] [--shapes sphere,box] [--sizes 16,32,64,128,256]
 //                [--layouts gradational,uniform] [--moduli 1e4,1e5,1e6] [--threads 1,2]
-//                [--scene FILE] [--load] [--reps 5] [--min-time 0.2] [--find-realtime]
+//                [--scene FILE] [--integrator NAME] [--load] [--reps 5] [--min-time 0.2]
+//                [--find-realtime]
 //
 // Columns: ns_per_vertex_step = wall time per step (frame work included) / unique vertices;
 // ns_per_pair_step the same per element-vertex pair; real_time_factor = simulated seconds per
 // wall second; bytes_per_vertex = every array of the model, state and scratch / unique
 // vertices; load = 1 when --load ran one busy process beside the benchmark; state_hash = hash
-// of positions and velocities after exactly 20 (paper) or 200 (real, scene) steps: identical at
-// any thread count.
+// of positions and velocities after exactly 20 (paper, and large_step / implicit rows) or 200
+// (explicit real, scene) steps: identical at
+// any thread count; integrator = the one that ran (--integrator sets it for the real and scene
+// rows: symplectic by default on the real rows, the scene's own on scene rows; large_step runs
+// at dt = 1/60 s).
+// --find-realtime with --sets real: for each modulus, the largest gradational real-scene sphere n
+// that runs in real time with the integrator given (n doubled from 16, then bisected).
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -38,7 +44,7 @@ using Clock = std::chrono::steady_clock;
 namespace {
 
 struct Row {
-  std::string set, shape, layout;
+  std::string set, shape, layout, integrator;
   double youngs = 0;  // [Pa], 0 for the paper setting (k instead)
   int n = 0, threads = 0, load = 0;
   size_t elements = 0, vertices = 0, pairs = 0;
@@ -125,6 +131,7 @@ Row measure(const std::string& shape, int n, LayoutKind layout, int threads, int
   preparePaperBench(*b.world);
   Row r;
   r.set = "paper", r.shape = shape, r.layout = layoutKindName(layout), r.n = n, r.threads = threads;
+  r.integrator = integratorKindName(b.world->settings().integrator);
   timeSteps(*b.world, r, 20, 0, reps, minTime);
   return r;
 }
@@ -137,23 +144,27 @@ Row measureScene(const Scene& scene, const std::string& set, int threads, int re
   b.volume = VoxelVolume();
   Row r;
   r.set = set, r.shape = sc.name, r.layout = layoutKindName(sc.body.layout), r.threads = threads;
+  r.integrator = integratorKindName(b.world->settings().integrator);
   r.n = sc.body.source ? 0 : sc.body.shape.dims[0];
   r.youngs = sc.body.material.scaling == Scaling::Consistent ? sc.body.material.youngsModulus : 0;
-  timeSteps(*b.world, r, 200, sc.output.frameInterval, reps, minTime);
+  // 200 explicit steps, 20 frame-size steps (1/3 s): the hash's point.
+  const IntegratorKind k = b.world->settings().integrator;
+  const bool frameStep = k == IntegratorKind::LargeStep || k == IntegratorKind::Implicit;
+  timeSteps(*b.world, r, frameStep ? 20 : 200, sc.output.frameInterval, reps, minTime);
   return r;
 }
 
 void printHeader() {
   std::printf(
       "set,shape,n,layout,youngs_modulus_pa,threads,load,elements,unique_vertices,pairs,ns_per_vertex_step,"
-      "ns_per_pair_step,steps_per_second,dt_s,real_time_factor,bytes_per_vertex,state_hash\n");
+      "ns_per_pair_step,steps_per_second,dt_s,real_time_factor,bytes_per_vertex,state_hash,integrator\n");
 }
 
 void printRow(const Row& r) {
-  std::printf("%s,%s,%d,%s,%.3g,%d,%d,%zu,%zu,%zu,%.3f,%.3f,%.1f,%.6g,%.4g,%.1f,%016llx\n", r.set.c_str(),
+  std::printf("%s,%s,%d,%s,%.3g,%d,%d,%zu,%zu,%zu,%.3f,%.3f,%.1f,%.6g,%.4g,%.1f,%016llx,%s\n", r.set.c_str(),
               r.shape.c_str(), r.n, r.layout.c_str(), r.youngs, r.threads, r.load, r.elements, r.vertices, r.pairs,
               r.nsPerVertex, r.nsPerPair, r.stepsPerSecond, r.dt, r.rtf, r.bytesPerVertex,
-              static_cast<unsigned long long>(r.hash));
+              static_cast<unsigned long long>(r.hash), r.integrator.c_str());
   std::fflush(stdout);
 }
 
@@ -188,12 +199,42 @@ void findRealtime(int threads, int reps, double minTime) {
   printRow(best);
 }
 
+// Largest gradational real-scene sphere (realBenchScene) in real time at modulus E with `scene`'s
+// integrator settings applied: n doubled from 16 while real time, then bisected to 2 voxels.
+void findRealtimeReal(double E, const std::optional<IntegratorKind>& integrator, int threads, int reps,
+                      double minTime) {
+  Row best;
+  auto ok = [&](int n) {
+    Scene sc = realBenchScene(n, E, LayoutKind::Gradational);
+    if (integrator) sc.simulation.integrator = *integrator;
+    const Row r = measureScene(sc, "real", threads, reps, minTime);
+    std::fprintf(stderr, "  real sphere %d E %.3g: real-time factor %.3f\n", n, E, r.rtf);
+    std::printf("# search: real sphere %d, E %.3g Pa, %s, %zu unique vertices, real-time factor %.4f\n", n, E,
+                r.integrator.c_str(), r.vertices, r.rtf);
+    if (r.rtf >= 1 && r.n > best.n) best = r;
+    return r.rtf >= 1;
+  };
+  int lo = 8, hi = 16;
+  if (!ok(lo)) {
+    std::printf("# no real-scene sphere runs in real time at E %.3g Pa, %d threads\n", E, threads);
+    return;
+  }
+  while (hi <= 512 && ok(hi)) lo = hi, hi *= 2;
+  while (hi - lo > 2) {
+    const int mid = (lo + hi) / 2;
+    (ok(mid) ? lo : hi) = mid;
+  }
+  std::printf("# largest real-time real-scene sphere at E %.3g Pa, %d threads, %s: n = %d (n = %d is not)\n", E,
+              threads, best.integrator.c_str(), best.n, hi);
+  printRow(best);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"gradel-bench: speed of real scenes and of the paper's Table 1 setting, CSV on stdout"};
   std::string sets = "real,paper", shapes = "sphere,box", sizes = "16,32,64,128,256", layouts = "gradational,uniform",
-              moduli = "1e4,1e5,1e6", threads = "1,2", sceneFile;
+              moduli = "1e4,1e5,1e6", threads = "1,2", sceneFile, integratorName;
   int reps = 5;
   double minTime = 0.2, maxPairs = 4.0e7;
   bool findRt = false, load = false;
@@ -206,12 +247,15 @@ int main(int argc, char** argv) {
   app.add_option("--threads", threads, "Comma-separated thread counts");
   app.add_option("--scene", sceneFile,
                  "Also time this scene file (frames computed at its frame_interval, not written)");
+  app.add_option("--integrator", integratorName,
+                 "Integrator of the real and scene rows (symplectic, large_step, auto, ...; default: the scene's)");
   app.add_flag("--load", load, "Run one busy process beside the benchmark (a machine with other work on it)");
   app.add_option("--reps", reps, "Repetitions (the median is reported)")->check(CLI::Range(1, 1000));
   app.add_option("--min-time", minTime, "Seconds per repetition")->check(CLI::Range(0.001, 100.0));
   app.add_option("--max-pairs", maxPairs, "Skip configurations with more element-vertex pairs (memory)");
   app.add_flag("--find-realtime", findRt,
-               "Also search the largest real-time gradational sphere (paper setting) at the largest thread count");
+               "Also search the largest real-time gradational sphere at the largest thread count (paper setting; "
+               "with --sets real: the real scene at each modulus, with --integrator)");
   CLI11_PARSE(app, argc, argv);
   try {
     auto str = [](const std::string& s) { return s; };
@@ -223,8 +267,11 @@ int main(int argc, char** argv) {
     const auto threadList = splitList<int>(threads, [](const std::string& s) { return std::stoi(s); });
     for (const std::string& set : setList)
       if (set != "real" && set != "paper") throw std::runtime_error("--sets: unknown set '" + set + "' (real, paper)");
+    std::optional<IntegratorKind> integrator;
+    if (!integratorName.empty()) integrator = parseIntegratorKind(integratorName);
     std::optional<Scene> scene;
     if (!sceneFile.empty()) scene = loadScene(sceneFile);
+    if (scene && integrator) scene->simulation.integrator = *integrator;
     BusyProcess busy;
     if (load) busy.start();
     auto emit = [&](Row r) {
@@ -253,7 +300,9 @@ int main(int argc, char** argv) {
             for (double E : moduliList)
               for (int t : threadList) {
                 std::fprintf(stderr, "real sphere %d %s E %.3g threads %d\n", n, layoutKindName(layout), E, t);
-                emit(measureScene(realBenchScene(n, E, layout), "real", t, reps, minTime));
+                Scene sc = realBenchScene(n, E, layout);
+                if (integrator) sc.simulation.integrator = *integrator;
+                emit(measureScene(sc, "real", t, reps, minTime));
               }
             continue;
           }
@@ -265,7 +314,11 @@ int main(int argc, char** argv) {
             }
           }
         }
-    if (findRt) findRealtime(*std::max_element(threadList.begin(), threadList.end()), reps, minTime);
+    const int maxThreads = *std::max_element(threadList.begin(), threadList.end());
+    if (findRt && std::find(setList.begin(), setList.end(), "real") != setList.end())
+      for (double E : moduliList) findRealtimeReal(E, integrator, maxThreads, reps, minTime);
+    else if (findRt)
+      findRealtime(maxThreads, reps, minTime);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "gradel-bench: %s\n", e.what());
     return 2;

@@ -5,6 +5,7 @@
 
 #include "gradel/element.h"
 #include "gradel/integration.h"
+#include "thread_team.h"
 
 namespace gradel {
 
@@ -38,6 +39,13 @@ RigidFit rigidFit(const RestModel& m, const std::vector<Vec3>& x, const std::vec
 LargeStepSolver::LargeStepSolver(const RestModel& model, Real dt, const std::vector<uint32_t>& pinned)
     : model_(&model), dt_(dt), pinned_(pinned), half_(model, 0.5 * dt, pinned) {
   acceleration_.assign(model.numVertices(), Vec3::Zero());
+  // Each vertex's element-vertex pairs in element order (a counting sort of the pairs by vertex).
+  vertexPairStart_.assign(model.numVertices() + 1, 0);
+  for (uint32_t v : model.elemVerts) ++vertexPairStart_[v + 1];
+  for (size_t i = 0; i < model.numVertices(); ++i) vertexPairStart_[i + 1] += vertexPairStart_[i];
+  vertexPairs_.resize(model.elemVerts.size());
+  std::vector<uint32_t> next(vertexPairStart_.begin(), vertexPairStart_.end() - 1);
+  for (uint32_t p = 0; p < model.elemVerts.size(); ++p) vertexPairs_[next[model.elemVerts[p]]++] = p;
 }
 
 Real LargeStepSolver::energy(const std::vector<Vec3>& x, const std::vector<Vec3>& v, const std::vector<Quat>& q,
@@ -56,19 +64,112 @@ Real LargeStepSolver::energy(const std::vector<Vec3>& x, const std::vector<Vec3>
   return e;
 }
 
-// Elastic forces [N] per vertex at x (rotations fitted, warm-started from q, written back).
+// Elastic forces [N] per vertex at x (rotations fitted, warm-started from q, written back): each
+// element's forces into its own pair slots (elements split between the team's members), then
+// per vertex the sum of its pairs in element order (vertices split): the same additions in the
+// same order as one thread scattering element by element, so the same bits at any thread count.
 void LargeStepSolver::forces(const std::vector<Vec3>& x, std::vector<Quat>& q, std::vector<Vec3>& f,
                              int iterations) const {
   const RestModel& m = *model_;
-  f.assign(m.numVertices(), Vec3::Zero());
-  std::vector<Vec3> fe;
-  for (size_t el = 0; el < m.numElements(); ++el) {
-    const uint32_t b = m.elemStart[el], n = m.elemStart[el + 1] - b;
-    fe.resize(n);
-    elementForces(m.dim, x.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[el], q[el], fe.data(),
-                  iterations);
-    for (uint32_t i = 0; i < n; ++i) f[m.elemVerts[b + i]] += fe[i];
+  const size_t E = m.numElements(), V = m.numVertices();
+  f.resize(V);
+  std::vector<Vec3> pair(m.numPairs());
+  auto elements = [&](size_t begin, size_t end) {
+    for (size_t el = begin; el < end; ++el) {
+      const uint32_t b = m.elemStart[el], n = m.elemStart[el + 1] - b;
+      elementForces(m.dim, x.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[el], q[el], &pair[b],
+                    iterations);
+    }
+  };
+
+  auto gather = [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) {
+      Vec3 sum = Vec3::Zero();
+      for (uint32_t k = vertexPairStart_[i]; k < vertexPairStart_[i + 1]; ++k) sum += pair[vertexPairs_[k]];
+      f[i] = sum;
+    }
+  };
+  if (!team_ || team_->members() == 1) {
+    elements(0, E), gather(0, V);
+  } else {
+    team_->run([&](int t) {
+      const size_t T = size_t(team_->members());
+      elements(E * size_t(t) / T, E * size_t(t + 1) / T);
+      team_->barrier();
+      gather(V * size_t(t) / T, V * size_t(t + 1) / T);
+    });
   }
+}
+
+// Newton on Phi(x) = 1/(2 h^2) |x - y|_M^2 + E(x): each Newton system
+// (M / h^2 + K(x)) dx = -grad Phi is solved by conjugate gradients preconditioned with the
+// projective-dynamics matrix (M / h^2 + sum_e k_e G_e^T G_e, factored once), K(x) p by a
+// forward difference of the elastic forces. `passes` bounds the CG iterations of the step.
+int LargeStepSolver::minimise(const ProjectiveSolver& pre, Real h, const std::vector<Vec3>& y,
+                              const std::vector<char>& free, Real scale, int passes, int fitIterations,
+                              std::vector<Vec3>& x, std::vector<Quat>& q) const {
+  const RestModel& m = *model_;
+  const size_t V = m.numVertices();
+  const Real invH2 = 1.0 / (h * h);
+  int iterations = 0;
+  // The preconditioner restricted to the free vertices: z = S A^-1 S r, S zeroing the others.
+  auto precondition = [&](const std::vector<Vec3>& r, std::vector<Vec3>& z) {
+    pre.applyInverse(r, z);
+    for (size_t i = 0; i < V; ++i)
+      if (!free[i]) z[i].setZero();
+  };
+  std::vector<Vec3> f, fp, r(V), z, p(V), Ap(V), xp(V), dx(V);
+  std::vector<Quat> qp;
+  auto dot = [&](const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+    Real sum = 0;
+    for (size_t i = 0; i < V; ++i) sum += a[i].dot(b[i]);
+    return sum;
+  };
+  int budget = std::max(passes, 1);
+  for (int newton = 0; newton < 4 && budget > 0; ++newton) {
+    forces(x, q, f, fitIterations);
+    Real rNorm = 0;
+    for (size_t i = 0; i < V; ++i) {
+      r[i] = free[i] ? Vec3(f[i] - m.mass[i] * invH2 * (x[i] - y[i])) : Vec3::Zero();
+      rNorm = std::max(rNorm, r[i].norm() * m.invMass[i]);
+    }
+    if (rNorm <= 1e-10 * std::max(scale, Real(1e-3)) * invH2 * h * h) break;
+    precondition(r, z);
+    p = z;
+    std::fill(dx.begin(), dx.end(), Vec3::Zero());
+    Real rz = dot(r, z);
+    const Real rz0 = rz;
+    for (; budget > 0; --budget) {
+      ++iterations;
+      Real pMax = 0, xMax = 0;
+      for (size_t i = 0; i < V; ++i) pMax = std::max(pMax, p[i].norm()), xMax = std::max(xMax, x[i].norm());
+      if (pMax == 0) break;
+      const Real eps = 1e-7 * std::max(xMax, Real(1e-3)) / pMax;
+      for (size_t i = 0; i < V; ++i) xp[i] = x[i] + eps * p[i];
+      qp = q;
+      forces(xp, qp, fp, fitIterations);
+      for (size_t i = 0; i < V; ++i)
+        Ap[i] = free[i] ? Vec3(m.mass[i] * invH2 * p[i] - (fp[i] - f[i]) / eps) : Vec3::Zero();
+      const Real pAp = dot(p, Ap);
+      if (!(pAp > 0)) {
+        if (newton == 0 && dx[0].isZero() && iterations == 1) dx = z;  // no curvature: take the PD step
+        break;
+      }
+      const Real alpha = rz / pAp;
+      for (size_t i = 0; i < V; ++i) dx[i] += alpha * p[i], r[i] -= alpha * Ap[i];
+      precondition(r, z);
+      const Real rzNew = dot(r, z);
+      if (rzNew <= 1e-8 * rz0) {
+        --budget;
+        break;
+      }
+      const Real beta = rzNew / rz;
+      rz = rzNew;
+      for (size_t i = 0; i < V; ++i) p[i] = z[i] + beta * p[i];
+    }
+    for (size_t i = 0; i < V; ++i) x[i] += dx[i];
+  }
+  return iterations;
 }
 
 LargeStepReport LargeStepSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vector<Quat>& q,
@@ -92,62 +193,11 @@ LargeStepReport LargeStepSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v
   }
   for (size_t j = 0; j < pinned_.size(); ++j) y[pinned_[j]] = x[pinned_[j]] = 0.5 * (pinStart[j] + pinEnd[j]);
 
-  // Newton on Phi(x) = 1/(2 h^2) |x - y|_M^2 + E(x) - f_c.x: each Newton system
-  // (M / h^2 + K(x)) dx = -grad Phi is solved by conjugate gradients preconditioned with the
-  // projective-dynamics matrix (M / h^2 + sum_e k_e G_e^T G_e, factored once), K(x) p by a
-  // forward difference of the elastic forces. `passes` bounds the CG iterations of the step.
-  std::vector<Vec3> f, fp, r(V), z, p(V), Ap(V), xp(V), dx(V);
-  std::vector<Quat> qp;
-  auto dot = [&](const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
-    Real sum = 0;
-    for (size_t i = 0; i < V; ++i) sum += a[i].dot(b[i]);
-    return sum;
-  };
-  int budget = std::max(passes, 1);
-  for (int newton = 0; newton < 4 && budget > 0; ++newton) {
-    forces(x, q, f, fitIterations);
-    Real rNorm = 0, scale = 0;
-    for (size_t i = 0; i < V; ++i) {
-      r[i] = half_.isFree(uint32_t(i)) ? Vec3(f[i] - m.mass[i] * invH2 * (x[i] - y[i])) : Vec3::Zero();
-      rNorm = std::max(rNorm, r[i].norm() * m.invMass[i]);
-      scale = std::max(scale, (v[i].norm() / h + gravity.norm()));
-    }
-    if (rNorm <= 1e-10 * std::max(scale, Real(1e-3)) * invH2 * h * h) break;
-    half_.applyInverse(r, z);
-    p = z;
-    std::fill(dx.begin(), dx.end(), Vec3::Zero());
-    Real rz = dot(r, z);
-    const Real rz0 = rz;
-    for (; budget > 0; --budget) {
-      ++report.passes;
-      Real pMax = 0, xMax = 0;
-      for (size_t i = 0; i < V; ++i) pMax = std::max(pMax, p[i].norm()), xMax = std::max(xMax, x[i].norm());
-      if (pMax == 0) break;
-      const Real eps = 1e-7 * std::max(xMax, Real(1e-3)) / pMax;
-      for (size_t i = 0; i < V; ++i) xp[i] = x[i] + eps * p[i];
-      qp = q;
-      forces(xp, qp, fp, fitIterations);
-      for (size_t i = 0; i < V; ++i)
-        Ap[i] = half_.isFree(uint32_t(i)) ? Vec3(m.mass[i] * invH2 * p[i] - (fp[i] - f[i]) / eps) : Vec3::Zero();
-      const Real pAp = dot(p, Ap);
-      if (!(pAp > 0)) {
-        if (newton == 0 && dx[0].isZero() && report.passes == 1) dx = z;  // no curvature: take the PD step
-        break;
-      }
-      const Real alpha = rz / pAp;
-      for (size_t i = 0; i < V; ++i) dx[i] += alpha * p[i], r[i] -= alpha * Ap[i];
-      half_.applyInverse(r, z);
-      const Real rzNew = dot(r, z);
-      if (rzNew <= 1e-8 * rz0) {
-        --budget;
-        break;
-      }
-      const Real beta = rzNew / rz;
-      rz = rzNew;
-      for (size_t i = 0; i < V; ++i) p[i] = z[i] + beta * p[i];
-    }
-    for (size_t i = 0; i < V; ++i) x[i] += dx[i];
-  }
+  std::vector<char> free(V);
+  Real scale = 0;
+  for (size_t i = 0; i < V; ++i)
+    free[i] = half_.isFree(uint32_t(i)), scale = std::max(scale, (v[i].norm() / h + gravity.norm()));
+  report.passes = minimise(half_, h, y, free, scale, passes, fitIterations, x, q);
   for (size_t i = 0; i < V; ++i) {
     const Vec3 d = x[i] - x0[i];
     if (half_.isFree(uint32_t(i))) acceleration_[i] = (d - h * v[i]) * invH2;

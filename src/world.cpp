@@ -129,11 +129,11 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   for (ManipulatorSettings& s : manipulators) addManipulator(std::move(s));
 }
 
-// "auto": explicit (symplectic) while its dt = auto keeps real time, the large step otherwise.
+// "auto": explicit (symplectic) while its dt = auto keeps real time on a busy machine
+// (kAutoExplicitSecondsPerVertexStep, integrator.h), the large step otherwise.
 void World::chooseIntegrator(Real period) {
   const Real explicitDt = sim_.dtFraction * period;
-  const int threads = int(std::max<size_t>(1, std::min<size_t>(size_t(sim_.threads), model_->numVertices() / 1024)));
-  const double wallPerSecond = double(model_->numVertices()) * kExplicitSecondsPerVertexStep / explicitDt / threads;
+  const double wallPerSecond = double(model_->numVertices()) * kAutoExplicitSecondsPerVertexStep / explicitDt;
   char buf[256];
   if (wallPerSecond <= 1) {
     sim_.integrator = IntegratorKind::SymplecticEuler;
@@ -547,8 +547,9 @@ void World::finishFrameStep(Real tNext) {
 
 // Implicit step (projective.h): solve with pinned vertices eliminated, then the same contact
 // stage as the explicit path (positions projected, velocity rules applied to the derived
-// velocities (x_new - x_old) / dt).
-void World::stepImplicit(bool sweep) {
+// velocities (x_new - x_old) / dt). `largeStep` (a large step near contacts): fast manipulators
+// are swept along their paths.
+void World::stepImplicit(bool largeStep) {
   if (!projective_) projective_ = std::make_unique<ProjectiveSolver>(*model_, dt_, pinSet_.vertices);
   beginContactImpulses();
   const Vec3 g = sim_.gravity;
@@ -563,16 +564,20 @@ void World::stepImplicit(bool sweep) {
                     targets, sim_.rotationIterations);
   moveManipulators(tNext);
   if (contacts) {
-    if (sweep) sweepManipulatorPaths(tNext - dt_);
     // The contact pass finds the vertices that ended inside a surface; the step is solved again
     // with them held at their projected positions, so that the support reaches the whole body
     // within the step (projecting only those vertices afterwards lets a body sink and crush at
     // frame-size steps). A last pass then applies the contact rules to the final state.
+    // The holds are one-sided (projective.h): each carries the direction it pushed its vertex out.
+    const std::vector<Vec3> freeEnd = state_.positions;
+    if (largeStep) sweepManipulatorPaths(tNext - dt_);
     stageContacts(0, model_->numVertices());
     std::vector<uint32_t> held;
-    std::vector<Vec3> heldAt;
+    std::vector<Vec3> heldAt, heldNormal;
     for (uint32_t i = 0; i < model_->numVertices(); ++i)
-      if (scratch_->contactDepth[i] > 0) held.push_back(i), heldAt.push_back(state_.positions[i]);
+      if (scratch_->contactDepth[i] > 0)
+        held.push_back(i), heldAt.push_back(state_.positions[i]),
+            heldNormal.push_back((state_.positions[i] - freeEnd[i]).normalized());
     if (!held.empty()) {
       // Contact forces: the held solve's multipliers (the force holding each vertex, times dt)
       // are the impulse the contacts give the body, each on the surface that moved it; the last
@@ -583,13 +588,13 @@ void World::stepImplicit(bool sweep) {
       state_.positions = x0, state_.velocities = v0, state_.rotations = q0;
       std::vector<Vec3> heldForces;
       projective_->step(state_.positions, state_.velocities, state_.rotations, g, sim_.damping, sim_.implicitIterations,
-                        targets, sim_.rotationIterations, held, heldAt, &heldForces);
+                        targets, sim_.rotationIterations, held, heldAt, heldNormal, &heldForces);
       for (size_t j = 0; j < held.size(); ++j) {
         const size_t k = size_t(std::max(0, heldSurface[j]));  // every held vertex was moved by a surface
         const Vec3 centre = k < manipulators_.size() ? manipulators_[k].position : Vec3::Zero();
         addImpulse(scratch_->impulse[k], heldForces[j] * dt_, heldAt[j], centre, model_->dim);
       }
-      if (sweep) sweepManipulatorPaths(tNext - dt_);
+      if (largeStep) sweepManipulatorPaths(tNext - dt_);
       stageContacts(0, model_->numVertices());
     }
   }
@@ -597,16 +602,24 @@ void World::stepImplicit(bool sweep) {
 }
 
 // Large step (large_step.h): midpoint substeps away from contacts. A step that could touch
-// anything is a projective-dynamics step with held contacts (stepImplicit, backward Euler, with
-// fast manipulators swept): the midpoint keeps whatever energy a contact projection puts into
-// the deformation, and in contact-rich scenes (grasp at E x1) that blew the body up within 0.1 s
-// (measured, with the projection after the midpoint and with contact forces inside its solve).
+// anything is a projective-dynamics step with held contacts (stepImplicit: backward Euler, the
+// holds one-sided constraints of a filtered PCG, fast manipulators swept): the midpoint keeps
+// whatever energy a contact projection puts into the deformation, and in contact-rich scenes
+// (grasp at E x1) that blew the body up within 0.1 s (measured, with the projection after the
+// midpoint and with contact forces inside its solve); a Newton-PCG backward-Euler step with the
+// held vertices as constraints of its CG needed 40-80 CG iterations to stay stable on the grasp
+// scenes at E x100 (20 inverted elements), 2-5x the cost of this step.
 // A step touches if the last one did, or a vertex's free-flight end point or its start is within
 // the smallest element's size of a surface (manipulators at their end-of-step pose), or a
 // manipulator moves more than half its radius within the step.
 void World::stepLargeStep() {
   const int substeps = sim_.largeStepSubsteps;
   if (!largeStep_) largeStep_ = std::make_unique<LargeStepSolver>(*model_, dt_ / substeps, pinSet_.vertices);
+  // The solve's element forces on the team (the same bits at any count, large_step.h).
+  const int members =
+      int(std::max<size_t>(1, std::min<size_t>(size_t(sim_.threads), model_->numVertices() / kMinVerticesPerThread)));
+  if (members > 1) prepareTeam(members);
+  largeStep_->setTeam(members > 1 ? team_.get() : nullptr);
   const Vec3 g = sim_.gravity;  // projected into a 2D body's plane by the constructor
   const bool contacts = !manipulators_.empty() || domain_.enabled;
   const Real tNext = state_.time + dt_;

@@ -1,11 +1,13 @@
 // The large-step integrator (large_step.h): exact free fall, a free spin that keeps its angular
 // momentum and energy, a bending mode that keeps its amplitude at dt = 1/60 s, the static
-// equilibrium of the explicit integrator, no energy gain, stability at E x1000 and dt = 1/30 s on
-// the strike and grasp scenes, and the same state at 1 and 2 threads.
+// equilibrium of the explicit integrator, no energy gain, stability at E x100 / dt = 1/60 s and
+// E x1000 / dt = 1/30 s on the strike and grasp scenes, contacts as constraints of the solve, and
+// the same state at 1 and 2 threads.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
+#include "gradel/projective.h"
 #include "gradel/scene.h"
 #include "gradel/shared/validation.h"
 #include "test_support.h"
@@ -179,10 +181,11 @@ TEST(LargeStep, UndampedBarNeverGainsEnergyIn1e4Steps) {
   EXPECT_GT(last - e0, -0.5 * maxElastic);  // and it keeps (most of) its vibration
 }
 
-// At dt = 1/60 s with E x100 (1e7 Pa) on the shipped strike and grasp scenes (test_support.h).
-// (The issue asks for E x1000 at dt = 1/30 s: not met yet, see large_step.h.)
-std::unique_ptr<BuiltScene> runStiff(const std::string& file, Real duration) {
-  return test::runStiffScene(file, duration, IntegratorKind::LargeStep, 100, 1.0 / 60.0);
+// At dt = 1/60 s with E x100 (1e7 Pa), and at dt = 1/30 s with E x1000 (1e8 Pa), on the shipped
+// strike and grasp scenes (test_support.h: finite, nothing inside anything, no energy from
+// nowhere, no inverted element).
+std::unique_ptr<BuiltScene> runStiff(const std::string& file, Real duration, Real eScale = 100, Real dt = 1.0 / 60.0) {
+  return test::runStiffScene(file, duration, IntegratorKind::LargeStep, eScale, dt);
 }
 using test::centroid;
 TEST(LargeStep, StrikeSceneE100Dt60IsStableAndSendsTheBallAway) {
@@ -194,6 +197,84 @@ TEST(LargeStep, GraspTwoSceneE100Dt60IsStableAndLifts) {
   EXPECT_GT(centroid(*b->world).y(), 0.065);  // rests at 0.06
 }
 TEST(LargeStep, GraspWallSceneE100Dt60IsStable) { runStiff("grasp-wall.json", 1.5); }
+// At E x1000 / dt = 1/30 s the contact steps (projective dynamics, one frame, 10 passes, which
+// converge slowly on a body this stiff) transfer little: the struck ball leaves slowly (centroid
+// 0.076 m at 0.5 s against > 0.15 m at E x100 / 1/60 s) and the grasped ball is not lifted; what
+// is asserted is stability (and that the ball is hit).
+TEST(LargeStep, StrikeSceneE1000Dt30IsStableAndHitsTheBall) {
+  auto b = runStiff("strike.json", 0.5, 1000, 1.0 / 30.0);
+  std::printf("centroid x %.4f m\n", centroid(*b->world).x());
+  EXPECT_GT(centroid(*b->world).x(), 0.07);  // starts at 0.06
+}
+TEST(LargeStep, GraspTwoSceneE1000Dt30IsStable) {
+  auto b = runStiff("grasp-two.json", 1.5, 1000, 1.0 / 30.0);
+  std::printf("centroid y %.4f m\n", centroid(*b->world).y());
+}
+TEST(LargeStep, GraspWallSceneE1000Dt30IsStable) { runStiff("grasp-wall.json", 1.5, 1000, 1.0 / 30.0); }
+
+// Contacts at large steps (projective.h): held vertices are constraints of a filtered PCG. A
+// ball held at its lowest vertices sags under gravity onto a state where the held vertices sit
+// exactly on their targets (the constrained equilibrium: the explicit integrator with the same
+// vertices pinned gives the same sag). The holds are one-sided: a ball hung from held top
+// vertices under a surface above it (normal -y) is let go and falls; with the normal +y (the
+// surface below them, holding them up) it hangs.
+struct HeldBall {
+  test::Body b = test::makeBody("sphere", 6, 3, LayoutKind::Gradational);
+  std::vector<uint32_t> bottom, top;
+  Real yMin = 1e300, yMax = -1e300;
+  HeldBall() {
+    const RestModel& m = *b.model;
+    for (const Vec3& x : m.restPositions) yMin = std::min(yMin, x.y()), yMax = std::max(yMax, x.y());
+    for (uint32_t i = 0; i < m.numVertices(); ++i) {
+      if (m.restPositions[i].y() < yMin + 1e-9) bottom.push_back(i);
+      if (m.restPositions[i].y() > yMax - 1e-9) top.push_back(i);
+    }
+  }
+};
+TEST(LargeStep, HeldContactVerticesSettleOnThePinnedExplicitSag) {
+  HeldBall ball;
+  const RestModel& m = *ball.b.model;
+  ASSERT_GE(ball.bottom.size(), 4u);
+  std::vector<Vec3> targets, normals(ball.bottom.size(), Vec3::UnitY());
+  for (uint32_t i : ball.bottom) targets.push_back(m.restPositions[i]);
+  ProjectiveSolver solver(m, 1.0 / 60.0, {});
+  std::vector<Vec3> x = m.restPositions, v(m.numVertices(), Vec3::Zero());
+  std::vector<Quat> q(m.numElements(), Quat::Identity());
+  for (int i = 0; i < 300; ++i) solver.step(x, v, q, Vec3(0, -9.81, 0), 20.0, 10, {}, 4, ball.bottom, targets, normals);
+  for (size_t j = 0; j < ball.bottom.size(); ++j) EXPECT_EQ(x[ball.bottom[j]], targets[j]);
+  const uint32_t t = ball.top.front();
+  const Real sag = m.restPositions[t].y() - x[t].y();
+  SimulationSettings ex;
+  ex.damping = 20;
+  World w(ball.b.model, ex, {}, {});
+  PinSettings pin;
+  pin.min = Vec3(-1e9, ball.yMin - 1e-9, -1e9), pin.max = Vec3(1e9, ball.yMin + 1e-9, 1e9);
+  w.setPins({pin});
+  ASSERT_EQ(w.pinned().vertices.size(), ball.bottom.size());
+  w.advanceTo(2.0);
+  const Real ref = m.restPositions[t].y() - w.state().positions[t].y();
+  std::printf("top sag: held in the implicit solve %.5g m, pinned explicit %.5g m\n", sag, ref);
+  EXPECT_GT(ref, 0);
+  EXPECT_NEAR(sag, ref, 0.02 * ref);
+}
+TEST(LargeStep, HeldContactVerticesAreOneSided) {
+  HeldBall ball;
+  const RestModel& m = *ball.b.model;
+  std::vector<Vec3> targets;
+  for (uint32_t i : ball.top) targets.push_back(m.restPositions[i]);
+  for (Real ny : {-1.0, 1.0}) {
+    ProjectiveSolver solver(m, 1.0 / 60.0, {});
+    std::vector<Vec3> x = m.restPositions, v(m.numVertices(), Vec3::Zero());
+    std::vector<Quat> q(m.numElements(), Quat::Identity());
+    const std::vector<Vec3> normals(ball.top.size(), Vec3(0, ny, 0));
+    solver.step(x, v, q, Vec3(0, -9.81, 0), 0.0, 10, {}, 4, ball.top, targets, normals);
+    const Real drop = m.restPositions[ball.top.front()].y() - x[ball.top.front()].y();
+    if (ny < 0)
+      EXPECT_NEAR(drop, 9.81 / 3600, 1e-6);  // let go: falls as in free fall (dt^2 g), within 0.04 %
+    else
+      EXPECT_EQ(drop, 0.0);  // held up
+  }
+}
 
 TEST(LargeStep, SameStateAtOneAndTwoThreads) {
   Scene scene = loadScene(std::string(GRADEL_SOURCE_DIR) + "/scenes/strike.json");

@@ -15,10 +15,10 @@ namespace gradel {
 ///   energy stays bounded for any dt below the stability limit, which is why it is the default.
 /// Implicit: projective dynamics (projective.h), backward Euler on the same element energy;
 ///   stable at any dt (dt = auto means 1/60 s here), dissipative.
-/// LargeStep: implicit midpoint by projective dynamics with Chebyshev acceleration (large_step.h);
+/// LargeStep: implicit midpoint by Newton-PCG, backward Euler in steps near contacts (large_step.h);
 ///   stable at any dt (dt = auto means 1/60 s), keeps a mode's amplitude and a spin's momentum.
 /// Auto: chosen when the World is built: symplectic while its dt = auto keeps real time (estimated
-///   from the vertex count, kExplicitSecondsPerVertexStep of run_budget.h and the threads),
+///   from the vertex count and kAutoExplicitSecondsPerVertexStep below),
 ///   large_step when it cannot (World::integratorChoice() says which and why).
 enum class IntegratorKind { SymplecticEuler, ForwardEuler, Implicit, LargeStep, Auto };
 /// "symplectic" | "forward_euler" | "implicit" | "large_step" | "auto"
@@ -44,6 +44,13 @@ inline int hardwareThreads() { return int(std::clamp(std::thread::hardware_concu
 /// integrator and by the run budget to estimate a run's time.
 inline constexpr double kExplicitSecondsPerVertexStep = 30e-9;
 inline constexpr double kImplicitSecondsPerVertexStep = 4e-6;
+/// What `auto` assumes an explicit vertex-step costs [s] on one thread of a machine that is doing
+/// other work too (measured on the real scenes of gradel-bench beside other builds: 85-150 ns per
+/// vertex-step on the 2-core VM, docs/speed.md "Which integrator auto picks"; 11-30 ns when quiet).
+/// `auto` counts no thread speed-up (under load the governor often runs one member): it keeps the
+/// explicit step only where that runs in real time on a busy machine, since a wrong explicit pick
+/// runs far below real time while a wrong large-step pick still runs at frame rate.
+inline constexpr double kAutoExplicitSecondsPerVertexStep = 100e-9;
 
 struct SimulationSettings {
   IntegratorKind integrator = IntegratorKind::SymplecticEuler;

@@ -37,7 +37,8 @@
 //           fit, which keeps linear and angular momentum; for a pinned body all of them). At a
 //           turning point (no such velocity) the excess waits for the next step.
 // Contacts are not in this solve: World::stepLargeStep runs a step that could touch anything as
-// a projective-dynamics (backward Euler) step with held contacts (stepImplicit), see world.cpp.
+// a projective-dynamics (backward Euler) step with held contacts (stepImplicit, see world.cpp and
+// projective.h: the held vertices are constraints of a filtered PCG there, no back-solve each).
 #pragma once
 
 #include <memory>
@@ -47,6 +48,8 @@
 #include "gradel/projective.h"
 
 namespace gradel {
+
+class ThreadTeam;
 
 struct LargeStepReport {
   int passes = 0;             ///< Conjugate-gradient iterations run.
@@ -73,11 +76,21 @@ class LargeStepSolver {
   /// outside): the next step sets it from its start state.
   void resetEnergyBudget() { budgetValid_ = false; }
   Real dt() const { return dt_; }
+  /// Threads for the solve's element forces (null: this thread only). Any team gives the same
+  /// result bit for bit: each element's forces go to its own slots, summed per vertex in element
+  /// order, as on one thread.
+  void setTeam(ThreadTeam* team) { team_ = team; }
 
  private:
   void forces(const std::vector<Vec3>& x, std::vector<Quat>& q, std::vector<Vec3>& f, int iterations) const;
+  /// Newton-PCG on 1/(2 h^2) |x - y|_M^2 + E(x) over the vertices with free[i] != 0 (x in/out,
+  /// the others kept), preconditioned by `pre` (factored at h); returns the CG iterations run.
+  int minimise(const ProjectiveSolver& pre, Real h, const std::vector<Vec3>& y, const std::vector<char>& free,
+               Real scale, int passes, int fitIterations, std::vector<Vec3>& x, std::vector<Quat>& q) const;
 
   const RestModel* model_;
+  ThreadTeam* team_ = nullptr;
+  std::vector<uint32_t> vertexPairStart_, vertexPairs_;  ///< Per vertex: its element-vertex pairs, in element order.
   Real dt_;
   std::vector<uint32_t> pinned_;
   ProjectiveSolver half_;           ///< Backward Euler at h = dt / 2.

@@ -152,7 +152,7 @@ class World {
   void beginContactImpulses();
   void finishContactImpulses();
   void moveManipulators(Real tNext);
-  void stepImplicit(bool sweep);
+  void stepImplicit(bool largeStep);
   void stepLargeStep();
   void finishFrameStep(Real tNext);
   void sweepManipulatorPaths(Real t0);
@@ -171,8 +171,9 @@ class World {
   std::string integratorChoice_;
   std::vector<PinSettings> pins_;
   PinSet pinSet_;
-  std::unique_ptr<ProjectiveSolver> projective_;  ///< Implicit only: built at the first step (dt, pins fixed).
-  std::unique_ptr<LargeStepSolver> largeStep_;    ///< LargeStep only: built at the first step (dt, pins fixed).
+  std::unique_ptr<ProjectiveSolver>
+      projective_;  ///< Implicit, and LargeStep near contacts: built at the first such step.
+  std::unique_ptr<LargeStepSolver> largeStep_;  ///< LargeStep only: built at the first step (dt, pins fixed).
   // Threads of the explicit step (thread_team.h): the team, its chunk queues and each member's
   // first share of the element and vertex chunks (weighted by work), made for `teamMembers_`.
   std::unique_ptr<ThreadTeam> team_;
