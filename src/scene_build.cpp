@@ -1,5 +1,7 @@
 #include "gradel/scene.h"
 
+#include <algorithm>
+
 namespace gradel {
 
 BuiltScene buildScene(const Scene& scene, const SizeLimits& limits) {
@@ -13,7 +15,9 @@ BuiltScene buildScene(const Scene& scene, const SizeLimits& limits) {
   } else {
     ShapeSpec shape = scene.body.shape;
     shape.dim = scene.dim;
-    checkVolumeSize(shape.dims, shape.dim, limits, scene.body.sizeKey);
+    const bool labelled =
+        std::any_of(shape.primitives.begin(), shape.primitives.end(), [](const Primitive& p) { return p.label != 1; });
+    checkVolumeSize(shape.dims, shape.dim, limits, scene.body.sizeKey, labelled);
     b.volume = rasterize(shape);
   }
   checkLayoutSize(b.volume, scene.body.layout, limits, scene.body.sizeKey);

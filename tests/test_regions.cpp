@@ -12,6 +12,7 @@
 #include <tuple>
 
 #include "gradel/io/nrrd.h"
+#include "gradel/io/volume_file.h"
 #include "gradel/model.h"
 #include "gradel/output.h"
 #include "gradel/scene.h"
@@ -337,6 +338,17 @@ TEST(Regions, NrrdWithLabelsKeepsTheIntegerValues) {
   auto neg = test::stream(nrrdLabels({0, 1, -4, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1}, "short"), "seg.nrrd");
   EXPECT_EQ(test::errorOf([&] { io::readNrrd(*neg, rule, 0.01); }),
             "seg.nrrd: labels: sample 2 is -4 (expected an integer label in [0, 65535]: 0 empty, 1..65535 a region)");
+  // A 2D label map read for a 2D scene keeps its labels.
+  const auto file = std::filesystem::temp_directory_path() / "gradel_test_regions_2d.nrrd";
+  std::ofstream(file) << "NRRD0004\ntype: uchar\ndimension: 2\nsizes: 3 2\nencoding: ascii\n\n0 1 2 2 2 5\n";
+  io::VolumeFileSpec spec;
+  spec.path = file.string();
+  spec.dim = 2;
+  spec.grey.labels = true;
+  const VoxelVolume flat = io::readVolumeFile(spec);
+  EXPECT_EQ(flat.dim(), 2);
+  EXPECT_EQ(flat.labels(), (std::vector<uint16_t>{0, 1, 2, 2, 2, 5}));
+  std::filesystem::remove(file);
 }
 
 /// A scene folder in the temp directory holding a label NRRD (binary encoding, uint8).
