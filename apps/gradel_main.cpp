@@ -292,7 +292,7 @@ int runScene(const RunOptions& o) {
     fs::copy_file(o.scene, dir.file("scene.json"), ec);
     if (ec) throw gradel::IoError("cannot write " + dir.file("scene.json").string() + ": " + ec.message());
   }
-  gradel::MetricsCsv csv(dir.file("metrics.csv"));
+  gradel::MetricsCsv csv(dir.file("metrics.csv"), world.manipulators().size());
   std::vector<gradel::PvdFrame> pvd;
   Real maxPenetration = 0, maxStress = 0;
   gradel::Metrics last;

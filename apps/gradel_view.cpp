@@ -105,6 +105,7 @@ class Viewer {
     rebuild(true);
     // A body from a mesh file shows that mesh (embedded) first; other bodies the smooth surface.
     view_.surface = built_.embedded ? SurfaceMode::Embedded : SurfaceMode::Smooth;
+    view_.forces = true;  // the contact force arrows on the tools
     // The body keeps its physical size when the resolution changes.
     const VoxelVolume& v = built_.volume;
     bodyExtent_ = v.voxelSize() * std::max(v.nx(), v.ny());
@@ -138,6 +139,7 @@ class Viewer {
       const double want = stepOnce_ ? w.dt() : std::min(frameSeconds, kMaxFrameSeconds) * speed_;
       const long n = std::max(1L, std::lround(want / w.dt()));
       const auto start = Clock::now();
+      w.restartForceAverage();  // the force arrows: averaged over this frame's steps
       for (long k = 0; k < n; ++k) {
         if (drag_) feedDrag(*built_.world, *drag_, double(k + 1) / double(n), want);
         w.step();
@@ -217,6 +219,7 @@ class Viewer {
     ImGui::SameLine();
     ImGui::Checkbox("vertices", &view_.vertices);
     ImGui::Checkbox("stress colour", &view_.stress);
+    ImGui::Checkbox("tool forces", &view_.forces);
     float scale = float(view_.stressScale);
     if (view_.stress && ImGui::SliderFloat("stress scale", &scale, 0.005f, 0.3f, "%.3f", ImGuiSliderFlags_Logarithmic))
       view_.stressScale = scale;

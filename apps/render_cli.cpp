@@ -15,6 +15,8 @@ CLI::App* addRenderCommand(CLI::App& app, RenderCommandOptions& o) {
       ->capture_default_str();
   r->add_flag("--stress", o.stress, "Colour the surface by stress (darker = higher), with a legend");
   r->add_flag("--wireframe", o.wireframe, "Draw the element outlines coloured by level");
+  r->add_flag("--forces", o.forces,
+              "Draw the contact force on each manipulator (averaged over the frame) as an arrow, with a legend in N");
   r->add_flag("--vertices", o.vertices, "Draw the model vertices");
   r->add_flag("--section", o.section, "With --wireframe: only the elements cut by the middle z plane (fig. 4)");
   r->add_option("--start", o.start, "Simulated time of the first frame [s]")->capture_default_str();

@@ -77,6 +77,7 @@ set(GRADEL_TEST_SOURCES
   tests/test_cli.cpp
   tests/test_contact_energy.cpp
   tests/test_contacts.cpp
+  tests/test_contact_forces.cpp
   tests/test_divergence.cpp
   tests/test_dynamics.cpp
   tests/test_element.cpp

@@ -195,6 +195,7 @@ void runSteps(Simulation& s, More more) {
   py::gil_scoped_release release;
   std::lock_guard<std::mutex> lock(s.mutex);
   requireFiniteState(s.world());
+  s.world().restartForceAverage();  // manipulator_force(): the average over this call's steps
   auto last = std::chrono::steady_clock::now();
   while (more()) {
     s.world().step();
@@ -379,6 +380,30 @@ PYBIND11_MODULE(gradel, m) {
           },
           py::arg("index"), py::arg("position"), py::arg("velocity") = std::vector<double>{0, 0, 0},
           "Sets a manipulator's centre [m] and velocity [m/s]; the next step sweeps it from its last pose.")
+      .def(
+          "manipulator_force",
+          [](Simulation& s, size_t i, bool average) {
+            WorldLock lock(s);
+            if (i >= s.world().manipulators().size()) throw py::index_error("no manipulator " + std::to_string(i));
+            const ContactForce f =
+                average ? s.world().averageContactForces().manipulators[i] : s.world().stepContactForces().manipulators[i];
+            return py::make_tuple(std::vector<double>{f.force.x(), f.force.y(), f.force.z()},
+                                  std::vector<double>{f.torque.x(), f.torque.y(), f.torque.z()});
+          },
+          py::arg("index"), py::kw_only(), py::arg("average") = true,
+          "(force [N], torque [N m] about its centre) that the body exerts on manipulator `index`: averaged over "
+          "the steps of the last step()/advance_to() call (average=True), or of the last step alone.")
+      .def(
+          "wall_force",
+          [](Simulation& s, bool average) {
+            WorldLock lock(s);
+            const ContactForce f = average ? s.world().averageContactForces().walls : s.world().stepContactForces().walls;
+            return py::make_tuple(std::vector<double>{f.force.x(), f.force.y(), f.force.z()},
+                                  std::vector<double>{f.torque.x(), f.torque.y(), f.torque.z()});
+          },
+          py::kw_only(), py::arg("average") = true,
+          "(force [N], torque [N m] about the origin) that the body exerts on the walls together (as "
+          "manipulator_force).")
       .def_property_readonly("manipulator_positions",
                              [](Simulation& s) {
                                WorldLock lock(s);

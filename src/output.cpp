@@ -225,12 +225,23 @@ void writePvd(const fs::path& file, const std::vector<PvdFrame>& frames) {
 
 // ---- metrics ----------------------------------------------------------------------
 
-const char* MetricsCsv::header() {
-  return "time,kinetic_energy,elastic_energy,gravity_energy,px,py,pz,Lx,Ly,Lz,max_stress,max_penetration,"
-         "max_contact_depth,min_element_det";
+std::string MetricsCsv::header(size_t manipulators) {
+  std::string h =
+      "time,kinetic_energy,elastic_energy,gravity_energy,px,py,pz,Lx,Ly,Lz,max_stress,max_penetration,"
+      "max_contact_depth,min_element_det";
+  auto forceColumns = [&](const std::string& p) {
+    for (const char* c : {"fx", "fy", "fz", "tx", "ty", "tz"}) h += "," + p + c;
+  };
+  for (size_t k = 0; k < manipulators; ++k) forceColumns("m" + std::to_string(k) + "_");
+  forceColumns("wall_");
+  return h;
 }
 
-std::string MetricsCsv::row(const Metrics& m) {
+std::string MetricsCsv::row(const Metrics& m, size_t manipulators) {
+  const ContactForces& cf = m.contactForces;
+  if (cf.manipulators.size() != manipulators)
+    throw std::invalid_argument("MetricsCsv::row: " + std::to_string(cf.manipulators.size()) +
+                                " manipulators' forces for a header of " + std::to_string(manipulators));
   const double v[] = {m.time,
                       m.kineticEnergy,
                       m.elasticEnergy,
@@ -250,13 +261,19 @@ std::string MetricsCsv::row(const Metrics& m) {
     if (i) out += ',';
     appendNumber(out, v[i]);
   }
+  auto forces = [&](const ContactForce& f) {
+    for (int c = 0; c < 3; ++c) out += ',', appendNumber(out, f.force[c]);
+    for (int c = 0; c < 3; ++c) out += ',', appendNumber(out, f.torque[c]);
+  };
+  for (const ContactForce& f : cf.manipulators) forces(f);
+  forces(cf.walls);
   return out;
 }
 
-MetricsCsv::MetricsCsv(const fs::path& file) : path_(file) {
+MetricsCsv::MetricsCsv(const fs::path& file, size_t manipulators) : path_(file), manipulators_(manipulators) {
   file_ = std::fopen(file.c_str(), "wb");
   if (!file_) throwWriteError(file, errno);
-  std::fputs(header(), file_);
+  std::fputs(header(manipulators).c_str(), file_);
   std::fputc('\n', file_);
 }
 
@@ -266,7 +283,7 @@ MetricsCsv::~MetricsCsv() {
 
 void MetricsCsv::append(const Metrics& m) {
   if (!file_) throw std::logic_error("MetricsCsv::append after close");
-  const std::string line = row(m) + '\n';
+  const std::string line = row(m, manipulators_) + '\n';
   if (std::fwrite(line.data(), 1, line.size(), file_) != line.size() && !err_) err_ = errno ? errno : EIO;
 }
 

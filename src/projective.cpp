@@ -60,6 +60,7 @@ struct ProjectiveSolver::Impl {
   Eigen::MatrixXd Z;
   Eigen::LDLT<Eigen::MatrixXd> S;
   Rhs heldTargets;
+  Rhs heldForces;  ///< The last solve's lambda: the force [N] holding each held row.
 
   void prepareHeld(const std::vector<uint32_t>& held, const std::vector<Vec3>& targets) {
     heldRows.clear();
@@ -85,7 +86,8 @@ struct ProjectiveSolver::Impl {
       Rhs r(Eigen::Index(heldRows.size()), 3);
       for (size_t k = 0; k < heldRows.size(); ++k)
         r.row(Eigen::Index(k)) = heldTargets.row(Eigen::Index(k)) - sol.row(heldRows[k]);
-      sol += Z * Rhs(S.solve(r));
+      heldForces = S.solve(r);
+      sol += Z * heldForces;
     }
     for (size_t i = 0; i < freeIndex.size(); ++i)
       if (freeIndex[i] >= 0) x[i] = sol.row(freeIndex[i]).transpose();
@@ -142,7 +144,8 @@ size_t ProjectiveSolver::numFree() const { return size_t(impl_->rhs.rows()); }
 
 void ProjectiveSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vector<Quat>& q, const Vec3& gravity,
                             Real damping, int iterations, const std::vector<Vec3>& pinTargets, int rotationIterations,
-                            const std::vector<uint32_t>& held, const std::vector<Vec3>& heldTargets) {
+                            const std::vector<uint32_t>& held, const std::vector<Vec3>& heldTargets,
+                            std::vector<Vec3>* heldForces) {
   Impl& s = *impl_;
   s.prepareHeld(held, heldTargets);
   const RestModel& m = *s.model;
@@ -167,6 +170,11 @@ void ProjectiveSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vec
   }
   const Real damp = dampingFactor(damping, dt);  // integration.h
   for (size_t i = 0; i < V; ++i) v[i] = (x[i] - x0[i]) / dt * damp;
+  if (heldForces) {
+    heldForces->assign(held.size(), Vec3::Zero());
+    for (size_t j = 0, k = 0; j < held.size() && !s.heldRows.empty(); ++j)
+      if (s.freeIndex[held[j]] >= 0) (*heldForces)[j] = s.heldForces.row(Eigen::Index(k++)).transpose();
+  }
   s.heldRows.clear();
 }
 

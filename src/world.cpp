@@ -29,7 +29,28 @@ struct World::StepScratch {
   std::vector<Vec3> previousVelocities;  ///< [m/s] velocities then (the bounce's crossing speed, contacts.h).
   std::vector<Real> contactDepth;        ///< [m] per vertex, implicit step only: depth before correction.
   Real maxContactDepth = 0;              ///< [m] deepest vertex found (and corrected) in the last step.
+  // Contact impulses (World::stepContactForces): per surface (the manipulators, then the walls)
+  // the impulse the contact response gave the body [N s] and its moment [N m s] (about the
+  // manipulator's centre, the walls' about the origin). The explicit step sums them per aligned
+  // block of kVertexBlock vertices (blockImpulse, blocks x surfaces; blockTouched marks the blocks
+  // the broad phase let through) and adds the blocks in block order after the step: the same
+  // sums at any thread count, and no work for the blocks no contact can reach.
+  std::vector<ContactForce> impulse;
+  std::vector<ContactForce> blockImpulse;
+  std::vector<uint8_t> blockTouched;
+  std::vector<int> contactSurface;  ///< Per vertex, implicit step: the surface that moved it last (-1: none).
 };
+
+namespace {
+// The explicit vertex stage's blocks: the broad phase's unit and the contact forces' partial sums.
+constexpr size_t kVertexBlock = 16;
+// One vertex's contact impulse J = m dv on the body from `surface` at x, about `centre` (2D: in the plane).
+inline void addImpulse(ContactForce& acc, const Vec3& J, const Vec3& x, const Vec3& centre, int dim) {
+  Vec3 r = x - centre;
+  if (dim == 2) r.z() = 0;
+  acc.force += J, acc.torque += r.cross(J);
+}
+}  // namespace
 
 IntegratorKind parseIntegratorKind(const std::string& name) {
   if (name == "symplectic") return IntegratorKind::SymplecticEuler;
@@ -129,6 +150,8 @@ size_t World::addManipulator(ManipulatorSettings s, const Vec3& position) {
   m.velocity = scripted ? m.settings.path.velocity(state_.time) : Vec3::Zero();
   m.previousPosition = m.position;  // no sweep from elsewhere on its first step
   manipulators_.push_back(std::move(m));
+  stepForces_.manipulators.resize(manipulators_.size());  // no force on it before its first step
+  averageImpulse_.manipulators.resize(manipulators_.size());
   return manipulators_.size() - 1;
 }
 
@@ -185,7 +208,8 @@ World::ContactBounds World::contactBounds() const {
 // manipulator's swept bounds skips the contact tests. Returns the deepest contact [m].
 Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
   using namespace simd;
-  constexpr size_t kBlock = 16;
+  constexpr size_t kBlock = kVertexBlock;
+  const size_t surfaces = manipulators_.size() + 1;
   const RestModel& m = *model_;
   const Real dt = dt_;
   const Real damp = dampingFactor(sim_.damping, dt);  // integration.h
@@ -198,8 +222,8 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
   // without contacts nothing is kept for them.
   auto run = [&](auto forward, auto contacts) {
     d4 start[kBlock], startVelocity[kBlock];
-    for (size_t b = begin; b < end; b += kBlock) {
-      const size_t be = std::min(end, b + kBlock);
+    for (size_t b = begin, be; b < end; b = be) {
+      be = std::min(end, (b / kBlock + 1) * kBlock);  // blocks aligned to kBlock (the contact forces' partial sums)
       d4 lo = splat(std::numeric_limits<Real>::infinity()), hi = -lo;
       gatherVertexForces(m, *stageRest_, scratch_->frames.data(), positions, b, be, [&](size_t i, d4 force) {
         const d4 a = force * invMass[i] + g;
@@ -220,10 +244,14 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
         bool touch = !none(lo < cb->wallLo) || !none(hi > cb->wallHi);
         for (size_t k = 0; !touch && k < cb->lo.size(); ++k) touch = none(hi < cb->lo[k]) && none(lo > cb->hi[k]);
         if (!touch) continue;
+        ContactForce* impulse = &scratch_->blockImpulse[b / kBlock * surfaces];
+        std::fill(impulse, impulse + surfaces, ContactForce{});
+        scratch_->blockTouched[b / kBlock] = 1;
         for (size_t i = b; i < be; ++i) {
           Vec3 previous, previousVelocity;
           storeVec3(previous, start[i - b]), storeVec3(previousVelocity, startVelocity[i - b]);
-          depth = std::max(depth, resolveVertexContacts(previous, previousVelocity, positions[i], velocities[i]));
+          depth = std::max(depth, resolveVertexContacts(previous, previousVelocity, positions[i], velocities[i],
+                                                        m.mass[i], impulse));
         }
       }
     }
@@ -244,17 +272,30 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
 // resolved again, up to three more passes, inelastically: repeated elastic reflections between
 // two surfaces would pump energy into it. The walls go last in every pass, so no vertex ever
 // leaves the box. Returns the deepest penetration found [m].
-Real World::resolveVertexContacts(const Vec3& previous, const Vec3& previousVelocity, Vec3& x, Vec3& v) const {
+// `impulse` (one entry per manipulator, then the walls) gets the vertex's impulse m dv from each
+// surface and its moment (contact forces); `surface`, when given, the last surface that moved it.
+Real World::resolveVertexContacts(const Vec3& previous, const Vec3& previousVelocity, Vec3& x, Vec3& v, Real mass,
+                                  ContactForce* impulse, int* surface) const {
   const int dim = model_->dim;
   const StepStart start{previousVelocity, dt_, sim_.integrator == IntegratorKind::SymplecticEuler};
   const size_t surfaces = manipulators_.size() + (domain_.enabled ? 1 : 0);
+  const size_t K = manipulators_.size();
   Real depth = 0;
   for (int pass = 0; pass < 4; ++pass) {
     const bool bounce = pass == 0;
     Real passDepth = 0;
-    for (const Manipulator& mp : manipulators_)
-      passDepth = std::max(passDepth, resolveManipulator(mp, previous, x, v, dim, bounce, &start).depth);
-    passDepth = std::max(passDepth, resolveDomain(domain_, previous, x, v, dim, bounce, &start).depth);
+    for (size_t k = 0; k < K; ++k) {
+      const Vec3 before = v;
+      const Real d = resolveManipulator(manipulators_[k], previous, x, v, dim, bounce, &start).depth;
+      if (d > 0 || v != before) addImpulse(impulse[k], mass * (v - before), x, manipulators_[k].position, dim);
+      if (d > 0 && surface) *surface = int(k);
+      passDepth = std::max(passDepth, d);
+    }
+    const Vec3 before = v;
+    const Real d = resolveDomain(domain_, previous, x, v, dim, bounce, &start).depth;
+    if (d > 0 || v != before) addImpulse(impulse[K], mass * (v - before), x, Vec3::Zero(), dim);
+    if (d > 0 && surface) *surface = int(K);
+    passDepth = std::max(passDepth, d);
     depth = std::max(depth, passDepth);
     if (passDepth == 0 || surfaces < 2) break;
   }
@@ -263,9 +304,62 @@ Real World::resolveVertexContacts(const Vec3& previous, const Vec3& previousVelo
 
 // Contacts of every vertex from scratch_->previousPositions (the implicit step).
 void World::stageContacts(size_t begin, size_t end) {
-  for (size_t i = begin; i < end; ++i)
-    scratch_->contactDepth[i] = resolveVertexContacts(scratch_->previousPositions[i], scratch_->previousVelocities[i],
-                                                      state_.positions[i], state_.velocities[i]);
+  scratch_->contactSurface.resize(model_->numVertices());
+  for (size_t i = begin; i < end; ++i) {
+    scratch_->contactSurface[i] = -1;
+    scratch_->contactDepth[i] =
+        resolveVertexContacts(scratch_->previousPositions[i], scratch_->previousVelocities[i], state_.positions[i],
+                              state_.velocities[i], model_->mass[i], scratch_->impulse.data(), &scratch_->contactSurface[i]);
+  }
+}
+
+// Contact forces: every step starts with zero impulses on every surface ...
+void World::beginContactImpulses() {
+  const size_t surfaces = manipulators_.size() + 1;
+  scratch_->impulse.assign(surfaces, ContactForce{});
+  const size_t blocks = (model_->numVertices() + kVertexBlock - 1) / kVertexBlock;
+  if (scratch_->blockImpulse.size() != blocks * surfaces) {
+    scratch_->blockImpulse.assign(blocks * surfaces, ContactForce{});
+    scratch_->blockTouched.assign(blocks, 0);
+  }
+}
+
+// ... and ends with the explicit stage's blocks added in block order (the same sums at any
+// thread count), the step's forces (the impulse on the body, negated, over dt) and the average.
+void World::finishContactImpulses() {
+  const size_t surfaces = manipulators_.size() + 1;
+  std::vector<ContactForce>& J = scratch_->impulse;
+  for (size_t b = 0; b < scratch_->blockTouched.size(); ++b) {
+    if (!scratch_->blockTouched[b]) continue;
+    scratch_->blockTouched[b] = 0;
+    for (size_t s = 0; s < surfaces; ++s)
+      J[s].force += scratch_->blockImpulse[b * surfaces + s].force,
+          J[s].torque += scratch_->blockImpulse[b * surfaces + s].torque;
+  }
+  stepForces_.manipulators.resize(surfaces - 1);
+  averageImpulse_.manipulators.resize(surfaces - 1);
+  for (size_t s = 0; s < surfaces; ++s) {
+    ContactForce& f = s + 1 < surfaces ? stepForces_.manipulators[s] : stepForces_.walls;
+    ContactForce& a = s + 1 < surfaces ? averageImpulse_.manipulators[s] : averageImpulse_.walls;
+    f.force = -J[s].force / dt_, f.torque = -J[s].torque / dt_;
+    a.force -= J[s].force, a.torque -= J[s].torque;
+  }
+  averageTime_ += dt_;
+}
+
+ContactForces World::averageContactForces() const {
+  ContactForces f = averageImpulse_;
+  f.manipulators.resize(manipulators_.size());
+  const Real s = averageTime_ > 0 ? 1 / averageTime_ : 0;
+  for (ContactForce& c : f.manipulators) c.force *= s, c.torque *= s;
+  f.walls.force *= s, f.walls.torque *= s;
+  return f;
+}
+
+void World::restartForceAverage() {
+  averageImpulse_ = ContactForces{};
+  averageImpulse_.manipulators.resize(manipulators_.size());
+  averageTime_ = 0;
 }
 
 void World::moveManipulators(Real tNext) {
@@ -308,6 +402,7 @@ constexpr uint64_t kElementCost = 21, kVertexCost = 4;
 // Chunks handed out by the team: ~20-40 us of work each (kElementChunk a multiple of the
 // rotation fit's lanes, kVertexChunk of stageVertices' blocks).
 constexpr size_t kElementChunk = 256, kVertexChunk = 512;
+static_assert(kVertexChunk % kVertexBlock == 0, "chunks hold whole blocks (the contact forces' partial sums)");
 // Small bodies are not worth waking threads for.
 constexpr size_t kMinVerticesPerThread = 1024;
 
@@ -350,6 +445,7 @@ void World::step() {
   const bool contacts = !manipulators_.empty() || domain_.enabled;
   ContactBounds bounds;
   if (contacts) bounds = contactBounds();
+  beginContactImpulses();
   const ContactBounds* cb = contacts ? &bounds : nullptr;
   auto runOnThisThread = [&] {
     stageElementFrames(0, E);
@@ -366,8 +462,8 @@ void World::step() {
       stageElementFrames(splitPoint(model_->elemStart, kElementCost, t, T, kRotationLanes),
                          splitPoint(model_->elemStart, kElementCost, t + 1, T, kRotationLanes));
 #pragma omp barrier
-      depth = stageVertices(splitPoint(stageRest_->vertexStart, kVertexCost, t, T, 1),
-                            splitPoint(stageRest_->vertexStart, kVertexCost, t + 1, T, 1), cb);
+      depth = stageVertices(splitPoint(stageRest_->vertexStart, kVertexCost, t, T, kVertexBlock),
+                            splitPoint(stageRest_->vertexStart, kVertexCost, t + 1, T, kVertexBlock), cb);
     }
     scratch_->maxContactDepth = depth;
 #endif
@@ -393,6 +489,7 @@ void World::step() {
     }
     governor_->report(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   }
+  finishContactImpulses();
   for (Manipulator& m : manipulators_) m.previousPosition = m.position;
   state_.time += dt_;
   if (!pinSet_.empty()) applyPins(state_.time);
@@ -426,6 +523,7 @@ void World::applyPins(Real t) {
 
 // The end of an implicit or large step: deepest contact, manipulators' sweep start, time, pins.
 void World::finishFrameStep(Real tNext) {
+  finishContactImpulses();
   scratch_->maxContactDepth = scratch_->contactDepth.empty()
                                   ? 0
                                   : *std::max_element(scratch_->contactDepth.begin(), scratch_->contactDepth.end());
@@ -439,6 +537,7 @@ void World::finishFrameStep(Real tNext) {
 // velocities (x_new - x_old) / dt).
 void World::stepImplicit(bool sweep) {
   if (!projective_) projective_ = std::make_unique<ProjectiveSolver>(*model_, dt_, pinSet_.vertices);
+  beginContactImpulses();
   const Vec3 g = sim_.gravity;
   const bool contacts = !manipulators_.empty() || domain_.enabled;
   if (contacts) scratch_->previousPositions = state_.positions, scratch_->previousVelocities = state_.velocities;
@@ -462,9 +561,21 @@ void World::stepImplicit(bool sweep) {
     for (uint32_t i = 0; i < model_->numVertices(); ++i)
       if (scratch_->contactDepth[i] > 0) held.push_back(i), heldAt.push_back(state_.positions[i]);
     if (!held.empty()) {
+      // Contact forces: the held solve's multipliers (the force holding each vertex, times dt)
+      // are the impulse the contacts give the body, each on the surface that moved it; the last
+      // contact pass adds its own velocity changes. The first pass's are dropped with its state.
+      std::vector<int> heldSurface(held.size());
+      for (size_t j = 0; j < held.size(); ++j) heldSurface[j] = scratch_->contactSurface[held[j]];
+      scratch_->impulse.assign(manipulators_.size() + 1, ContactForce{});
       state_.positions = x0, state_.velocities = v0, state_.rotations = q0;
+      std::vector<Vec3> heldForces;
       projective_->step(state_.positions, state_.velocities, state_.rotations, g, sim_.damping, sim_.implicitIterations,
-                        targets, sim_.rotationIterations, held, heldAt);
+                        targets, sim_.rotationIterations, held, heldAt, &heldForces);
+      for (size_t j = 0; j < held.size(); ++j) {
+        const size_t k = size_t(std::max(0, heldSurface[j]));  // every held vertex was moved by a surface
+        const Vec3 centre = k < manipulators_.size() ? manipulators_[k].position : Vec3::Zero();
+        addImpulse(scratch_->impulse[k], heldForces[j] * dt_, heldAt[j], centre, model_->dim);
+      }
       if (sweep) sweepManipulatorPaths(tNext - dt_);
       stageContacts(0, model_->numVertices());
     }
@@ -486,6 +597,7 @@ void World::stepLargeStep() {
   const Vec3 g = sim_.gravity;  // projected into a 2D body's plane by the constructor
   const bool contacts = !manipulators_.empty() || domain_.enabled;
   const Real tNext = state_.time + dt_;
+  beginContactImpulses();
   if (contacts) {
     const std::vector<Manipulator> before = manipulators_;
     moveManipulators(tNext);
@@ -580,6 +692,9 @@ void World::sweepManipulatorPaths(Real t0) {
         x = xk;
       }
       if (depth == 0) continue;
+      // Contact forces: the velocity the sweep gave the vertex, against the one it ended the solve with.
+      addImpulse(scratch_->impulse[size_t(&mp - manipulators_.data())], m.mass[i] * (v - state_.velocities[i]), x,
+                 mp.position, m.dim);
       state_.positions[i] = x, state_.velocities[i] = v;
       scratch_->previousPositions[i] = x - (mp.position - mp.previousPosition);
       scratch_->contactDepth[i] = std::max(scratch_->contactDepth[i], depth);
@@ -666,6 +781,7 @@ Metrics World::metrics(std::vector<Real>* elementStress) const {
     r.maxPenetration = std::max(r.maxPenetration, pen);
   }
   r.maxContactDepth = scratch_->maxContactDepth;
+  r.contactForces = averageContactForces();
   return r;
 }
 
@@ -685,7 +801,8 @@ size_t World::memoryBytes() const {
   size_t b = sizeof(*this) + model_->memoryBytes() + stageRest_->memoryBytes();
   b += bytes(state_.positions) + bytes(state_.velocities) + bytes(state_.rotations);
   b += bytes(scratch_->frames) + bytes(scratch_->previousPositions) + bytes(scratch_->previousVelocities) +
-       bytes(scratch_->contactDepth);
+       bytes(scratch_->contactDepth) + bytes(scratch_->impulse) + bytes(scratch_->blockImpulse) +
+       bytes(scratch_->blockTouched) + bytes(scratch_->contactSurface);
   b += (elementSplit_.capacity() + vertexSplit_.capacity()) * sizeof(size_t);
   for (const Manipulator& m : manipulators_) b += sizeof(m) + bytes(m.settings.path.keys);
   return b;

@@ -182,6 +182,36 @@ TEST_F(CliTest, RunWritesCompleteResultAndSummary) {
   EXPECT_EQ(json::parse(again.out).at("steps").get<int>() * 2, j.at("steps").get<int>());
 }
 
+// metrics.csv carries the frame-averaged contact forces: per manipulator and the walls. A ball
+// resting on the floor with a sphere parked on top of it: the floor carries the ball's weight
+// and the sphere's push, the sphere is pushed up.
+TEST_F(CliTest, RunMetricsHaveContactForceColumns) {
+  write("press.json", R"({
+  "body": {"shape": "sphere", "size": 4, "voxel_size": 0.01},
+  "simulation": {"gravity": [0, -9.81, 0], "duration": 0.02, "frame_interval": 0.01, "damping": 10},
+  "domain": {"min": [-0.1, 0.0, -0.1], "max": [0.1, 0.2, 0.1], "restitution": 0},
+  "manipulators": [{"type": "sphere", "radius": 0.02, "restitution": 0,
+                    "path": [{"t": 0, "position": [0.02, 0.059, 0.02]}]}]
+})");
+  const Result r = run("run press.json --out res");
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::istringstream csv(readFile(dir_ / "res" / "metrics.csv"));
+  std::string header, line, last;
+  std::getline(csv, header);
+  while (std::getline(csv, line)) last = line;
+  std::vector<std::string> names, cells;
+  for (std::istringstream h(header); std::getline(h, line, ',');) names.push_back(line);
+  for (std::istringstream c(last); std::getline(c, line, ',');) cells.push_back(line);
+  ASSERT_EQ(names.size(), 14u + 12u);
+  ASSERT_EQ(cells.size(), names.size());
+  EXPECT_EQ(names[14], "m0_fx");
+  EXPECT_EQ(names[19], "m0_tz");
+  EXPECT_EQ(names[20], "wall_fx");
+  EXPECT_EQ(names[25], "wall_tz");
+  EXPECT_GT(std::stod(cells[15]), 0) << last;   // m0_fy: the ball pushes the sphere up
+  EXPECT_LT(std::stod(cells[21]), 0) << last;   // wall_fy: and the floor down
+}
+
 TEST_F(CliTest, RunDefaultOutIsOutSlashSceneName) {
   write("tiny.json", R"({"name": "named", "body": {"shape": "box", "size": 2}, "simulation": {"duration": 0.001}})");
   const Result r = run("run tiny.json");

@@ -231,17 +231,7 @@ TEST(Dynamics, SameStateAtAnyThreadCount) {
     Body b = makeBody("sphere", kind == LayoutKind::Voxel ? 16 : 28, 3, kind);
     ASSERT_GE(b.model->numVertices(), 2048u);
     auto run = [&](int threads) {
-      SimulationSettings s;
-      s.threads = threads;
-      s.damping = 1.0;
-      DomainSettings d;
-      d.enabled = true;
-      d.min = Vec3(-0.1, 0.0, -0.1), d.max = Vec3(0.4, 0.4, 0.4);
-      ManipulatorSettings mp;
-      mp.radius = 0.05;
-      mp.path.keys = {{0.0, Vec3(-0.05, 0.14, 0.14), std::nullopt}, {0.05, Vec3(0.1, 0.14, 0.14), std::nullopt}};
-      World w(b.model, s, d, {mp});
-      perturb(w, 0.1 * b.model->voxelSize, 0.05, 21);
+      World w = sweptWorld(b, threads);
       for (int i = 0; i < 200; ++i) w.step();
       return w.stateHash();
     };

@@ -309,17 +309,17 @@ TEST_F(OutputTest, MetricsCsvHeaderAndRowsRoundTrip) {
   EXPECT_FALSE(std::getline(in, extra));
   EXPECT_EQ(header,
             "time,kinetic_energy,elastic_energy,gravity_energy,px,py,pz,Lx,Ly,Lz,max_stress,max_penetration,"
-            "max_contact_depth,min_element_det");
+            "max_contact_depth,min_element_det,wall_fx,wall_fy,wall_fz,wall_tx,wall_ty,wall_tz");
   std::vector<double> values;
   std::istringstream cells(row1);
   for (std::string cell; std::getline(cells, cell, ',');) values.push_back(std::stod(cell));
-  ASSERT_EQ(values.size(), 14u);
+  ASSERT_EQ(values.size(), 20u);
   EXPECT_EQ(values[0], 0.1);
   EXPECT_EQ(values[1], 1.0 / 3.0);  // full precision
   EXPECT_EQ(values[6], 3.0);
   EXPECT_EQ(values[8], 5e-300);
   EXPECT_EQ(values[13], -0.5);
-  EXPECT_EQ(row2, "0,0,0,0,0,0,0,0,0,0,0,0,0,0");
+  EXPECT_EQ(row2, "0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0");
 }
 
 // ---- OutputDirectory ----------------------------------------------------------------

@@ -72,6 +72,24 @@ inline void deformSmoothly(World& w, Real strain) {
   for (Vec3& x : w.state().positions) x = c + (Mat3::Identity() + eps) * (x - c);
 }
 
+/// A world whose steps split across threads and touch everything: the body (>= 2048 vertices)
+/// perturbed, damped, between walls, with a sphere (of the given friction) sweeping through it.
+inline World sweptWorld(const Body& b, int threads, Real friction = 0) {
+  SimulationSettings s;
+  s.threads = threads;
+  s.damping = 1.0;
+  DomainSettings d;
+  d.enabled = true;
+  d.min = Vec3(-0.1, 0.0, -0.1), d.max = Vec3(0.4, 0.4, 0.4);
+  ManipulatorSettings mp;
+  mp.radius = 0.05;
+  mp.friction = friction;
+  mp.path.keys = {{0.0, Vec3(-0.05, 0.14, 0.14), std::nullopt}, {0.05, Vec3(0.1, 0.14, 0.14), std::nullopt}};
+  World w(b.model, s, d, {mp});
+  perturb(w, 0.1 * b.model->voxelSize, 0.05, 21);
+  return w;
+}
+
 inline Real totalEnergy(const World& w) {
   const Metrics m = w.metrics();
   return m.kineticEnergy + m.elasticEnergy + m.gravityEnergy;

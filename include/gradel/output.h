@@ -56,13 +56,16 @@ class MetricsCsv {
  public:
   /// The header line (no newline):
   /// time,kinetic_energy,elastic_energy,gravity_energy,px,py,pz,Lx,Ly,Lz,max_stress,
-  /// max_penetration,max_contact_depth,min_element_det
-  static const char* header();
-  /// One data line (no newline).
-  static std::string row(const Metrics& m);
+  /// max_penetration,max_contact_depth,min_element_det, then the frame-averaged contact forces
+  /// (Metrics::contactForces) the body exerts: per manipulator k = 0, 1, ...
+  /// m<k>_fx,m<k>_fy,m<k>_fz [N],m<k>_tx,m<k>_ty,m<k>_tz [N m] (about its centre), then the walls
+  /// wall_fx,wall_fy,wall_fz,wall_tx,wall_ty,wall_tz (torque about the origin).
+  static std::string header(size_t manipulators = 0);
+  /// One data line (no newline); std::invalid_argument if m has another number of manipulators.
+  static std::string row(const Metrics& m, size_t manipulators = 0);
 
   /// Creates the file and writes the header. Throws IoError on I/O errors.
-  explicit MetricsCsv(const std::filesystem::path& file);
+  explicit MetricsCsv(const std::filesystem::path& file, size_t manipulators = 0);
   ~MetricsCsv();
   MetricsCsv(const MetricsCsv&) = delete;
   MetricsCsv& operator=(const MetricsCsv&) = delete;
@@ -73,6 +76,7 @@ class MetricsCsv {
 
  private:
   std::filesystem::path path_;
+  size_t manipulators_ = 0;
   std::FILE* file_ = nullptr;
   int err_ = 0;  ///< errno of the first failed append.
 };

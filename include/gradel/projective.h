@@ -38,9 +38,13 @@ class ProjectiveSolver {
   /// are set to the displacement over dt. Velocities are scaled by 1 / (1 + damping dt) as in
   /// the explicit integrators. `iterations` local/global passes (>= 1).
   /// `held` / `heldTargets`: free vertices held at given positions during this step (contacts).
+  /// `heldForces`, when given, gets the force [N] that held each of them in the last pass (the
+  /// constraint's multiplier: (m / dt^2)(x - y) - f_elastic; the contact forces' share of a held
+  /// solve; 0 for a pinned one). Over all vertices they sum to the momentum the holding added / dt.
   void step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vector<Quat>& q, const Vec3& gravity, Real damping,
             int iterations, const std::vector<Vec3>& pinTargets, int rotationIterations = 4,
-            const std::vector<uint32_t>& held = {}, const std::vector<Vec3>& heldTargets = {});
+            const std::vector<uint32_t>& held = {}, const std::vector<Vec3>& heldTargets = {},
+            std::vector<Vec3>* heldForces = nullptr);
 
   /// Static equilibrium under gravity with the pins at `pinTargets`: the same local/global
   /// iteration with the inertia term dropped (needs at least one pin per body). Runs until the

@@ -31,6 +31,20 @@ struct State {
   std::vector<Quat> rotations;   ///< Best-fit rotation per element (warm start of eq. 1).
 };
 
+/// The force [N] and torque [N m] the body exerts on one contact surface: minus the momentum the
+/// contact response gave the body's vertices (their velocity changes m dv, summed), over the time.
+struct ContactForce {
+  Vec3 force{0, 0, 0};   ///< [N]
+  Vec3 torque{0, 0, 0};  ///< [N m] about the manipulator's centre (walls: about the world origin).
+};
+
+/// The contact forces on every surface: one per manipulator (in index order) and the walls
+/// together. Newton's third law holds: their sum is minus the momentum the contacts gave the body.
+struct ContactForces {
+  std::vector<ContactForce> manipulators;
+  ContactForce walls;
+};
+
 /// Figures written per frame to metrics.csv.
 struct Metrics {
   Real time = 0;                  ///< [s]
@@ -43,6 +57,7 @@ struct Metrics {
   Real maxPenetration = 0;        ///< [m] deepest vertex inside a manipulator or outside the walls now (should be 0).
   Real maxContactDepth = 0;       ///< [m] deepest vertex found (and corrected) in the last step.
   Real minElementDet = 0;         ///< [-] min det of the elements' deformation estimate (< 0: inverted).
+  ContactForces contactForces;    ///< Averaged since the last restartForceAverage() (the frame, in `gradel run`).
 };
 
 class World {
@@ -80,6 +95,16 @@ class World {
   /// Sets a manipulator's pose from outside (viewer, script); used for manipulators without a path.
   void setManipulatorPose(size_t i, const Vec3& position, const Vec3& velocity);
 
+  /// Contact forces (contacts.h): what the body exerts on each manipulator and on the walls.
+  /// The last step's: the impulse its contact response gave the body, negated, over dt.
+  const ContactForces& stepContactForces() const { return stepForces_; }
+  /// Averaged over the steps since the last restartForceAverage() (impulse over that time; zero
+  /// when no step was made): what a frame of output or a haptic device wants.
+  ContactForces averageContactForces() const;
+  /// The time [s] the average covers.
+  Real forceAverageTime() const { return averageTime_; }
+  void restartForceAverage();
+
   void setThreads(int n) { sim_.threads = n < 1 ? 1 : n; }
 
   /// Boundary conditions (pins.h): replaces the pins and moves the pinned vertices to their
@@ -112,7 +137,10 @@ class World {
   ContactBounds contactBounds() const;
   void prepareTeam(int members);
   void stageContacts(size_t begin, size_t end);
-  Real resolveVertexContacts(const Vec3& previous, const Vec3& previousVelocity, Vec3& x, Vec3& v) const;
+  Real resolveVertexContacts(const Vec3& previous, const Vec3& previousVelocity, Vec3& x, Vec3& v, Real mass,
+                             ContactForce* impulse, int* surface = nullptr) const;
+  void beginContactImpulses();
+  void finishContactImpulses();
   void moveManipulators(Real tNext);
   void stepImplicit(bool sweep);
   void stepLargeStep();
@@ -143,6 +171,9 @@ class World {
   std::vector<size_t> elementSplit_, vertexSplit_;
   std::vector<Real> memberContactDepth_;
   int teamMembers_ = 0;
+  ContactForces stepForces_;       ///< The last step's contact forces.
+  ContactForces averageImpulse_;   ///< [N s], [N m s] summed since restartForceAverage().
+  Real averageTime_ = 0;           ///< [s] since restartForceAverage().
 };
 
 }  // namespace gradel

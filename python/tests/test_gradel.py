@@ -73,12 +73,20 @@ def test_manipulator_pushes_the_body():
     sim = gradel.Simulation(body, gravity=[0, 0, 0], damping=0.0, youngs_modulus=1e5)
     i = sim.add_manipulator("sphere", radius=0.02, position=[-0.05, 0.03, 0.03])
     x0 = sim.positions[:, 0].mean()
+    p0 = sim.masses @ sim.velocities
+    impulse = np.zeros(3)
     t = 0.0
     while t < 0.15:
-        t += 0.005
+        t0, t = sim.time, t + 0.005
         sim.move_manipulator(i, [-0.05 + 0.5 * t, 0.03, 0.03], [0.5, 0, 0])
         sim.advance_to(t)
+        force, torque = sim.manipulator_force(i)  # averaged over this advance_to's steps
+        impulse += np.array(force) * (sim.time - t0)
     assert sim.positions[:, 0].mean() > x0 + 0.005
+    # Newton's third law: what the tool received is minus what the body gained.
+    dp = sim.masses @ sim.velocities - p0
+    assert dp[0] > 1e-3 and np.allclose(impulse, -dp, rtol=0, atol=1e-9 * np.linalg.norm(dp))
+    assert len(sim.manipulator_force(i, average=False)[1]) == 3 and sim.wall_force()[0] == [0.0, 0.0, 0.0]
     assert sim.metrics()["max_penetration"] < 1e-3
     assert np.allclose(sim.manipulator_positions[0], [-0.05 + 0.5 * t, 0.03, 0.03])
     with pytest.raises(IndexError):

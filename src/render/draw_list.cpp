@@ -154,6 +154,42 @@ void addLegend(DrawList& list, Real scale, int width, int height) {
   addText(list, "0", x0 - 20, y1 - 8, 1.6f, kTextColor);
 }
 
+// Each manipulator's contact force as an arrow from its centre (length |F| scale, a head of a
+// fifth of it) and, bottom left, its size in N with the scale of the arrows.
+void addForceArrows(DrawList& list, const World& world, Real scale, int height) {
+  const RestModel& m = world.model();
+  if (!(scale > 0)) {
+    Vec3 lo = m.restPositions.front(), hi = lo;
+    for (const Vec3& p : m.restPositions) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+    scale = 0.5 * (hi - lo).maxCoeff() / std::max(m.totalMass * 9.81, 1e-30);
+  }
+  const ContactForces f =
+      world.forceAverageTime() > 0 ? world.averageContactForces() : world.stepContactForces();
+  const Color arrow{0.85f, 0.15f, 0.10f};
+  char line[96];
+  float y = float(height) - 14.0f * float(f.manipulators.size()) - 24;
+  std::snprintf(line, sizeof line, "force on the tools [N] (arrow: %.3g N per cm)", 0.01 / scale);
+  addText(list, line, 12, y - 14, 1.6f, kTextColor);
+  for (size_t k = 0; k < f.manipulators.size() && k < world.manipulators().size(); ++k, y += 14) {
+    const Vec3 F = f.manipulators[k].force, c = world.manipulators()[k].position;
+    std::snprintf(line, sizeof line, "tool %zu: %.3g  (%.3g, %.3g, %.3g)", k, F.norm(), F.x(), F.y(), F.z());
+    addQuad2D(list, 12, y + 1, 24, y + 11, arrow, arrow);
+    addText(list, line, 30, y, 1.6f, kTextColor);
+    const Real len = F.norm() * scale;
+    if (!(len > 0) || !std::isfinite(len)) continue;
+    const Vec3 d = F.normalized(), tip = c + len * d;
+    const Vec3 side = (m.dim == 2 ? Vec3(-d.y(), d.x(), 0) : Vec3(d.unitOrthogonal())) * (0.1 * len);
+    addLine(list.lines, c, tip, arrow);
+    addLine(list.lines, tip, tip - 0.2 * len * d + side, arrow);
+    addLine(list.lines, tip, tip - 0.2 * len * d - side, arrow);
+    if (m.dim == 3) {
+      const Vec3 other = d.cross(side);
+      addLine(list.lines, tip, tip - 0.2 * len * d + other, arrow);
+      addLine(list.lines, tip, tip - 0.2 * len * d - other, arrow);
+    }
+  }
+}
+
 }  // namespace
 
 std::array<float, 3> stressColor(Real s, Real scale) {
@@ -298,6 +334,7 @@ DrawList buildDrawList(const BodyView& body, const World& world, const ViewOptio
         addSphere(list, m.position, m.settings.radius, kManipulatorColor);
     }
   if (o.walls && world.domain().enabled) addWalls(list, world.domain(), dim);
+  if (o.forces && !world.manipulators().empty()) addForceArrows(list, world, o.forceScale, height);
 
   // ---- overlay ----
   if (o.stress) addLegend(list, o.stressScale, width, height);

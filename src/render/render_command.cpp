@@ -52,6 +52,7 @@ int runRenderCommand(const RenderCommandOptions& o) {
   if (o.surface != "auto") view.surface = parseSurfaceMode(o.surface);
   view.stress = o.stress;
   view.wireframe = o.wireframe;
+  view.forces = o.forces;
   view.vertices = o.vertices;
   view.section = o.section;
   if (!(o.start >= 0) || !std::isfinite(o.start)) throw InputError("--start: must be >= 0 seconds");

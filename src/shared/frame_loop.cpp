@@ -56,6 +56,7 @@ size_t runFrames(World& world, const FrameSchedule& s, const std::function<void(
     if (world.time() > lastFrameTime) {
       onFrame(written++);
       lastFrameTime = world.time();
+      world.restartForceAverage();  // each frame's contact forces average the steps since the previous frame
     }
   }
   return written;

@@ -58,6 +58,31 @@ TEST(RenderHeadless, ContextIsOpenGl33) {
   std::cout << "GL_RENDERER: " << Renderer::glRenderer() << "\n";
 }
 
+// The draw list (no OpenGL): the force arrow of a manipulator pressed into the ball starts at
+// its centre and points along the force the body exerts on it, |F| x scale long.
+TEST(DrawList, ForceArrowStartsAtTheToolAndPointsAlongItsForce) {
+  Scene scene = loadScene(std::string(GRADEL_SOURCE_DIR) + "/scenes/strike.json");
+  BuiltScene built = buildScene(scene);
+  World& w = *built.world;
+  while (w.time() < 0.3 && w.stepContactForces().manipulators.at(0).force.norm() == 0) w.step();
+  const Vec3 F = w.stepContactForces().manipulators[0].force, c = w.manipulators()[0].position;
+  ASSERT_GT(F.norm(), 0);
+  ViewOptions v;
+  v.surface = SurfaceMode::None, v.walls = false, v.manipulators = false;
+  const size_t without = buildDrawList(makeBodyView(built), w, v, kW, kH).lines.size();
+  v.forces = true;
+  v.forceScale = 0.01;  // 1 cm per N
+  w.restartForceAverage();  // nothing averaged: the last step's force is drawn
+  const DrawList list = buildDrawList(makeBodyView(built), w, v, kW, kH);
+  ASSERT_EQ(list.lines.size(), without + 2 * 5);  // shaft and four head lines
+  const DrawVertex& a = list.lines[without];
+  const DrawVertex& b = list.lines[without + 1];
+  const Vec3 from(a.position[0], a.position[1], a.position[2]), to(b.position[0], b.position[1], b.position[2]);
+  EXPECT_LT((from - c).norm(), 1e-6);
+  EXPECT_LT((to - from - 0.01 * F).norm(), 1e-6 * std::max(1.0, 0.01 * F.norm()));
+  EXPECT_GT(list.overlay.size(), 0u);  // the legend
+}
+
 TEST(RenderHeadless, StressColourIsDarkerAtTheContactThanFarFromIt) {
   // Strike scene at the moment the manipulator is pressed into the ball.
   Scene scene = loadScene(std::string(GRADEL_SOURCE_DIR) + "/scenes/strike.json");

@@ -34,6 +34,12 @@ struct ViewOptions {
   bool vertices = false;   ///< Model vertices as points.
   bool manipulators = true;
   bool walls = true;
+  /// The contact force the body exerts on each manipulator (World::averageContactForces, the
+  /// last step's when no time was averaged) as an arrow from its centre, with a legend in N.
+  bool forces = false;
+  /// [m/N] arrow length per newton; 0 = auto: the body's weight under 9.81 m/s^2 is drawn half
+  /// the body's largest extent long (the same scale in every frame of a run).
+  Real forceScale = 0;
   Real stressScale = 0.05;  ///< [-] stress drawn darkest (World::vertexStress units).
   std::string caption;      ///< Text drawn at the top left (empty = none).
 };

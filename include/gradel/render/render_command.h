@@ -19,6 +19,7 @@ struct RenderCommandOptions {
       "auto";  ///< auto | smooth | voxel | embedded | none (auto: embedded for a body from a mesh file, else smooth)
   bool stress = false;
   bool wireframe = false;
+  bool forces = false;  ///< Arrows of the contact forces on the manipulators (ViewOptions::forces).
   bool vertices = false;
   bool section = false;               ///< Wireframe of the middle z section only.
   double start = 0;                   ///< [s] simulated time of the first frame.

@@ -37,7 +37,8 @@ struct FrameLoopChecks {
 };
 
 /// Advances `world` through the schedule, calling onFrame(index) at each frame time reached
-/// (index 0, 1, ... in order). Steps go in chunks of at most 32 (the same steps as one
+/// (index 0, 1, ... in order), then restarts the world's contact force average (so that a frame's
+/// World::averageContactForces() covers the steps since the previous frame). Steps go in chunks of at most 32 (the same steps as one
 /// World::advanceTo per frame), so that the checks run within a frame. Frames land on distinct
 /// steps: a frame time that no further step reaches (the last one, when the duration ends less
 /// than half a step past the previous frame) is skipped. Returns the frames written.
