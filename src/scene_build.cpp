@@ -19,7 +19,9 @@ void buildBody(const BodySettings& settings, int dim, const SizeLimits& limits, 
   } else {
     ShapeSpec shape = settings.shape;
     shape.dim = dim;
-    checkVolumeSize(shape.dims, shape.dim, limits, settings.sizeKey);
+    const bool labelled =
+        std::any_of(shape.primitives.begin(), shape.primitives.end(), [](const Primitive& p) { return p.label != 1; });
+    checkVolumeSize(shape.dims, shape.dim, limits, settings.sizeKey, labelled);
     b.volume = rasterize(shape);
   }
   checkLayoutSize(b.volume, settings.layout, limits, settings.sizeKey);

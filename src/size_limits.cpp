@@ -29,12 +29,13 @@ uint64_t defaultMemoryLimit() {
   return uint64_t(double(pages) * double(pageSize) * 0.75);
 }
 
-uint64_t estimateVolumeBytes(const std::array<int, 3>& dims, int dim) {
+uint64_t estimateVolumeBytes(const std::array<int, 3>& dims, int dim, bool labelled) {
   const double voxels = double(dims[0]) * double(dims[1]) * double(dim == 3 ? dims[2] : 1);
   const double lattice = (double(dims[0]) + 1) * (double(dims[1]) + 1) * (dim == 3 ? double(dims[2]) + 1 : 1);
-  // The volume (1 byte), the next level's working volume (1/2^dim), the vertex bitmap and its
-  // rank table (1.5 bits per lattice point).
-  return uint64_t(voxels * (1.0 + 1.0 / (dim == 3 ? 8 : 4)) + lattice * 1.5 / 8);
+  // The volume (1 byte, plus a 2-byte label when labelled), the next level's working volume (a
+  // 2-byte label per cell, 1/2^dim cells), the vertex bitmap and its rank table (1.5 bits per
+  // lattice point).
+  return uint64_t(voxels * ((labelled ? 3.0 : 1.0) + 2.0 / (dim == 3 ? 8 : 4)) + lattice * 1.5 / 8);
 }
 
 uint64_t estimateModelBytes(const LayoutCounts& c, int /*dim*/) {
@@ -54,7 +55,8 @@ std::string formatBytes(uint64_t bytes) {
   return buf;
 }
 
-void checkVolumeSize(const std::array<int, 3>& dims, int dim, const SizeLimits& limits, const std::string& key) {
+void checkVolumeSize(const std::array<int, 3>& dims, int dim, const SizeLimits& limits, const std::string& key,
+                     bool labelled) {
   const std::string grid = std::to_string(dims[0]) + " x " + std::to_string(dims[1]) +
                            (dim == 3 ? " x " + std::to_string(dims[2]) : std::string());
   for (int a = 0; a < dim; ++a)
@@ -65,7 +67,7 @@ void checkVolumeSize(const std::array<int, 3>& dims, int dim, const SizeLimits& 
   if (voxels > limits.maxVoxels)
     throw InputError(key + ": a grid of " + grid + " = " + std::to_string(voxels) + " voxels is over the limit of " +
                      std::to_string(limits.maxVoxels) + " voxels (1024^3 in 3D)");
-  const uint64_t bytes = estimateVolumeBytes(dims, dim);
+  const uint64_t bytes = estimateVolumeBytes(dims, dim, labelled);
   const uint64_t maxBytes = limits.maxBytes ? limits.maxBytes : defaultMemoryLimit();
   if (bytes > maxBytes)
     throw InputError(key + ": a grid of " + grid + " voxels needs about " + formatBytes(bytes) +

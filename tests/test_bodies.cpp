@@ -317,7 +317,7 @@ TEST(MultiBodyScene, RunWritesPerBodyFramesPvdPartsAndMetricsRows) {
   std::istringstream csv(read(res / "metrics.csv"));
   std::string line;
   std::getline(csv, line);
-  EXPECT_EQ(line, MetricsCsv::bodyHeader());
+  EXPECT_EQ(line, MetricsCsv::header(1, /*bodyColumn=*/true));  // one manipulator
   std::vector<std::vector<std::string>> rows;
   while (std::getline(csv, line)) {
     std::vector<std::string> cells;

@@ -451,7 +451,7 @@ TEST(SceneIo, SizeLimitsRefuseBeforeAllocatingAndNameTheKey) {
   SizeLimits small;
   small.maxBytes = 1u << 20;
   msg = buildErrorOf(scene3(R"("shape": "box", "size": 128)"), small);
-  EXPECT_EQ(msg.rfind("body.size: a grid of 128 x 128 x 128 voxels needs about 2.8 MB for the volume alone, over the "
+  EXPECT_EQ(msg.rfind("body.size: a grid of 128 x 128 x 128 voxels needs about 3.0 MB for the volume alone, over the "
                       "memory limit of 1.0 MB",
                       0),
             0u)

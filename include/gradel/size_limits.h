@@ -32,15 +32,16 @@ struct SizeLimits {
 /// 3/4 of physical memory, or the environment variable GRADEL_MEMORY_LIMIT_MB when set (> 0).
 uint64_t defaultMemoryLimit();
 
-/// Bytes to make the volume (1 per voxel) and scan it (the coarser working volumes, the vertex
-/// bitmap): an upper bound before any layout.
-uint64_t estimateVolumeBytes(const std::array<int, 3>& dims, int dim);
+/// Bytes to make the volume (1 per voxel, 3 with region labels) and scan it (the coarser working
+/// volumes, the vertex bitmap): an upper bound before any layout.
+uint64_t estimateVolumeBytes(const std::array<int, 3>& dims, int dim, bool labelled = false);
 /// Bytes of layout, rest model and world for a layout with these counts (measured costs per
 /// vertex, element and element-vertex pair, see size_limits.cpp).
 uint64_t estimateModelBytes(const LayoutCounts& counts, int dim);
 
 /// Check 1: throws InputError "KEY: ..." when the grid exceeds the voxel count or memory limit.
-void checkVolumeSize(const std::array<int, 3>& dims, int dim, const SizeLimits& limits, const std::string& key);
+void checkVolumeSize(const std::array<int, 3>& dims, int dim, const SizeLimits& limits, const std::string& key,
+                     bool labelled = false);
 /// Check 2: throws InputError "KEY: ..." when the model's estimated bytes exceed the limit.
 void checkModelSize(const LayoutCounts& counts, int dim, LayoutKind kind, const SizeLimits& limits,
                     const std::string& key);

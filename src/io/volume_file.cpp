@@ -98,6 +98,7 @@ VoxelVolume readVolumeFile(const VolumeFileSpec& spec, TriangleMesh* latticeMesh
                        ": a 2D scene needs a volume one voxel thick in z, this one has nz = " + std::to_string(v.nz()));
     VoxelVolume flat(2, v.nx(), v.ny(), 1, v.voxelSize());
     flat.data().swap(v.data());
+    if (v.hasLabels()) flat.enableLabels().swap(v.enableLabels());  // a 2D label map keeps its labels
     return flat;
   }
   return v;
