@@ -9,6 +9,7 @@
 #include <random>
 #include <sstream>
 
+#include "gradel/bodies.h"
 #include "gradel/body_contacts.h"
 #include "gradel/surface.h"
 #include "test_support.h"
@@ -386,6 +387,123 @@ TEST(BodyContacts, SelfContactIgnoresAdjacentFaces) {
   test::perturb(*w.bodies[0].world, 5e-4, 0.0, 6);
   w.gather();
   EXPECT_EQ(w.resolve().contacts, 0u);
+}
+
+}  // namespace
+}  // namespace gradel
+
+// ---- in a World of several bodies (bodies.h) ----
+
+namespace gradel {
+namespace {
+
+// Bodies in one World: combined model, contact surfaces from each body's layout and volume.
+struct WorldOfBodies {
+  std::vector<test::Body> parts;
+  std::unique_ptr<World> world;
+
+  WorldOfBodies(std::vector<test::Body> bodies, const std::vector<Vec3>& velocities, const SimulationSettings& sim,
+                const BodyContactSettings& contact, const DomainSettings& domain = {})
+      : parts(std::move(bodies)) {
+    std::vector<std::shared_ptr<const RestModel>> models;
+    std::vector<const Layout*> layouts;
+    std::vector<const VoxelVolume*> volumes;
+    for (const test::Body& b : parts) models.push_back(b.model), layouts.push_back(&b.layout), volumes.push_back(&b.volume);
+    auto m = std::make_shared<RestModel>(combineRestModels(models));
+    world = std::make_unique<World>(m, sim, domain, std::vector<ManipulatorSettings>{});
+    for (size_t i = 0; i < parts.size(); ++i)
+      for (uint32_t u = m->bodies[i].vertexBegin; u < m->bodies[i].vertexEnd; ++u) world->state().velocities[u] = velocities[i];
+    world->setBodyContacts(buildContactBodies(*m, layouts, volumes), contact);
+  }
+  const BodyRange& range(size_t i) const { return world->model().bodies[i]; }
+  Vec3 momentum() const {
+    Vec3 p = Vec3::Zero();
+    for (size_t u = 0; u < world->model().numVertices(); ++u) p += world->model().mass[u] * world->state().velocities[u];
+    return p;
+  }
+  Real momentumScale() const {
+    Real s = 0;
+    for (size_t u = 0; u < world->model().numVertices(); ++u)
+      s += world->model().mass[u] * world->state().velocities[u].norm();
+    return s;
+  }
+  Vec3 centre(size_t i) const {
+    Vec3 c = Vec3::Zero();
+    Real m = 0;
+    for (uint32_t u = range(i).vertexBegin; u < range(i).vertexEnd; ++u)
+      c += world->model().mass[u] * world->state().positions[u], m += world->model().mass[u];
+    return c / m;
+  }
+  Vec3 centreVelocity(size_t i) const {
+    Vec3 c = Vec3::Zero();
+    Real m = 0;
+    for (uint32_t u = range(i).vertexBegin; u < range(i).vertexEnd; ++u)
+      c += world->model().mass[u] * world->state().velocities[u], m += world->model().mass[u];
+    return c / m;
+  }
+  // Boundary vertices of body a inside body b (winding number of b's surface, off its surface).
+  size_t inside(size_t a, size_t b) const {
+    const ContactBody& A = world->bodyContacts()->bodies()[a];
+    const ContactBody& B = world->bodyContacts()->bodies()[b];
+    const Vec3* x = world->state().positions.data();
+    Vec3 lo = Vec3::Constant(1e300), hi = -lo;
+    for (uint32_t u : B.vertices) lo = lo.cwiseMin(x[u]), hi = hi.cwiseMax(x[u]);
+    size_t n = 0;
+    for (uint32_t u : A.vertices) {
+      if ((x[u].array() < lo.array()).any() || (x[u].array() > hi.array()).any()) continue;
+      if (windingNumber(x[u], B.triangles, x) <= 0.5) continue;
+      Real d = std::numeric_limits<Real>::infinity();
+      for (const auto& t : B.triangles) {
+        const ClosestPoint cp = closestPointOnTriangle(x[u], x[t[0]], x[t[1]], x[t[2]]);
+        d = std::min(d, (x[u] - (cp.w[0] * x[t[0]] + cp.w[1] * x[t[1]] + cp.w[2] * x[t[2]])).norm());
+      }
+      if (d > 1e-12) ++n;
+    }
+    return n;
+  }
+};
+
+// Two balls (8 voxels across) head on at 0.5 m/s each: linear momentum conserved to 1e-9 of its
+// scale through the collision, no vertex inside the other ball after any step, and they part.
+TEST(BodyContactsWorld, TwoBallsCollideHeadOnAndPart) {
+  std::vector<test::Body> balls;
+  balls.push_back(test::makeBody("sphere", 8, 3, LayoutKind::Gradational));
+  balls.push_back(test::makeBody("sphere", 8, 3, LayoutKind::Gradational, {}, 0.01, Vec3(0.082, 0.002, 0)));
+  WorldOfBodies w(std::move(balls), {Vec3(0.5, 0, 0), Vec3(-0.5, 0, 0)}, explicitFree(), {0.5, 0.2, false});
+  const Vec3 p0 = w.momentum();
+  const Real scale = w.momentumScale();
+  size_t contactSteps = 0;
+  while (w.world->time() < 0.05) {
+    w.world->step();
+    ASSERT_LE((w.momentum() - p0).norm(), 1e-9 * scale) << "t = " << w.world->time();
+    if (w.world->bodyContactStats().contacts == 0) continue;
+    ++contactSteps;
+    ASSERT_EQ(w.inside(0, 1), 0u) << "t = " << w.world->time();
+    ASSERT_EQ(w.inside(1, 0), 0u) << "t = " << w.world->time();
+  }
+  EXPECT_GT(contactSteps, 10u);
+  EXPECT_LT(w.centreVelocity(0).x(), -0.05) << "ball 0 bounced back";
+  EXPECT_GT(w.centreVelocity(1).x(), 0.05) << "ball 1 bounced back";
+  EXPECT_EQ(w.world->bodyContactStats().contacts, 0u) << "apart at the end";
+}
+
+// The same collision at 1 and 2 threads (bodies big enough for two): identical state hashes.
+TEST(BodyContactsWorld, SameStateAtOneAndTwoThreads) {
+  std::vector<uint64_t> hashes;
+  for (int threads : {1, 2}) {
+    std::vector<test::Body> balls;
+    balls.push_back(test::makeBody("sphere", 14, 3, LayoutKind::Gradational));
+    balls.push_back(test::makeBody("sphere", 14, 3, LayoutKind::Voxel, {}, 0.01, Vec3(0.141, 0.003, -0.002)));
+    SimulationSettings sim = explicitFree();
+    sim.threads = threads;
+    WorldOfBodies w(std::move(balls), {Vec3(0.5, 0, 0), Vec3(-0.5, 0, 0)}, sim, {0.5, 0.3, false});
+    ASSERT_GE(w.world->model().numVertices(), 2048u);
+    size_t contacts = 0;
+    for (int s = 0; s < 60; ++s) w.world->step(), contacts += w.world->bodyContactStats().contacts;
+    EXPECT_GT(contacts, 0u);
+    hashes.push_back(w.world->stateHash());
+  }
+  EXPECT_EQ(hashes[0], hashes[1]);
 }
 
 }  // namespace

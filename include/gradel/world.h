@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "gradel/body_contacts.h"
 #include "gradel/contacts.h"
 #include "gradel/integrator.h"
 #include "gradel/large_step.h"
@@ -80,6 +81,14 @@ class World {
   /// Sets a manipulator's pose from outside (viewer, script); used for manipulators without a path.
   void setManipulatorPose(size_t i, const Vec3& position, const Vec3& velocity);
 
+  /// Soft-soft contact between the bodies and, if set, of a body with itself (body_contacts.h):
+  /// their contact surfaces (buildContactBodies), made once; replaces any before. It runs after
+  /// each step, serially. InputError for a 2D model.
+  void setBodyContacts(std::vector<ContactBody> bodies, const BodyContactSettings& settings);
+  /// The stage (nullptr without body contacts) and what it found in the last step.
+  const BodyContacts* bodyContacts() const { return bodyContacts_.get(); }
+  const BodyContactStats& bodyContactStats() const { return bodyContactStats_; }
+
   void setThreads(int n) { sim_.threads = n < 1 ? 1 : n; }
 
   /// Boundary conditions (pins.h): replaces the pins and moves the pinned vertices to their
@@ -119,6 +128,10 @@ class World {
   void stageContacts(size_t begin, size_t end);
   Real resolveVertexContacts(const Vec3& previous, const Vec3& previousVelocity, Vec3& x, Vec3& v) const;
   void moveManipulators(Real tNext);
+  void stepExplicit();
+  void saveBodyContactStart();
+  void stageBodyContacts();
+  void updateBodyContactInvMass();
   void stepImplicit(bool sweep);
   void stepLargeStep();
   void finishFrameStep(Real tNext);
@@ -147,6 +160,12 @@ class World {
   std::unique_ptr<ChunkQueue> elementQueue_, vertexQueue_;
   std::vector<size_t> elementSplit_, vertexSplit_;
   std::vector<Real> memberContactDepth_;
+  // Soft-soft contact: the stage, its last result, the boundary vertices' start of the step
+  // (full-size arrays, only the bodies' boundary vertices written) and the inverse masses it uses.
+  std::unique_ptr<BodyContacts> bodyContacts_;
+  BodyContactStats bodyContactStats_;
+  std::vector<Vec3> bodyContactStartX_, bodyContactStartV_;
+  std::vector<Real> bodyContactInvMass_;
   int teamMembers_ = 0;
 };
 
