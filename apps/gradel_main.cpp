@@ -292,7 +292,10 @@ int runScene(const RunOptions& o) {
     fs::copy_file(o.scene, dir.file("scene.json"), ec);
     if (ec) throw gradel::IoError("cannot write " + dir.file("scene.json").string() + ": " + ec.message());
   }
-  gradel::MetricsCsv csv(dir.file("metrics.csv"));
+  // Several bodies: one file per body and frame, all listed per time in run.pvd (parts), and
+  // per frame a metrics row per body and one for the world (docs/scenes.md, "Output").
+  const bool several = built.numBodies() > 1;
+  gradel::MetricsCsv csv(dir.file("metrics.csv"), several);
   std::vector<gradel::PvdFrame> pvd;
   Real maxPenetration = 0, maxStress = 0;
   gradel::Metrics last;
@@ -301,15 +304,25 @@ int runScene(const RunOptions& o) {
   const std::string cause = likelyCause(scene, dt);
   auto writeFrame = [&](size_t index) {
     std::vector<gradel::Real> elementStress;
-    const gradel::Metrics m = world.metrics(&elementStress);  // one pass over the elements per frame
+    // One pass over the elements per frame.
+    const std::vector<gradel::Metrics> each = world.bodyMetrics(&elementStress);
+    const gradel::Metrics m = gradel::combineMetrics(each);
     if (auto diverged = guard.check(m, cause)) throw Diverged(*diverged);
-    csv.append(m);
+    if (several) {
+      for (size_t i = 0; i < each.size(); ++i) csv.append(built.body(i).name, each[i]);
+      csv.append("all", m);
+    } else {
+      csv.append(m);
+    }
     maxPenetration = std::max(maxPenetration, m.maxPenetration);
     maxStress = std::max(maxStress, m.maxStress);
     last = m;
-    const std::string name = gradel::frameFileName(index);
-    gradel::writeVtu(dir.file(name), model, world.state(), world.vertexStress(elementStress), elementStress);
-    pvd.push_back({world.time(), name});
+    const std::vector<gradel::Real> vertexStress = world.vertexStress(elementStress);
+    for (size_t i = 0; i < built.numBodies(); ++i) {
+      const std::string name = gradel::frameFileName(index, several ? built.body(i).name : "");
+      gradel::writeVtu(dir.file(name), model, world.state(), built.range(i), vertexStress, elementStress);
+      pvd.push_back({world.time(), name, int(i), several ? built.body(i).name : ""});
+    }
   };
 
   // Divergence, Ctrl-C and the progress bar are noticed within a frame (frame_loop.h).
@@ -342,7 +355,8 @@ int runScene(const RunOptions& o) {
   j["steps"] = std::llround(world.time() / dt);
   j["dt"] = dt;
   j["simulated_seconds"] = world.time();
-  j["frames"] = pvd.size();
+  j["frames"] = pvd.size() / built.numBodies();
+  j["bodies"] = built.numBodies();
   j["wall_seconds"] = wall;
   j["real_time_factor"] = wall > 0 ? world.time() / wall : 0.0;
   j["elements"] = model.numElements();

@@ -128,8 +128,9 @@ struct Simulation {
   std::mutex mutex;
   Scene scene;
   BuiltScene built;
-  std::map<SurfaceKind, DisplaySurface> surfaces;
-  std::optional<EmbeddedMesh> isoEmbedded;  ///< surface("embedded") of a volume: its isosurface, built on first use.
+  std::map<std::pair<size_t, SurfaceKind>, DisplaySurface> surfaces;  ///< Per (body, kind), built on first use.
+  /// surface("embedded") of a body from a volume: its isosurface, built on first use (per body).
+  std::map<size_t, EmbeddedMesh> isoEmbedded;
 
   World& world() { return *built.world; }
 };
@@ -226,9 +227,35 @@ void assignState(Simulation& s, std::vector<Vec3>& dst, const py::array_t<double
 
 // A view of one of the world's per-vertex vector arrays (positions, velocities), kept alive by
 // the Simulation object that owns the world.
-py::array stateView(py::object self, std::vector<Vec3>& v) {
-  return py::array_t<double>({py::ssize_t(v.size()), py::ssize_t(3)},
-                             {py::ssize_t(sizeof(Vec3)), py::ssize_t(sizeof(double))}, v.data()->data(), self);
+py::array stateView(py::object self, std::vector<Vec3>& v, size_t begin = 0, size_t end = size_t(-1)) {
+  end = std::min(end, v.size());
+  return py::array_t<double>({py::ssize_t(end - begin), py::ssize_t(3)},
+                             {py::ssize_t(sizeof(Vec3)), py::ssize_t(sizeof(double))}, v[begin].data(), self);
+}
+
+const BodyRange& bodyRange(Simulation& s, size_t body) {
+  if (body >= s.built.numBodies())
+    throw py::index_error("no body " + std::to_string(body) + " (the scene has " + std::to_string(s.built.numBodies()) +
+                          ")");
+  return s.built.range(body);
+}
+
+py::dict metricsDict(Metrics x, bool finite) {
+  if (!finite) {  // NaN spreads honestly: no min/max over NaN that hides it
+    const Real nan = std::numeric_limits<Real>::quiet_NaN();
+    x.kineticEnergy = x.elasticEnergy = x.gravityEnergy = x.maxStress = x.maxPenetration = x.minElementDet = nan;
+  }
+  py::dict d;
+  d["time"] = x.time;
+  d["kinetic_energy"] = x.kineticEnergy;
+  d["elastic_energy"] = x.elasticEnergy;
+  d["gravity_energy"] = x.gravityEnergy;
+  d["linear_momentum"] = std::vector<double>{x.linearMomentum.x(), x.linearMomentum.y(), x.linearMomentum.z()};
+  d["angular_momentum"] = std::vector<double>{x.angularMomentum.x(), x.angularMomentum.y(), x.angularMomentum.z()};
+  d["max_stress"] = x.maxStress;
+  d["max_penetration"] = x.maxPenetration;
+  d["min_element_det"] = x.minElementDet;
+  return d;
 }
 
 }  // namespace
@@ -469,49 +496,90 @@ PYBIND11_MODULE(gradel, m) {
       .def("metrics",
            [](Simulation& s) {
              WorldLock lock(s);
-             Metrics x = s.world().metrics();
-             if (!finiteState(s.world())) {  // NaN spreads honestly: no min/max over NaN that hides it
-               const Real nan = std::numeric_limits<Real>::quiet_NaN();
-               x.kineticEnergy = x.elasticEnergy = x.gravityEnergy = x.maxStress = x.maxPenetration = x.minElementDet =
-                   nan;
-             }
-             py::dict d;
-             d["time"] = x.time;
-             d["kinetic_energy"] = x.kineticEnergy;
-             d["elastic_energy"] = x.elasticEnergy;
-             d["gravity_energy"] = x.gravityEnergy;
-             d["linear_momentum"] =
-                 std::vector<double>{x.linearMomentum.x(), x.linearMomentum.y(), x.linearMomentum.z()};
-             d["angular_momentum"] =
-                 std::vector<double>{x.angularMomentum.x(), x.angularMomentum.y(), x.angularMomentum.z()};
-             d["max_stress"] = x.maxStress;
-             d["max_penetration"] = x.maxPenetration;
-             d["min_element_det"] = x.minElementDet;
-             return d;
+             return metricsDict(s.world().metrics(), finiteState(s.world()));
            })
       .def(
-          "surface",
-          [](Simulation& s, const std::string& kind) {
+          "body_metrics",
+          [](Simulation& s) {
             WorldLock lock(s);
+            const bool finite = finiteState(s.world());
+            py::list out;
+            for (const Metrics& x : s.world().bodyMetrics()) out.append(metricsDict(x, finite));
+            return out;
+          },
+          "metrics() per body (a list, body order); metrics() is their sum.")
+      .def_property_readonly("num_bodies", [](Simulation& s) { return s.built.numBodies(); })
+      .def_property_readonly(
+          "body_names",
+          [](Simulation& s) {
+            std::vector<std::string> names;
+            for (size_t i = 0; i < s.built.numBodies(); ++i) names.push_back(s.built.body(i).name);
+            return names;
+          },
+          "Each body's name (scene key bodies[i].name, default 'body<i>').")
+      .def_property_readonly(
+          "body_vertex_ranges",
+          [](Simulation& s) {
+            std::vector<std::pair<size_t, size_t>> r;
+            for (const BodyRange& b : s.world().model().bodies) r.emplace_back(b.vertexBegin, b.vertexEnd);
+            return r;
+          },
+          "Per body, (begin, end): its rows of positions, velocities, masses, ...")
+      .def_property_readonly(
+          "body_element_ranges",
+          [](Simulation& s) {
+            std::vector<std::pair<size_t, size_t>> r;
+            for (const BodyRange& b : s.world().model().bodies) r.emplace_back(b.elementBegin, b.elementEnd);
+            return r;
+          },
+          "Per body, (begin, end): its entries of element_stress.")
+      .def(
+          "body_positions",
+          [](py::object self, size_t body) {
+            Simulation& s = self.cast<Simulation&>();
+            const BodyRange& r = bodyRange(s, body);
+            return stateView(self, s.world().state().positions, r.vertexBegin, r.vertexEnd);
+          },
+          py::arg("body"), "(n, 3) view of one body's rows of positions (no copy, writable; as positions).")
+      .def(
+          "body_velocities",
+          [](py::object self, size_t body) {
+            Simulation& s = self.cast<Simulation&>();
+            const BodyRange& r = bodyRange(s, body);
+            return stateView(self, s.world().state().velocities, r.vertexBegin, r.vertexEnd);
+          },
+          py::arg("body"), "(n, 3) view of one body's rows of velocities (as velocities).")
+      .def(
+          "surface",
+          [](Simulation& s, const std::string& kind, size_t body) {
+            WorldLock lock(s);
+            const BodyRange& range = bodyRange(s, body);
+            const BuiltBody& b = s.built.body(body);
             TriangleMesh mesh;
             if (kind == "embedded") {
-              // The body's mesh file carried by the elements; for a volume, its isosurface.
-              const EmbeddedMesh* em = s.built.embedded ? &*s.built.embedded : nullptr;
-              if (!em) {
-                if (s.scene.dim != 3) throw InputError("surface: 'embedded' needs a 3D body or a mesh");
-                if (!s.isoEmbedded) {
-                  const Layout& layout = s.built.layout;
-                  const RestModel& model = *s.built.model;
-                  s.isoEmbedded = embedMesh(isosurface(s.built.volume, model.origin), layout, model);
+              // The body's mesh file carried by the elements; for a volume, its isosurface. In
+              // the body's own vertex ids, moved to the world's (bodies.h).
+              auto it = s.isoEmbedded.find(body);
+              if (it == s.isoEmbedded.end()) {
+                EmbeddedMesh em;
+                if (b.embedded) {
+                  em = *b.embedded;
+                } else {
+                  if (s.scene.dim != 3) throw InputError("surface: 'embedded' needs a 3D body or a mesh");
+                  em = embedMesh(isosurface(b.volume, b.model->origin), b.layout, *b.model);
                 }
-                em = &*s.isoEmbedded;
+                shiftVertexIds(em, range.vertexBegin, range.elementBegin);
+                it = s.isoEmbedded.emplace(body, std::move(em)).first;
               }
-              mesh = embeddedMesh(*em, s.world().state().positions);
+              mesh = embeddedMesh(it->second, s.world().state().positions);
             } else {
               const SurfaceKind k = parseSurfaceKind(kind);
-              auto it = s.surfaces.find(k);
-              if (it == s.surfaces.end())
-                it = s.surfaces.emplace(k, buildDisplaySurface(s.built.layout, s.built.volume, k)).first;
+              auto it = s.surfaces.find({body, k});
+              if (it == s.surfaces.end()) {
+                DisplaySurface surface = buildDisplaySurface(b.layout, b.volume, k);
+                shiftVertexIds(surface, range.vertexBegin);
+                it = s.surfaces.emplace(std::make_pair(body, k), std::move(surface)).first;
+              }
               mesh = surfaceMesh(it->second, s.world().state().positions);
             }
             auto tris = std::move(mesh.triangles);
@@ -523,8 +591,8 @@ PYBIND11_MODULE(gradel, m) {
                                       owner->data()->data(), base);
             return py::make_tuple(vec3Array(std::move(mesh.vertices)), triangles, vec3Array(std::move(mesh.normals)));
           },
-          py::arg("kind") = "smooth",
-          "The display surface now: (vertices (V, 3) [m], triangles (T, 3) uint32, normals (V, 3)); kind 'smooth', "
-          "'voxel' "
-          "or 'embedded' (the body's mesh file carried by the elements; for a volume, its isosurface).");
+          py::arg("kind") = "smooth", py::arg("body") = 0,
+          "A body's display surface now: (vertices (V, 3) [m], triangles (T, 3) uint32, normals (V, 3)); kind "
+          "'smooth', 'voxel' or 'embedded' (the body's mesh file carried by the elements; for a volume, its "
+          "isosurface).");
 }

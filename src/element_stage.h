@@ -11,7 +11,8 @@
 //     f_v = sum_e k_e (M R0 + e - x_v) = (sum_e G_e) X_v + sum_e t_e - (sum_e k_e) x_v:
 //     four 4-wide additions per pair, in a fixed order (the vertex's elements in id order).
 // Rest offsets are lattice vectors: R0_i = h (P_i - mean P), P_i the vertex's lattice offset from
-// the element's first vertex in voxels (h the voxel size of the element's body, RestModel::bodies), and since sum (x_i - c) = 0,
+// the element's first vertex in voxels (h the voxel size of the element's body,
+// RestModel::bodies), and since sum (x_i - c) = 0,
 // A = h (sum x_i P_i^T - c sum P_i^T). Pass 1 streams a 12-byte record per pair (the vertex and
 // (P_i, 1) as four int16; the vertex id and R0 took 28 bytes) and forms the rows of
 // sum x_i (P_i, 1)^T, whose last lane is sum x_i; the factor h does not change the fitted

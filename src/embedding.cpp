@@ -154,3 +154,12 @@ TriangleMesh embeddedMesh(const EmbeddedMesh& embedded, const std::vector<Vec3>&
 }
 
 }  // namespace gradel
+
+namespace gradel {
+
+void shiftVertexIds(EmbeddedMesh& embedded, uint32_t offset, uint32_t elementOffset) {
+  for (uint32_t& v : embedded.weightVertex) v += offset;
+  for (uint32_t& e : embedded.element) e += elementOffset;
+}
+
+}  // namespace gradel

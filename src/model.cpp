@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
-#include <limits>
 
 #include "gradel/settings_check.h"
 
@@ -157,8 +157,8 @@ BodyRange wholeModelBody(const RestModel& m) {
 }
 
 size_t RestModel::bodyOfVertex(size_t v) const {
-  const auto it = std::upper_bound(bodies.begin(), bodies.end(), v,
-                                   [](size_t x, const BodyRange& b) { return x < b.vertexEnd; });
+  const auto it =
+      std::upper_bound(bodies.begin(), bodies.end(), v, [](size_t x, const BodyRange& b) { return x < b.vertexEnd; });
   if (it == bodies.end()) throw std::out_of_range("RestModel::bodyOfVertex: no body holds vertex " + std::to_string(v));
   return size_t(it - bodies.begin());
 }

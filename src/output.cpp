@@ -123,52 +123,67 @@ constexpr const char* kByteOrder = std::endian::native == std::endian::little ? 
 
 // ---- VTK ------------------------------------------------------------------------
 
-std::string frameFileName(size_t index) {
+std::string frameFileName(size_t index, const std::string& body) {
   char buf[32];
-  std::snprintf(buf, sizeof buf, "frame_%05zu.vtu", index);
-  return buf;
+  std::snprintf(buf, sizeof buf, "_%05zu.vtu", index);
+  return (body.empty() ? std::string("frame") : body) + buf;
 }
 
 void writeVtu(const fs::path& file, const RestModel& model, const State& state, const std::vector<Real>& vertexStress,
               const std::vector<Real>& elementStress, VtkEncoding encoding) {
-  const size_t nv = model.numVertices(), ne = model.numElements();
-  if (state.positions.size() != nv || state.velocities.size() != nv)
+  writeVtu(file, model, state, wholeModelBody(model), vertexStress, elementStress, encoding);
+}
+
+void writeVtu(const fs::path& file, const RestModel& model, const State& state, const BodyRange& body,
+              const std::vector<Real>& vertexStress, const std::vector<Real>& elementStress, VtkEncoding encoding) {
+  const size_t NV = model.numVertices(), NE = model.numElements();
+  if (state.positions.size() != NV || state.velocities.size() != NV)
     throw std::invalid_argument("writeVtu: state does not match the model's vertex count");
-  if (!vertexStress.empty() && vertexStress.size() != nv)
+  if (!vertexStress.empty() && vertexStress.size() != NV)
     throw std::invalid_argument("writeVtu: vertexStress must be empty or have one value per vertex");
-  if (!elementStress.empty() && elementStress.size() != ne)
+  if (!elementStress.empty() && elementStress.size() != NE)
     throw std::invalid_argument("writeVtu: elementStress must be empty or have one value per element");
-  if (model.elemStart.size() != ne + 1 || model.level.size() != ne)
+  if (model.elemStart.size() != NE + 1 || model.level.size() != NE)
     throw std::invalid_argument("writeVtu: inconsistent rest model");
+  if (body.vertexBegin > body.vertexEnd || body.vertexEnd > NV || body.elementBegin > body.elementEnd ||
+      body.elementEnd > NE)
+    throw std::invalid_argument("writeVtu: the body's range is not in the model");
+  const size_t v0 = body.vertexBegin, e0 = body.elementBegin;
+  const size_t nv = body.numVertices(), ne = body.numElements();
 
   std::vector<double> points(3 * nv), velocity(3 * nv);
   for (size_t v = 0; v < nv; ++v)
     for (int c = 0; c < 3; ++c) {
-      points[3 * v + c] = state.positions[v][c];
-      velocity[3 * v + c] = state.velocities[v][c];
+      points[3 * v + c] = state.positions[v0 + v][c];
+      velocity[3 * v + c] = state.velocities[v0 + v][c];
     }
 
   std::vector<int64_t> connectivity;
-  connectivity.reserve(model.numPairs());
+  connectivity.reserve(model.elemStart[body.elementEnd] - model.elemStart[e0]);
   std::vector<int64_t> offsets(ne);
   std::vector<uint8_t> types(ne, model.dim == 2 ? kVtkPolygon : kVtkConvexPointSet);
   std::vector<int64_t> elementId(ne);
   std::vector<std::pair<double, uint32_t>> ring;  // (angle, pair) of one 2D element
   for (size_t e = 0; e < ne; ++e) {
-    const uint32_t b = model.elemStart[e], end = model.elemStart[e + 1];
+    const uint32_t b = model.elemStart[e0 + e], end = model.elemStart[e0 + e + 1];
     if (model.dim == 2) {
       // restOffsets are relative to the rest centroid, so their angles order the outline.
       ring.clear();
       for (uint32_t p = b; p < end; ++p)
         ring.emplace_back(std::atan2(model.restOffsets[p].y(), model.restOffsets[p].x()), p);
       std::stable_sort(ring.begin(), ring.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
-      for (const auto& r : ring) connectivity.push_back(model.elemVerts[r.second]);
+      for (const auto& r : ring) connectivity.push_back(int64_t(model.elemVerts[r.second] - v0));
     } else {
-      for (uint32_t p = b; p < end; ++p) connectivity.push_back(model.elemVerts[p]);
+      for (uint32_t p = b; p < end; ++p) connectivity.push_back(int64_t(model.elemVerts[p] - v0));
     }
     offsets[e] = int64_t(connectivity.size());
     elementId[e] = int64_t(e);
   }
+  auto slice = [](const std::vector<Real>& all, size_t from, size_t n) {
+    return all.empty() ? std::vector<double>() : std::vector<double>(all.begin() + from, all.begin() + from + n);
+  };
+  const std::vector<double> pointStress = slice(vertexStress, v0, nv), cellStress = slice(elementStress, e0, ne);
+  const std::vector<uint8_t> level(model.level.begin() + e0, model.level.begin() + e0 + ne);
 
   std::string out;
   out.reserve(64 * nv + 16 * connectivity.size() + 1024);
@@ -179,15 +194,12 @@ void writeVtu(const fs::path& file, const RestModel& model, const State& state, 
   out += vertexStress.empty() ? "      <PointData Vectors=\"velocity\">\n"
                               : "      <PointData Scalars=\"stress\" Vectors=\"velocity\">\n";
   appendDataArray(out, "velocity", 3, velocity, encoding);
-  if (!vertexStress.empty())
-    appendDataArray(out, "stress", 1, std::vector<double>(vertexStress.begin(), vertexStress.end()), encoding);
+  if (!vertexStress.empty()) appendDataArray(out, "stress", 1, pointStress, encoding);
   out += "      </PointData>\n";
   out += "      <CellData Scalars=\"level\">\n";
-  appendDataArray(out, "level", 1, model.level, encoding);
+  appendDataArray(out, "level", 1, level, encoding);
   appendDataArray(out, "element_id", 1, elementId, encoding);
-  if (!elementStress.empty())
-    appendDataArray(out, "element_stress", 1, std::vector<double>(elementStress.begin(), elementStress.end()),
-                    encoding);
+  if (!elementStress.empty()) appendDataArray(out, "element_stress", 1, cellStress, encoding);
   out += "      </CellData>\n";
   out += "      <Points>\n";
   appendDataArray(out, "position", 3, points, encoding);
@@ -210,7 +222,9 @@ void writePvd(const fs::path& file, const std::vector<PvdFrame>& frames) {
   for (const PvdFrame& f : frames) {
     out += "    <DataSet timestep=\"";
     appendNumber(out, f.time);
-    out += "\" group=\"\" part=\"0\" file=\"" + xmlEscape(f.file) + "\"/>\n";
+    out += "\" group=\"\" part=\"" + std::to_string(f.part) + "\"";
+    if (!f.name.empty()) out += " name=\"" + xmlEscape(f.name) + "\"";
+    out += " file=\"" + xmlEscape(f.file) + "\"/>\n";
   }
   out += "  </Collection>\n";
   out += "</VTKFile>\n";
@@ -223,6 +237,10 @@ const char* MetricsCsv::header() {
   return "time,kinetic_energy,elastic_energy,gravity_energy,px,py,pz,Lx,Ly,Lz,max_stress,max_penetration,"
          "max_contact_depth,min_element_det";
 }
+
+std::string MetricsCsv::bodyHeader() { return std::string("body,") + header(); }
+
+std::string MetricsCsv::row(const std::string& body, const Metrics& m) { return body + "," + row(m); }
 
 std::string MetricsCsv::row(const Metrics& m) {
   const double v[] = {m.time,
@@ -247,10 +265,10 @@ std::string MetricsCsv::row(const Metrics& m) {
   return out;
 }
 
-MetricsCsv::MetricsCsv(const fs::path& file) : path_(file) {
+MetricsCsv::MetricsCsv(const fs::path& file, bool bodyColumn) : path_(file), bodyColumn_(bodyColumn) {
   file_ = std::fopen(file.c_str(), "wb");
   if (!file_) throwWriteError(file, errno);
-  std::fputs(header(), file_);
+  std::fputs(bodyColumn ? bodyHeader().c_str() : header(), file_);
   std::fputc('\n', file_);
 }
 
@@ -259,8 +277,18 @@ MetricsCsv::~MetricsCsv() {
 }
 
 void MetricsCsv::append(const Metrics& m) {
+  if (bodyColumn_) throw std::logic_error("MetricsCsv::append without a body in a file with a body column");
+  writeLine(row(m));
+}
+
+void MetricsCsv::append(const std::string& body, const Metrics& m) {
+  if (!bodyColumn_) throw std::logic_error("MetricsCsv::append with a body in a file without a body column");
+  writeLine(row(body, m));
+}
+
+void MetricsCsv::writeLine(std::string line) {
   if (!file_) throw std::logic_error("MetricsCsv::append after close");
-  const std::string line = row(m) + '\n';
+  line += '\n';
   if (std::fwrite(line.data(), 1, line.size(), file_) != line.size() && !err_) err_ = errno ? errno : EIO;
 }
 

@@ -110,8 +110,7 @@ PinSet selectPins(const std::vector<PinSettings>& pins, const std::vector<Vec3>&
   }
   for (size_t p = 0; p < pins.size(); ++p)
     if (held[p] == 0)
-      throw InputError("pins[" + std::to_string(p) + "]: the " + (masks[p] ? "mask" : "box") +
-                       " holds no vertex of " +
+      throw InputError("pins[" + std::to_string(p) + "]: the " + (masks[p] ? "mask" : "box") + " holds no vertex of " +
                        (bodyVertices.size() > 1 ? "body " + std::to_string(pins[p].body) : std::string("the body")));
   return s;
 }

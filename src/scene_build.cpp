@@ -1,47 +1,83 @@
+#include <algorithm>
+
+#include "gradel/bodies.h"
 #include "gradel/scene.h"
 
 namespace gradel {
 
-BuiltScene buildScene(const Scene& scene, const SizeLimits& limits) {
-  BuiltScene b;
+namespace {
+
+// One body: volume, layout, rest model and embedded source mesh.
+void buildBody(const BodySettings& settings, int dim, const SizeLimits& limits, BuiltBody& b) {
+  b.name = settings.name;
   TriangleMesh latticeMesh;  // a mesh source's mesh, in lattice units
-  if (scene.body.source) {
-    b.volume = scene.body.source->loadWithMesh(&latticeMesh);
-    if (b.volume.dim() != scene.dim)
-      throw InputError(scene.body.source->describe() + ": a " + std::to_string(b.volume.dim()) + "D volume in a " +
-                       std::to_string(scene.dim) + "D scene");
+  if (settings.source) {
+    b.volume = settings.source->loadWithMesh(&latticeMesh);
+    if (b.volume.dim() != dim)
+      throw InputError(settings.source->describe() + ": a " + std::to_string(b.volume.dim()) + "D volume in a " +
+                       std::to_string(dim) + "D scene");
   } else {
-    ShapeSpec shape = scene.body.shape;
-    shape.dim = scene.dim;
-    checkVolumeSize(shape.dims, shape.dim, limits, scene.body.sizeKey);
+    ShapeSpec shape = settings.shape;
+    shape.dim = dim;
+    checkVolumeSize(shape.dims, shape.dim, limits, settings.sizeKey);
     b.volume = rasterize(shape);
   }
-  checkLayoutSize(b.volume, scene.body.layout, limits, scene.body.sizeKey);
-  b.layout = buildLayout(b.volume, scene.body.layout);
-  auto model =
-      std::make_shared<RestModel>(buildRestModel(b.layout, b.volume, scene.body.material, scene.body.position));
+  checkLayoutSize(b.volume, settings.layout, limits, settings.sizeKey);
+  b.layout = buildLayout(b.volume, settings.layout);
+  auto model = std::make_shared<RestModel>(buildRestModel(b.layout, b.volume, settings.material, settings.position));
   b.model = model;
   const Vec3& origin = model->origin;
-  if (!latticeMesh.triangles.empty() && scene.dim == 3) {
+  if (!latticeMesh.triangles.empty() && dim == 3) {
     // restPositions = origin + lattice * h (model.h): the mesh goes exactly where it was voxelised.
     TriangleMesh rest = std::move(latticeMesh);
     for (Vec3& p : rest.vertices) p = origin + model->voxelSize * p;
     try {
       b.embedded = embedMesh(rest, b.layout, *model);
     } catch (const InputError& e) {
-      throw InputError(scene.body.source->describe() + ": " + e.what());
+      throw InputError(settings.source->describe() + ": " + e.what());
     }
     b.sourceMesh = std::move(rest);
   }
-  b.world = std::make_unique<World>(b.model, scene.simulation, scene.domain, scene.manipulators);
+}
+
+}  // namespace
+
+BuiltScene buildScene(const Scene& scene, const SizeLimits& limits) {
+  BuiltScene b;
+  b.moreBodies.resize(scene.moreBodies.size());
+  // The memory limit holds all bodies: each body is checked against what the ones before leave.
+  const uint64_t memory = limits.maxBytes ? limits.maxBytes : defaultMemoryLimit();
+  uint64_t used = 0;
+  std::vector<std::shared_ptr<const RestModel>> models;
+  for (size_t i = 0; i < scene.numBodies(); ++i) {
+    SizeLimits left = limits;
+    left.maxBytes = std::max<uint64_t>(1, memory > used ? memory - used : 0);
+    BuiltBody& body = i == 0 ? static_cast<BuiltBody&>(b) : b.moreBodies[i - 1];
+    try {
+      buildBody(scene.bodyAt(i), scene.dim, left, body);
+    } catch (const InputError& e) {
+      if (i == 0 || used == 0) throw;
+      throw InputError(std::string(e.what()) + "; the bodies before it take about " + formatBytes(used) + " of " +
+                       formatBytes(memory));
+    }
+    const Layout& l = body.layout;
+    used += estimateModelBytes({l.numElements(), l.numVertices(), l.numPairs()}, scene.dim);
+    models.push_back(body.model);
+  }
+  auto worldModel = models.size() == 1 ? models[0] : std::make_shared<const RestModel>(combineRestModels(models));
+  b.world = std::make_unique<World>(worldModel, scene.simulation, scene.domain, scene.manipulators);
   if (!scene.pins.empty()) {
     std::vector<PinSettings> pins = scene.pins;
     loadPinMasks(pins);  // the mask files, read here once (World::setPins reads no file)
     b.world->setPins(std::move(pins));
   }
-  Vec3 v0 = scene.body.velocity;
-  if (scene.dim == 2) v0.z() = 0;
-  for (Vec3& v : b.world->state().velocities) v = v0;
+  for (size_t i = 0; i < scene.numBodies(); ++i) {
+    Vec3 v0 = scene.bodyAt(i).velocity;
+    if (scene.dim == 2) v0.z() = 0;
+    const BodyRange& r = b.range(i);
+    std::fill(b.world->state().velocities.begin() + r.vertexBegin, b.world->state().velocities.begin() + r.vertexEnd,
+              v0);
+  }
   return b;
 }
 

@@ -168,6 +168,7 @@ class Fields {
   Fields(const json& object, std::string path, const Context& ctx)
       : obj_(&object), path_(std::move(path)), ctx_(&ctx) {}
 
+  const std::string& path() const { return path_; }
   std::string keyPath(std::string_view key) const { return path_.empty() ? shown(key) : path_ + "." + shown(key); }
   [[noreturn]] void fail(std::string_view key, const std::string& what) const { failAt(*ctx_, keyPath(key), what); }
   [[noreturn]] void failWrongType(std::string_view key, const json& v, const std::string& expected) const {
@@ -605,15 +606,14 @@ std::shared_ptr<const VolumeSource> readSource(Fields f, int dim, Real voxelSize
   return io::openVolume(spec);
 }
 
-void readBody(Fields f, Scene& scene) {
-  const int dim = scene.dim;
-  BodySettings& body = scene.body;
+// A body's keys (`body`, or an entry of `bodies`, whose material and name readBodies reads).
+void readBody(Fields& f, int dim, BodySettings& body) {
   if (auto source = f.optObject("source")) {
     for (const char* key : {"shape", "size", "grid", "primitives"})
       f.forbid(key, "a body with \"source\" takes its volume from the file");
     body.shape.voxelSize = f.number("voxel_size", body.shape.voxelSize, kPositive, "m");
     body.source = readSource(*source, dim, body.shape.voxelSize);
-    body.sizeKey = "body.source";
+    body.sizeKey = f.keyPath("source");
   } else {
     const int shape = f.choice("shape", {"box", "sphere", "cylinder", "union"});
     const Real voxelSize = f.number("voxel_size", body.shape.voxelSize, kPositive, "m");
@@ -623,7 +623,7 @@ void readBody(Fields f, Scene& scene) {
       spec.dim = dim;
       spec.voxelSize = voxelSize;
       spec.dims = f.requireIntVec("grid", 1, kMaxGridEdge);
-      body.sizeKey = "body.grid";
+      body.sizeKey = f.keyPath("grid");
       std::vector<Fields> prims = f.objectArray("primitives", true);
       if (prims.empty()) f.fail("primitives", "empty (expected at least one primitive)");
       for (Fields& pf : prims) spec.primitives.push_back(readPrimitive(pf));
@@ -632,6 +632,7 @@ void readBody(Fields f, Scene& scene) {
       f.forbid("grid", "\"grid\" is only for shape \"union\"");
       f.forbid("primitives", "\"primitives\" is only for shape \"union\"");
       const int size = f.requireInteger("size", 1, kMaxGridEdge);
+      body.sizeKey = f.keyPath("size");
       if (shape == 2 && dim == 2)
         f.fail("shape", "\"cylinder\" is 3D only (expected \"box\", \"sphere\" or \"union\" in a 2D scene)");
       static const char* kNames[] = {"box", "sphere", "cylinder"};
@@ -645,7 +646,7 @@ void readBody(Fields f, Scene& scene) {
   body.layout = f.enumeration("layout", body.layout, &parseLayoutKind);
   body.position = f.vec("position", body.position, "m");
   body.velocity = f.vec("velocity", body.velocity, "m/s");
-  f.finish();
+  if (dim == 2) body.position.z() = 0, body.velocity.z() = 0;
 }
 
 // The core's own check of a settings type (settings_check.h: the same one World and the Python
@@ -670,6 +671,34 @@ void readMaterial(Fields f, MaterialSettings& m) {
   m.paperK = f.number("k", m.paperK, kPositive, "N");
   coreCheck(f, [&] { validate(m); });
   f.finish();
+}
+
+// `bodies`: several bodies, each with its own material and an output name (default "body<i>").
+void readBodies(Fields& top, Scene& scene) {
+  std::vector<Fields> entries = top.objectArray("bodies", true);
+  if (entries.empty()) top.fail("bodies", "empty (expected at least one body)");
+  std::vector<BodySettings> bodies(entries.size());
+  for (size_t i = 0; i < entries.size(); ++i) {
+    Fields& f = entries[i];
+    BodySettings& b = bodies[i];
+    b.name = "body" + std::to_string(i);
+    if (auto name = f.optString("name")) {
+      if (!isSafeName(*name))
+        f.fail("name",
+               "\"" + shown(*name) +
+                   "\" is not usable in a file name (expected 1-100 of A-Z a-z 0-9 _ - ., not starting with .)");
+      for (size_t j = 0; j < i; ++j)
+        if (bodies[j].name == *name)
+          f.fail("name", "\"" + shown(*name) + "\" is the name of bodies[" + std::to_string(j) +
+                             "] too (expected a name of its own)");
+      b.name = *name;
+    }
+    readBody(f, scene.dim, b);
+    if (auto m = f.optObject("material")) readMaterial(*m, b.material);
+    f.finish();
+  }
+  scene.body = std::move(bodies[0]);
+  scene.moreBodies.assign(std::make_move_iterator(bodies.begin() + 1), std::make_move_iterator(bodies.end()));
 }
 
 void readSimulation(Fields f, Scene& scene) {
@@ -747,22 +776,25 @@ Path readPath(Fields& f) {
   return path;
 }
 
-// A pinned box or voxel mask; its path's positions are offsets from rest (pins.h). A mask lives
-// on the body's lattice: mask voxel (i, j, k) is body voxel offset + (i, j, k).
+// A pinned box or voxel mask of one body (`body`, default 0); its path's positions are offsets
+// from rest (pins.h). A mask lives on its body's lattice: mask voxel (i, j, k) is body voxel
+// offset + (i, j, k).
 PinSettings readPin(Fields& f, const Scene& scene) {
   const int dim = scene.dim;
   PinSettings p;
+  p.body = uint32_t(f.optInteger("body", 0, int(scene.numBodies()) - 1).value_or(0));
+  const BodySettings& body = scene.bodyAt(p.body);
   if (auto mf = f.optObject("mask")) {
     f.forbid("min", "a pin takes a box (\"min\", \"max\") or a \"mask\", not both");
     f.forbid("max", "a pin takes a box (\"min\", \"max\") or a \"mask\", not both");
     auto mask = std::make_shared<PinMask>();
-    mask->voxelSize = scene.body.shape.voxelSize;
+    mask->voxelSize = body.shape.voxelSize;
     Vec3 offset = Vec3::Zero();
     if (mf->take("offset")) {
       const std::array<int, 3> o = mf->requireIntVec("offset", -kMaxGridEdge, kMaxGridEdge);
       offset = Vec3(o[0], o[1], dim == 3 ? o[2] : 0);
     }
-    Vec3 origin = scene.body.position;
+    Vec3 origin = body.position;
     if (dim == 2) origin.z() = 0;
     mask->origin = origin + offset * mask->voxelSize;
     for (Fields& bf : mf->objectArray("boxes", false)) {
@@ -847,8 +879,17 @@ Scene parseScene(const std::string& jsonText, const std::string& sourceName) {
   }
   top.optString("description");  // free text for people; ignored
 
-  readBody(top.requireObject("body"), scene);
-  if (auto m = top.optObject("material")) readMaterial(*m, scene.body.material);
+  // `body` (+ top-level `material`) is the one-body shorthand of `bodies`.
+  if (top.take("bodies")) {
+    top.forbid("body", "give \"body\" (one body) or \"bodies\" (a list), not both");
+    top.forbid("material", "with \"bodies\", each body's \"material\" goes inside its entry");
+    readBodies(top, scene);
+  } else {
+    Fields body = top.requireObject("body");
+    readBody(body, scene.dim, scene.body);
+    body.finish();
+    if (auto m = top.optObject("material")) readMaterial(*m, scene.body.material);
+  }
   if (auto s = top.optObject("simulation")) readSimulation(*s, scene);
   if (auto d = top.optObject("domain")) readDomain(*d, scene);
   for (Fields& mf : top.objectArray("manipulators", false))
@@ -856,10 +897,6 @@ Scene parseScene(const std::string& jsonText, const std::string& sourceName) {
   for (Fields& pf : top.objectArray("pins", false)) scene.pins.push_back(readPin(pf, scene));
   top.finish();
 
-  if (scene.dim == 2) {
-    scene.body.position.z() = 0;
-    scene.body.velocity.z() = 0;
-  }
   return scene;
 }
 

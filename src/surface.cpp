@@ -367,3 +367,11 @@ TriangleMesh surfaceMesh(const DisplaySurface& surface, const std::vector<Vec3>&
 }
 
 }  // namespace gradel
+
+namespace gradel {
+
+void shiftVertexIds(DisplaySurface& surface, uint32_t offset) {
+  for (uint32_t& v : surface.modelVertex) v += offset;
+}
+
+}  // namespace gradel

@@ -70,9 +70,8 @@ std::shared_ptr<const RestModel> withBodies(std::shared_ptr<const RestModel> mod
 
 World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& sim, const DomainSettings& domain,
              std::vector<ManipulatorSettings> manipulators)
-    : model_(withBodies(std::move(model))),
-      stageRest_(std::make_unique<const ElementStageRest>(*model_)), sim_(sim), domain_(domain),
-      scratch_(std::make_unique<StepScratch>()) {
+    : model_(withBodies(std::move(model))), stageRest_(std::make_unique<const ElementStageRest>(*model_)), sim_(sim),
+      domain_(domain), scratch_(std::make_unique<StepScratch>()) {
   validate(sim_);
   validate(domain_, model_->dim);
   if (model_->dim == 2) sim_.gravity.z() = 0;  // a 2D body moves in its plane: the one place gravity is projected
@@ -697,10 +696,10 @@ std::vector<Real> World::vertexStress(const std::vector<Real>& elementStress) co
   return sum;
 }
 
-Metrics World::metrics(std::vector<Real>* elementStress) const {
-  const std::vector<Metrics> each = bodyMetrics(elementStress);
-  if (each.size() == 1) return each[0];
-  // The world's figures: sums in body order, extremes over the bodies.
+Metrics World::metrics(std::vector<Real>* elementStress) const { return combineMetrics(bodyMetrics(elementStress)); }
+
+Metrics combineMetrics(const std::vector<Metrics>& each) {
+  if (each.empty()) throw std::invalid_argument("combineMetrics: no bodies");
   Metrics r = each[0];
   for (size_t k = 1; k < each.size(); ++k) {
     const Metrics& b = each[k];

@@ -2,9 +2,15 @@
 // side, and bodies that do not touch move exactly as each would alone.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 
 #include "gradel/bodies.h"
+#include "gradel/output.h"
 #include "test_support.h"
 
 using namespace gradel;
@@ -22,7 +28,7 @@ MaterialSettings material(Real E, Real rho) {
 
 }  // namespace
 
-TEST(Bodies, CombinedModelIsTheModelsSideBySide) {
+TEST(MultiBody, CombinedModelIsTheModelsSideBySide) {
   const Body a = makeBody("sphere", 8, 3, LayoutKind::Gradational, material(1e5, 1000), 0.01);
   const Body b = makeBody("box", 5, 3, LayoutKind::Voxel, material(3e5, 500), 0.02, Vec3(1, 0, 0));
   const RestModel c = combineRestModels({a.model, b.model});
@@ -75,7 +81,7 @@ TEST(Bodies, CombinedModelIsTheModelsSideBySide) {
   EXPECT_EQ(one.bodies[0].vertexEnd, VA);
 }
 
-TEST(Bodies, CombineRefusesMixedDimensionsAndNoModels) {
+TEST(MultiBody, CombineRefusesMixedDimensionsAndNoModels) {
   const Body a = makeBody("sphere", 6, 3, LayoutKind::Gradational);
   const Body b = makeBody("sphere", 6, 2, LayoutKind::Gradational);
   EXPECT_THROW(combineRestModels({a.model, b.model}), std::invalid_argument);
@@ -85,7 +91,7 @@ TEST(Bodies, CombineRefusesMixedDimensionsAndNoModels) {
 // Two bodies that never touch, with different voxel sizes, materials and layouts, in one world
 // with walls, gravity, damping and a manipulator striking the first: each evolves bit for bit as
 // it does alone in a world of its own (same dt), at one thread and at two.
-TEST(Bodies, SeparatedBodiesEvolveBitIdenticallyToEachAlone) {
+TEST(MultiBody, SeparatedBodiesEvolveBitIdenticallyToEachAlone) {
   const Body a = makeBody("sphere", 16, 3, LayoutKind::Gradational, material(1e5, 1000), 0.01, Vec3(0, 0.05, 0));
   const Body b = makeBody("box", 7, 3, LayoutKind::Voxel, material(4e5, 700), 0.013, Vec3(0.4, 0.02, 0));
   auto combined = std::make_shared<RestModel>(combineRestModels({a.model, b.model}));
@@ -108,7 +114,7 @@ TEST(Bodies, SeparatedBodiesEvolveBitIdenticallyToEachAlone) {
       both.state().positions[i] = wa.state().positions[i], both.state().velocities[i] = wa.state().velocities[i];
     for (size_t i = 0; i < b.model->numVertices(); ++i)
       both.state().positions[VA + i] = wb.state().positions[i],
-                              both.state().velocities[VA + i] = wb.state().velocities[i];
+                                  both.state().velocities[VA + i] = wb.state().velocities[i];
     for (int s = 0; s < 300; ++s) wa.step(), wb.step(), both.step();
     EXPECT_GT(both.metrics().maxContactDepth + wa.state().velocities[0].norm(), 0);  // it moved
     size_t differ = 0;
@@ -131,7 +137,7 @@ TEST(Bodies, SeparatedBodiesEvolveBitIdenticallyToEachAlone) {
   }
 }
 
-TEST(Bodies, PinsSelectOnlyTheirBodysVertices) {
+TEST(MultiBody, PinsSelectOnlyTheirBodysVertices) {
   const Body a = makeBody("box", 4, 3, LayoutKind::Voxel, {}, 0.01);
   const Body b = makeBody("box", 4, 3, LayoutKind::Voxel, {}, 0.01);  // the same place: boxes overlap
   auto combined = std::make_shared<RestModel>(combineRestModels({a.model, b.model}));
@@ -150,4 +156,188 @@ TEST(Bodies, PinsSelectOnlyTheirBodysVertices) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("pins[0].body"), std::string::npos) << e.what();
   }
+}
+
+// ---- scenes -------------------------------------------------------------------------------
+
+namespace {
+
+constexpr const char* kFile = "scenes/two.json";
+
+std::string errorOf(const std::string& text) {
+  try {
+    parseScene(text, kFile);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// Two balls 12 cm apart flying at each other (no soft contact in this test: they do not reach).
+const char* kTwoBalls = R"({
+  "bodies": [
+    { "name": "left", "shape": "sphere", "size": 6, "voxel_size": 0.01, "position": [-0.1, 0, 0],
+      "velocity": [0.5, 0, 0], "material": { "youngs_modulus": 2e5, "density": 800 } },
+    { "shape": "box", "size": 4, "voxel_size": 0.015, "layout": "voxel", "position": [0.06, 0, 0],
+      "velocity": [-0.5, 0, 0] }
+  ],
+  "simulation": { "dt": 1e-4, "gravity": [0, 0, 0], "damping": 0, "duration": 0.01, "frame_interval": 0.005 },
+  "pins": [ { "body": 1, "min": [0.059, 0, 0], "max": [0.061, 0.06, 0.06] } ]
+})";
+
+}  // namespace
+
+TEST(MultiBodyScene, BodiesKeyGivesEachBodyItsOwnSettings) {
+  const Scene s = parseScene(kTwoBalls, kFile);
+  ASSERT_EQ(s.numBodies(), 2u);
+  EXPECT_EQ(s.body.name, "left");
+  EXPECT_EQ(s.bodyAt(1).name, "body1");
+  EXPECT_EQ(s.body.material.youngsModulus, 2e5);
+  EXPECT_EQ(s.bodyAt(1).material.youngsModulus, MaterialSettings{}.youngsModulus);
+  EXPECT_EQ(s.bodyAt(1).shape.voxelSize, 0.015);
+  EXPECT_EQ(s.bodyAt(1).layout, LayoutKind::Voxel);
+  EXPECT_EQ(s.bodyAt(1).sizeKey, "bodies[1].size");
+  ASSERT_EQ(s.pins.size(), 1u);
+  EXPECT_EQ(s.pins[0].body, 1u);
+
+  const BuiltScene b = buildScene(s);
+  ASSERT_EQ(b.numBodies(), 2u);
+  const RestModel& m = b.world->model();
+  EXPECT_EQ(m.numVertices(), b.model->numVertices() + b.body(1).model->numVertices());
+  EXPECT_EQ(b.range(1).voxelSize, 0.015);
+  EXPECT_EQ(b.range(1).material.density, MaterialSettings{}.density);
+  EXPECT_EQ(b.range(0).material.density, 800);
+  // Velocities per body; the pins hold body 1's vertices only (the box lies on x = 0.06).
+  EXPECT_EQ(b.world->state().velocities[0], Vec3(0.5, 0, 0));
+  for (uint32_t v : b.world->pinned().vertices) {
+    EXPECT_GE(v, b.range(1).vertexBegin);
+    EXPECT_NEAR(m.restPositions[v].x(), 0.06, 1e-12);
+  }
+  EXPECT_EQ(b.world->pinned().vertices.size(), 5u * 5u);
+}
+
+TEST(MultiBodyScene, MistakesNameTheKey) {
+  auto expect = [](const std::string& text, const std::string& key, const std::string& what) {
+    const std::string msg = errorOf(text);
+    SCOPED_TRACE(text);
+    ASSERT_FALSE(msg.empty());
+    EXPECT_EQ(msg.rfind(std::string(kFile) + ": " + key, 0), 0u) << msg;
+    EXPECT_NE(msg.find(what), std::string::npos) << msg;
+  };
+  const std::string ball = R"({"shape": "sphere", "size": 4})";
+  expect(R"({"bodies": []})", "bodies", "empty");
+  expect(R"({"bodies": [)" + ball + R"(], "body": )" + ball + "}", "body", "not both");
+  expect(R"({"bodies": [)" + ball + R"(], "material": {"density": 5}})", "material", "inside its entry");
+  expect(R"({"bodies": [)" + ball + "," + ball + R"(], "pins": [{"body": 2, "min": [0,0,0], "max": [1,1,1]}]})",
+         "pins[0].body", "");
+  expect(R"({"bodies": [)" + ball + R"(, {"shape": "sphere", "size": 4, "densty": 3}]})", "bodies[1].densty",
+         "unknown key");
+  expect(R"({"bodies": [{"name": "a", "shape": "box", "size": 2}, {"name": "a", "shape": "box", "size": 2}]})",
+         "bodies[1].name", "bodies[0]");
+  expect(R"({"bodies": [{"name": "../x", "shape": "box", "size": 2}]})", "bodies[0].name", "file name");
+  expect(R"({"bodies": [)" + ball + R"(, {"shape": "sphere", "size": 4, "material": {"density": -1}}]})",
+         "bodies[1].material.density", "");
+  expect(R"({"bodies": 3})", "bodies", "array");
+}
+
+TEST(MultiBodyScene, SizeLimitsCountEveryBody) {
+  // Each body alone fits; both together do not.
+  const std::string text = R"({"bodies": [{"shape": "box", "size": 24}, {"shape": "box", "size": 24}]})";
+  const Scene s = parseScene(text, kFile);
+  Scene single = s;
+  single.moreBodies.clear();
+  // The bytes one body takes, measured through the limit's own estimate: a limit just above it.
+  const uint64_t bytes =
+      estimateModelBytes(countLayout(rasterize(presetShape("box", 24, 3, 0.01)), LayoutKind::Gradational), 3);
+  SizeLimits limits;
+  limits.maxBytes = bytes + bytes / 2;
+  EXPECT_NO_THROW(buildScene(single, limits));
+  try {
+    buildScene(s, limits);
+    FAIL() << "two bodies over the limit";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("bodies[1].size", 0), 0u) << e.what();
+    EXPECT_NE(std::string(e.what()).find("the bodies before it"), std::string::npos) << e.what();
+  }
+}
+
+// The same two-body scene at one and two threads: the same state bit for bit.
+TEST(MultiBodyScene, StateHashIsTheSameAtOneAndTwoThreads) {
+  Scene s = parseScene(R"({
+    "bodies": [ { "shape": "sphere", "size": 16, "position": [-0.2, 0.1, 0], "velocity": [1, 0, 0] },
+                { "shape": "sphere", "size": 14, "voxel_size": 0.012, "position": [0.1, 0.1, 0],
+                  "velocity": [-1, 0, 0] } ],
+    "domain": { "min": [-1, 0, -1], "max": [1, 1, 1] },
+    "manipulators": [ { "type": "sphere", "radius": 0.03,
+                        "path": [ { "t": 0, "position": [-0.3, 0.18, 0.08] }, { "t": 0.05, "position": [0.3, 0.18, 0.08] } ] } ]
+  })",
+                       kFile);
+  uint64_t hash[2];
+  for (int t : {1, 2}) {
+    s.simulation.threads = t;
+    BuiltScene b = buildScene(s);
+    ASSERT_GE(b.world->model().numVertices(), 2048u);  // two members, not one
+    for (int k = 0; k < 150; ++k) b.world->step();
+    hash[t - 1] = b.world->stateHash();
+  }
+  EXPECT_EQ(hash[0], hash[1]);
+}
+
+// `gradel run` of a two-body scene: one .vtu per body and frame, run.pvd listing both per
+// timestep as parts, metrics.csv with a body column (a row per body and one "all" per frame).
+TEST(MultiBodyScene, RunWritesPerBodyFramesPvdPartsAndMetricsRows) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("gradel-bodies-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "two.json") << kTwoBalls;
+  const std::string cmd =
+      "cd '" + dir.string() + "' && '" + std::string(GRADEL_CLI_PATH) + "' run two.json --out res > out.txt 2> err.txt";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  auto read = [](const fs::path& p) {
+    std::ifstream in(p);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  };
+  const fs::path res = dir / "res";
+  // Frames at 0, 0.005 and 0.01 s for each body.
+  for (const char* body : {"left", "body1"})
+    for (int f = 0; f < 3; ++f) EXPECT_TRUE(fs::exists(res / frameFileName(size_t(f), body))) << body << " " << f;
+  EXPECT_FALSE(fs::exists(res / frameFileName(0)));
+  const std::string pvd = read(res / "run.pvd");
+  EXPECT_NE(pvd.find(R"(timestep="0.005" group="" part="1" name="body1" file="body1_00001.vtu")"), std::string::npos)
+      << pvd;
+  EXPECT_NE(pvd.find(R"(timestep="0.005" group="" part="0" name="left" file="left_00001.vtu")"), std::string::npos)
+      << pvd;
+  // Each body's file holds its own vertices: the box's 5^3 lattice points.
+  const std::string box = read(res / "body1_00000.vtu");
+  EXPECT_NE(box.find(R"(NumberOfPoints="125" NumberOfCells="64")"), std::string::npos);
+  // metrics.csv: header with "body", 3 frames x (2 bodies + all); the total is the sum.
+  std::istringstream csv(read(res / "metrics.csv"));
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, MetricsCsv::bodyHeader());
+  std::vector<std::vector<std::string>> rows;
+  while (std::getline(csv, line)) {
+    std::vector<std::string> cells;
+    std::stringstream ls(line);
+    for (std::string c; std::getline(ls, c, ',');) cells.push_back(c);
+    rows.push_back(cells);
+  }
+  ASSERT_EQ(rows.size(), 9u);
+  for (size_t f = 0; f < 3; ++f) {
+    EXPECT_EQ(rows[3 * f][0], "left");
+    EXPECT_EQ(rows[3 * f + 1][0], "body1");
+    EXPECT_EQ(rows[3 * f + 2][0], "all");
+    // px (column 5): the ball moves at +0.5 m/s, the box is pinned on one face and moves at -0.5
+    // m/s elsewhere; the total is their sum.
+    const double a = std::stod(rows[3 * f][5]), b = std::stod(rows[3 * f + 1][5]), all = std::stod(rows[3 * f + 2][5]);
+    EXPECT_GT(a, 0);
+    EXPECT_DOUBLE_EQ(all, a + b);
+  }
+  const std::string out = read(dir / "out.txt");
+  EXPECT_NE(out.find("\"bodies\": 2"), std::string::npos) << out;
+  EXPECT_NE(out.find("\"frames\": 3"), std::string::npos) << out;
+  fs::remove_all(dir);
 }

@@ -34,6 +34,10 @@ struct EmbeddedMesh {
 /// for an empty mesh, a triangle index out of range or a non-finite coordinate.
 EmbeddedMesh embedMesh(const TriangleMesh& restMesh, const Layout& layout, const RestModel& model);
 
+/// Moves the mesh's model vertex ids by `offset` (and its element ids by `elementOffset`): a body's
+/// mesh, embedded in its own model, onto the world's model of several bodies (bodies.h).
+void shiftVertexIds(EmbeddedMesh& embedded, uint32_t offset, uint32_t elementOffset = 0);
+
 /// The embedded mesh at the given model vertex positions [m], with area-weighted vertex normals.
 TriangleMesh embeddedMesh(const EmbeddedMesh& embedded, const std::vector<Vec3>& positions);
 

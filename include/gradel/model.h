@@ -17,7 +17,7 @@ namespace gradel {
 struct BodyRange {
   uint32_t vertexBegin = 0, vertexEnd = 0;
   uint32_t elementBegin = 0, elementEnd = 0;
-  Real voxelSize = 1;  ///< [m] the body's voxel edge.
+  Real voxelSize = 1;    ///< [m] the body's voxel edge.
   Vec3 origin{0, 0, 0};  ///< [m] world position of the body's lattice point (0, 0, 0) at rest.
   MaterialSettings material;
   int dim = 3;
@@ -28,9 +28,9 @@ struct BodyRange {
 struct RestModel {
   int dim = 3;
   // Body 0's lattice and material (for a one-body model, the body's); per body: `bodies`.
-  Real voxelSize = 1;  ///< [m] body 0's voxel edge.
+  Real voxelSize = 1;         ///< [m] body 0's voxel edge.
   MaterialSettings material;  ///< Body 0's material.
-  Vec3 origin{0, 0, 0};  ///< [m] world position of body 0's lattice point (0, 0, 0) at rest.
+  Vec3 origin{0, 0, 0};       ///< [m] world position of body 0's lattice point (0, 0, 0) at rest.
   /// The bodies, in vertex and element order (buildRestModel: one, covering everything;
   /// combineRestModels: one per combined model). Never empty for a built model.
   std::vector<BodyRange> bodies;

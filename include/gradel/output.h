@@ -37,37 +37,56 @@ void writeVtu(const std::filesystem::path& file, const RestModel& model, const S
               const std::vector<Real>& vertexStress, const std::vector<Real>& elementStress = {},
               VtkEncoding encoding = VtkEncoding::Base64);
 
-/// "frame_00012.vtu": zero-padded so that file listings sort in time order.
-std::string frameFileName(size_t index);
+/// The same for one body of a model of several (RestModel::bodies, bodies.h): its vertices and
+/// elements only, vertex ids from 0 within the body, "element_id" the element's index within the
+/// body. vertexStress / elementStress hold every vertex / element of the model (or are empty).
+/// writeVtu above is this with one body covering the whole model.
+void writeVtu(const std::filesystem::path& file, const RestModel& model, const State& state, const BodyRange& body,
+              const std::vector<Real>& vertexStress, const std::vector<Real>& elementStress = {},
+              VtkEncoding encoding = VtkEncoding::Base64);
+
+/// "frame_00012.vtu": zero-padded so that file listings sort in time order. With a body name
+/// (several bodies): "<body>_00012.vtu".
+std::string frameFileName(size_t index, const std::string& body = "");
 
 struct PvdFrame {
   Real time = 0;     ///< [s] simulated time of the frame.
   std::string file;  ///< Path relative to the .pvd file.
+  int part = 0;      ///< Which dataset of the timestep (one per body): ParaView shows the parts as one multiblock.
+  std::string name;  ///< The part's name (the body's), written when not empty.
 };
 
-/// Writes a ParaView collection (.pvd) that lists the frames with their times.
+/// Writes a ParaView collection (.pvd) that lists the frames with their times (and parts: one
+/// entry per body and time).
 void writePvd(const std::filesystem::path& file, const std::vector<PvdFrame>& frames);
 
 // ---- metrics ----------------------------------------------------------------
 
 /// metrics.csv: one row per frame from World::metrics(), every number written so that it
-/// reads back to the same double (shortest round-trip form).
+/// reads back to the same double (shortest round-trip form). With several bodies, a first
+/// column `body`: per frame one row per body (World::bodyMetrics) and one row "all" (the world).
 class MetricsCsv {
  public:
   /// The header line (no newline):
   /// time,kinetic_energy,elastic_energy,gravity_energy,px,py,pz,Lx,Ly,Lz,max_stress,
   /// max_penetration,max_contact_depth,min_element_det
   static const char* header();
+  /// "body," + header().
+  static std::string bodyHeader();
   /// One data line (no newline).
   static std::string row(const Metrics& m);
+  /// One data line with the body column first.
+  static std::string row(const std::string& body, const Metrics& m);
 
-  /// Creates the file and writes the header. Throws IoError on I/O errors.
-  explicit MetricsCsv(const std::filesystem::path& file);
+  /// Creates the file and writes the header (with the body column when asked). Throws IoError on
+  /// I/O errors.
+  explicit MetricsCsv(const std::filesystem::path& file, bool bodyColumn = false);
   ~MetricsCsv();
   MetricsCsv(const MetricsCsv&) = delete;
   MetricsCsv& operator=(const MetricsCsv&) = delete;
 
-  void append(const Metrics& m);
+  void append(const Metrics& m);                           ///< Without a body column.
+  void append(const std::string& body, const Metrics& m);  ///< With a body column.
   /// Flushes and closes; throws IoError if any write failed (disk full, ...).
   void close();
 
@@ -75,6 +94,8 @@ class MetricsCsv {
   std::filesystem::path path_;
   std::FILE* file_ = nullptr;
   int err_ = 0;  ///< errno of the first failed append.
+  bool bodyColumn_ = false;
+  void writeLine(std::string line);
 };
 
 // ---- the output directory -----------------------------------------------------

@@ -33,7 +33,7 @@ struct PinSettings {
   Vec3 min{0, 0, 0};  ///< [m] lower corner of the box, world coordinates at rest (ignored with a mask).
   Vec3 max{0, 0, 0};  ///< [m] upper corner (closed box: vertices on its faces are pinned).
   std::shared_ptr<const PinMask> mask;  ///< When set, selects the vertices instead of the box.
-  Path path;  ///< Keyframe `position` = offset [m] of the pinned vertices from rest; empty = fixed.
+  Path path;          ///< Keyframe `position` = offset [m] of the pinned vertices from rest; empty = fixed.
   uint32_t body = 0;  ///< The body whose vertices it selects (RestModel::bodies; bodies.h).
 };
 

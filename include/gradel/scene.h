@@ -27,6 +27,8 @@ struct BodySettings {
   Vec3 position{0, 0, 0};  ///< [m] world position of the volume's lattice origin (voxel (0,0,0)'s lower corner).
   Vec3 velocity{0, 0, 0};  ///< [m/s] initial velocity of every vertex.
   std::string sizeKey = "body.size";  ///< The scene key that sets the grid (size-limit messages).
+  /// Output name (frames/<name>_NNNNN.vtu with several bodies): `bodies[i].name`, default "body<i>".
+  std::string name = "body0";
 };
 
 struct OutputSettings {
@@ -37,12 +39,17 @@ struct OutputSettings {
 struct Scene {
   std::string name;  ///< From the file name or "name".
   int dim = 3;
-  BodySettings body;
+  BodySettings body;                     ///< Body 0: the scene's `body`, or `bodies[0]`.
+  std::vector<BodySettings> moreBodies;  ///< Bodies 1, 2, ... of `bodies` (empty: one body).
   SimulationSettings simulation;
   DomainSettings domain;
   std::vector<ManipulatorSettings> manipulators;
   std::vector<PinSettings> pins;  ///< Boundary conditions (pins.h).
   OutputSettings output;
+
+  size_t numBodies() const { return 1 + moreBodies.size(); }
+  const BodySettings& bodyAt(size_t i) const { return i == 0 ? body : moreBodies.at(i - 1); }
+  BodySettings& bodyAt(size_t i) { return i == 0 ? body : moreBodies.at(i - 1); }
 };
 
 /// Reads and validates a scene file (strict: unknown keys, wrong types, NaN, out-of-range values
@@ -51,22 +58,38 @@ Scene loadScene(const std::string& path);
 /// Same, from JSON text; `sourceName` is used in messages.
 Scene parseScene(const std::string& jsonText, const std::string& sourceName);
 
-/// The built body: volume, layout and world together.
-struct BuiltScene {
+/// One built body: volume, layout and its own rest model (vertex ids from 0; in the world its
+/// vertices are RestModel::bodies[i] of the world's model, bodies.h).
+struct BuiltBody {
+  std::string name = "body0";  ///< BodySettings::name.
   VoxelVolume volume;
   Layout layout;
   std::shared_ptr<const RestModel> model;
-  std::unique_ptr<World> world;
   /// A body voxelised from a mesh file (body.source obj / stl / ply): that mesh in rest
   /// coordinates [m] (where it was voxelised, at body.position), and the same mesh embedded in
-  /// the model (embedding.h), the body's render mesh. Empty for volumes and shapes.
+  /// the body's model (embedding.h, vertex ids of `model`), the body's render mesh. Empty for
+  /// volumes and shapes.
   std::optional<TriangleMesh> sourceMesh;
   std::optional<EmbeddedMesh> embedded;
 };
 
-/// Rasterises the shape (or reads body.source), builds the layout, rest model and world, and
-/// embeds a source mesh. Before the volume and before the layout, the sizes are checked against
-/// `limits` (size_limits.h). Throws InputError.
+/// The built scene: body 0 (the members inherited from BuiltBody, what one-body code uses), the
+/// other bodies, and the world that steps them all. With one body the world's model is
+/// `model`; with several it is their combination (combineRestModels).
+struct BuiltScene : BuiltBody {
+  std::vector<BuiltBody> moreBodies;  ///< Bodies 1, 2, ...
+  std::unique_ptr<World> world;
+
+  size_t numBodies() const { return 1 + moreBodies.size(); }
+  const BuiltBody& body(size_t i) const { return i == 0 ? *this : moreBodies.at(i - 1); }
+  /// Where body i's vertices and elements are in the world's model.
+  const BodyRange& range(size_t i) const { return world->model().bodies.at(i); }
+};
+
+/// Per body: rasterises the shape (or reads its source), builds the layout and rest model, and
+/// embeds a source mesh; then the world of all bodies (each with its velocity; pins on their
+/// bodies). Before each volume and each layout, the sizes are checked against `limits`
+/// (size_limits.h), the memory limit counting the bodies before. Throws InputError.
 BuiltScene buildScene(const Scene& scene, const SizeLimits& limits = {});
 
 }  // namespace gradel

@@ -47,6 +47,10 @@ struct DisplaySurface {
 /// Builds the surface from the layout (and the volume it was built from). Pure function.
 DisplaySurface buildDisplaySurface(const Layout& layout, const VoxelVolume& volume, SurfaceKind kind);
 
+/// Moves the surface's model vertex ids by `offset`: a body's surface, built from its own layout,
+/// onto the world's model of several bodies (offset = RestModel::bodies[i].vertexBegin, bodies.h).
+void shiftVertexIds(DisplaySurface& surface, uint32_t offset);
+
 /// The surface at the given model vertex positions [m]: vertices gathered from `positions`,
 /// normals averaged from the neighbouring faces (area-weighted, unit length; +z in 2D); for the
 /// smooth surface averaged once more over the neighbouring vertices.

@@ -1,8 +1,9 @@
-// A simulated world of one or more bodies (bodies.h: one combined rest model): rest model (shared, immutable) + runtime state + manipulators + walls,
-// advanced by named stages (Box2D style): element frames (eq. 1, per element) -> per vertex:
-// gather the elastic force, integrate (eqs. 2-3), contacts (element_stage.h). Every stage runs
-// over an index range; threads only split ranges and never change the order in which any sum is
-// formed (a vertex sums its elements in id order), so results are identical at any thread count.
+// A simulated world of one or more bodies (bodies.h: one combined rest model): rest model
+// (shared, immutable) + runtime state + manipulators + walls, advanced by named stages (Box2D
+// style): element frames (eq. 1, per element) -> per vertex: gather the elastic force, integrate
+// (eqs. 2-3), contacts (element_stage.h). Every stage runs over an index range; threads only split
+// ranges and never change the order in which any sum is formed (a vertex sums its elements in id
+// order), so results are identical at any thread count.
 #pragma once
 
 #include <memory>
@@ -45,6 +46,10 @@ struct Metrics {
   Real maxContactDepth = 0;       ///< [m] deepest vertex found (and corrected) in the last step.
   Real minElementDet = 0;         ///< [-] min det of the elements' deformation estimate (< 0: inverted).
 };
+
+/// The figures of several bodies together: energies and momenta summed in order, the largest
+/// stress and penetration, the smallest determinant; time and maxContactDepth the first's.
+Metrics combineMetrics(const std::vector<Metrics>& bodies);
 
 class World {
  public:

@@ -1,7 +1,7 @@
 # Type stubs of the compiled module gradel.gradel (python/gradel_module.cpp), re-exported by the
 # package `gradel`. Units are SI (m, s, kg, Pa). Checked against the module by
 # python/tests/test_stubs.py (mypy's stubtest).
-from typing import Optional, Sequence, Tuple, TypedDict
+from typing import List, Optional, Sequence, Tuple, TypedDict
 
 import numpy as np
 import numpy.typing as npt
@@ -138,6 +138,20 @@ class Simulation:
     @property
     def voxels(self) -> npt.NDArray[np.bool_]: ...
     def metrics(self) -> _Metrics: ...
+    def body_metrics(self) -> List[_Metrics]:
+        """metrics() per body (body order); metrics() is their sum."""
+    @property
+    def num_bodies(self) -> int: ...
+    @property
+    def body_names(self) -> List[str]: ...
+    @property
+    def body_vertex_ranges(self) -> List[Tuple[int, int]]:
+        """Per body, (begin, end): its rows of positions, velocities, masses."""
+    @property
+    def body_element_ranges(self) -> List[Tuple[int, int]]: ...
+    def body_positions(self, body: int) -> npt.NDArray[np.float64]:
+        """(n, 3) view of one body's rows of positions (no copy, writable)."""
+    def body_velocities(self, body: int) -> npt.NDArray[np.float64]: ...
     def surface(
-        self, kind: str = "smooth"
+        self, kind: str = "smooth", body: int = 0
     ) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.uint32], npt.NDArray[np.float64]]: ...

@@ -138,3 +138,32 @@ def test_embedded_surface_is_the_mesh_file_carried_by_the_body():
     assert len(iso) > 50
     with pytest.raises(gradel.InputError):
         gradel.Simulation(gradel.Body.from_array(np.ones((8, 6), bool))).surface("embedded")
+
+
+def test_several_bodies_ranges_views_metrics_and_surfaces(tmp_path):
+    scene = tmp_path / "two.json"
+    scene.write_text("""{
+      "bodies": [
+        {"name": "ball", "shape": "sphere", "size": 6, "position": [-0.1, 0, 0], "velocity": [1, 0, 0]},
+        {"shape": "box", "size": 3, "voxel_size": 0.02, "layout": "voxel", "position": [0.1, 0, 0],
+         "material": {"density": 500}}
+      ],
+      "simulation": {"gravity": [0, 0, 0], "damping": 0}
+    }""")
+    sim = gradel.Simulation.from_scene(str(scene))
+    assert sim.num_bodies == 2 and sim.body_names == ["ball", "body1"]
+    (a0, a1), (b0, b1) = sim.body_vertex_ranges
+    assert a0 == 0 and a1 == b0 and b1 == sim.num_vertices and b1 - b0 == 4 ** 3
+    box = sim.body_positions(1)
+    assert box.shape == (64, 3) and np.shares_memory(box, sim.positions)
+    np.testing.assert_array_equal(box, sim.positions[b0:b1])
+    assert (sim.body_velocities(0)[:, 0] == 1).all() and (sim.body_velocities(1) == 0).all()
+    sim.step(10)
+    each = sim.body_metrics()
+    assert each[0]["linear_momentum"][0] > 0.1 and abs(each[1]["linear_momentum"][0]) < 1e-12
+    assert sim.metrics()["kinetic_energy"] == each[0]["kinetic_energy"] + each[1]["kinetic_energy"]
+    # The box's voxel surface: its 6 faces of 3 x 3 squares, at the box's own positions.
+    verts, tris, _ = sim.surface("voxel", body=1)
+    assert len(tris) == 6 * 9 * 2 and verts[:, 0].min() >= 0.1 - 1e-9
+    with pytest.raises(IndexError):
+        sim.body_positions(2)

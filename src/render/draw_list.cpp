@@ -174,7 +174,10 @@ std::array<float, 3> levelColor(int level) {
   return palette[size_t(level) % 8];
 }
 
-BodyView makeBodyView(const BuiltScene& scene, const TriangleMesh* restMesh) {
+namespace {
+
+// One body's view, in the vertex ids of its own model.
+BodyView makeOneBodyView(const BuiltBody& scene, const TriangleMesh* restMesh) {
   const Layout& layout = scene.layout;
   const RestModel& model = *scene.model;
   BodyView v;
@@ -218,6 +221,50 @@ BodyView makeBodyView(const BuiltScene& scene, const TriangleMesh* restMesh) {
     }
   }
   return v;
+}
+
+// Appends `part` (vertex ids of a body's own model) to `all`, its ids moved to the world's model
+// by the body's range there.
+void appendBodyView(BodyView& all, BodyView part, const BodyRange& range) {
+  const uint32_t offset = range.vertexBegin;
+  auto appendSurface = [&](DisplaySurface& to, DisplaySurface from) {
+    shiftVertexIds(from, offset);
+    const uint32_t base = uint32_t(to.modelVertex.size());
+    to.dim = from.dim, to.kind = from.kind;
+    to.modelVertex.insert(to.modelVertex.end(), from.modelVertex.begin(), from.modelVertex.end());
+    for (auto t : from.triangles) to.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  };
+  appendSurface(all.smooth, std::move(part.smooth));
+  appendSurface(all.voxel, std::move(part.voxel));
+  for (auto& e : part.edges) all.edges.push_back({e[0] + offset, e[1] + offset});
+  all.edgeLevel.insert(all.edgeLevel.end(), part.edgeLevel.begin(), part.edgeLevel.end());
+  all.edgeInSection.insert(all.edgeInSection.end(), part.edgeInSection.begin(), part.edgeInSection.end());
+  all.levels = std::max(all.levels, part.levels);
+  if (part.embedded) {
+    shiftVertexIds(*part.embedded, offset, range.elementBegin);
+    if (!all.embedded) {
+      all.embedded = std::move(part.embedded);
+    } else {
+      EmbeddedMesh& to = *all.embedded;
+      const EmbeddedMesh& from = *part.embedded;
+      const uint32_t vertexBase = uint32_t(to.weightStart.size() - 1), weightBase = uint32_t(to.weight.size());
+      for (auto t : from.triangles) to.triangles.push_back({t[0] + vertexBase, t[1] + vertexBase, t[2] + vertexBase});
+      for (size_t v = 1; v < from.weightStart.size(); ++v) to.weightStart.push_back(weightBase + from.weightStart[v]);
+      to.weightVertex.insert(to.weightVertex.end(), from.weightVertex.begin(), from.weightVertex.end());
+      to.weight.insert(to.weight.end(), from.weight.begin(), from.weight.end());
+      to.element.insert(to.element.end(), from.element.begin(), from.element.end());
+    }
+  }
+}
+
+}  // namespace
+
+BodyView makeBodyView(const BuiltScene& scene, const TriangleMesh* restMesh) {
+  if (scene.numBodies() == 1) return makeOneBodyView(scene, restMesh);
+  BodyView all;
+  for (size_t i = 0; i < scene.numBodies(); ++i)
+    appendBodyView(all, makeOneBodyView(scene.body(i), i == 0 ? restMesh : nullptr), scene.range(i));
+  return all;
 }
 
 void addText(DrawList& list, const std::string& text, float x, float y, float scale, std::array<float, 3> color) {

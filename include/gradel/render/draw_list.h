@@ -38,7 +38,7 @@ struct ViewOptions {
   std::string caption;      ///< Text drawn at the top left (empty = none).
 };
 
-/// Everything about a body that drawing needs and that is built once per model (rest data).
+/// Everything about the bodies that drawing needs and that is built once per model (rest data).
 struct BodyView {
   DisplaySurface smooth, voxel;
   std::vector<std::array<uint32_t, 2>> edges;  ///< Element outline edges (model vertex ids).
@@ -48,9 +48,11 @@ struct BodyView {
   std::optional<EmbeddedMesh> embedded;  ///< Drawn in SurfaceMode::Embedded (none in 2D without a mesh).
 };
 
-/// Builds the surfaces and element outlines of a built scene. The embedded mesh is `restMesh`
-/// (rest coordinates [m]) when given, else the scene's own (a body voxelised from a mesh file:
-/// BuiltScene::embedded), else (3D) the isosurface of the volume (isosurface.h).
+/// Builds the surfaces and element outlines of a built scene, of every body (their vertex ids
+/// those of the world's model: each body's moved by its RestModel::bodies[i].vertexBegin). The
+/// embedded mesh is `restMesh` (rest coordinates [m], body 0) when given, else the body's own (a
+/// body voxelised from a mesh file: BuiltBody::embedded), else (3D) the isosurface of its volume
+/// (isosurface.h).
 BodyView makeBodyView(const BuiltScene& scene, const TriangleMesh* restMesh = nullptr);
 
 struct DrawVertex {
