@@ -1,6 +1,7 @@
 #include "gradel/body_contacts.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -412,6 +413,7 @@ void BodyContacts::detectSelf(size_t a, const BodyContactState& s, BodyContactSt
 }
 
 BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
+  const auto t0 = std::chrono::steady_clock::now();
   BodyContactStats stats;
   contacts_.clear();
   if (empty()) return stats;
@@ -503,6 +505,7 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
     }
   }
   stats.contacts = contacts_.size();
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return stats;
 }
 

@@ -130,6 +130,7 @@ struct BodyContactStats {
   size_t contacts = 0;    ///< Vertex-face contacts resolved.
   Real maxDepth = 0;      ///< [m] deepest vertex found, before correction.
   int rounds = 0;         ///< Detection rounds run.
+  double seconds = 0;     ///< Wall time of the call (measurements; no result depends on it).
 };
 
 /// The stage: contact surfaces of the bodies and the per-step scratch.
