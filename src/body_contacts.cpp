@@ -1,6 +1,7 @@
 #include "gradel/body_contacts.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -105,6 +106,21 @@ ContactBody buildContactBody(const DisplaySurface& surface, uint32_t vertexBegin
   for (uint32_t s = 0; s < S; ++s) near[s].push_back(b.vertices[s]);
   toRows(near, b.nearStart, b.near);
   return b;
+}
+
+std::vector<ContactBody> buildContactBodies(const RestModel& world, const std::vector<const Layout*>& layouts,
+                                            const std::vector<const VoxelVolume*>& volumes) {
+  if (layouts.size() != world.bodies.size() || volumes.size() != world.bodies.size())
+    throw std::invalid_argument("buildContactBodies: one layout and one volume per body");
+  std::vector<ContactBody> out;
+  for (size_t i = 0; i < world.bodies.size(); ++i) {
+    const BodyRange& r = world.bodies[i];
+    const DisplaySurface s = buildDisplaySurface(*layouts[i], *volumes[i], SurfaceKind::Voxel);
+    out.push_back(buildContactBody(s, r.vertexBegin, r.vertexEnd, r.voxelSize, world.restPositions.data() + r.vertexBegin,
+                                   world.onSurface.data() + r.vertexBegin,
+                                   {world.elemStart.data(), world.elemVerts.data(), r.elementBegin, r.elementEnd, 0}));
+  }
+  return out;
 }
 
 ClosestPoint closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
@@ -228,11 +244,13 @@ BodyContacts::BodyContacts(std::vector<ContactBody> bodies, const BodyContactSet
   for (const ContactBody& b : bodies_) thinnest = std::min(thinnest, b.thickness);
   skin_ = kSkin * thinnest;
   bounds_.resize(bodies_.size());
+  active_.assign(bodies_.size() * bodies_.size(), 0);
   moved_.resize(bodies_.size());
 }
 
 void BodyContacts::buildGrid(const ContactBody& faces, const Box& region, const Vec3* x) {
   grid_.clear();
+  if (seen_.size() < faces.triangles.size()) seen_.assign(faces.triangles.size(), stamp_);
   constexpr Real kMaxCells = 1 << 20;
   const Real extent = (region.hi - region.lo).maxCoeff();
   gridCell_ = std::max(gridCell_, extent / kMaxCells);
@@ -266,15 +284,17 @@ void BodyContacts::forCandidateTriangles(const Vec3& lo, const Vec3& hi, F&& f) 
   const int64_t i0 = cellOf(lo.x(), 0), i1 = cellOf(hi.x(), 0), j0 = cellOf(lo.y(), 1), j1 = cellOf(hi.y(), 1),
                 k0 = cellOf(lo.z(), 2), k1 = cellOf(hi.z(), 2);
   candidates_.clear();
+  ++stamp_;
   for (int64_t k = k0; k <= k1; ++k)
     for (int64_t j = j0; j <= j1; ++j) {
       // The cells of a row (i0..i1) are adjacent keys: one search per row.
       const uint64_t row = uint64_t(k) << 42 | uint64_t(j) << 21;
       auto it = std::lower_bound(grid_.begin(), grid_.end(), std::pair<uint64_t, uint32_t>(row | uint64_t(i0), 0));
-      for (; it != grid_.end() && it->first <= (row | uint64_t(i1)); ++it) candidates_.push_back(it->second);
+      for (; it != grid_.end() && it->first <= (row | uint64_t(i1)); ++it)
+        if (seen_[it->second] != stamp_) seen_[it->second] = stamp_, candidates_.push_back(it->second);
     }
+  // Ascending ids: ties between equally near triangles go to the lowest, whatever the cells' order.
   std::sort(candidates_.begin(), candidates_.end());
-  candidates_.erase(std::unique(candidates_.begin(), candidates_.end()), candidates_.end());
   for (uint32_t t : candidates_) f(t);
 }
 
@@ -372,8 +392,10 @@ void BodyContacts::detectSelf(size_t a, const BodyContactState& s, BodyContactSt
     Vec3 bestN;
     forCandidateTriangles(p - Vec3::Constant(r), p + Vec3::Constant(r), [&](uint32_t t) {
       const auto& tri = A.triangles[t];
+      const Vec3 f1 = faceNormal(tri, x);
+      if (!(f1.dot(p - x[tri[0]]) < 0)) return;  // in front of the face's plane (most candidates)
       if (isNear(tri[0]) || isNear(tri[1]) || isNear(tri[2])) return;
-      const Vec3 n1 = unit(faceNormal(tri, x));
+      const Vec3 n1 = unit(f1);
       const Real s1 = n1.dot(p - x[tri[0]]);
       if (!(s1 < 0 && s1 > bestS)) return;  // behind the face's plane now, the shallowest first
       const Real s0 = unit(faceNormal(tri, x0)).dot(x0[v] - x0[tri[0]]);
@@ -391,6 +413,7 @@ void BodyContacts::detectSelf(size_t a, const BodyContactState& s, BodyContactSt
 }
 
 BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
+  const auto t0 = std::chrono::steady_clock::now();
   BodyContactStats stats;
   contacts_.clear();
   if (empty()) return stats;
@@ -409,12 +432,21 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
       }
       bounds_[b] = box, moved_[b] = std::sqrt(moved2);
     }
+    // After the first round only the pairs (and bodies) that had contacts in the round before:
+    // a correction moves only vertices of the bodies it involves.
     round_.clear();
-    for (size_t a = 0; a < bodies_.size(); ++a)
-      for (size_t b = 0; b < bodies_.size(); ++b)
-        if (a != b) detectPair(a, b, s, stats);
-    if (settings_.selfContact)
-      for (size_t a = 0; a < bodies_.size(); ++a) detectSelf(a, s, stats);
+    const size_t B = bodies_.size();
+    for (size_t a = 0; a < B; ++a)
+      for (size_t b = 0; b < B; ++b) {
+        if (a == b && !settings_.selfContact) continue;
+        if (round > 0 && !active_[a * B + b]) continue;
+        const size_t before = round_.size();
+        if (a == b)
+          detectSelf(a, s, stats);
+        else
+          detectPair(a, b, s, stats);
+        active_[a * B + b] = round_.size() > before;
+      }
     stats.rounds = round + 1;
     if (round_.empty()) break;
     if (round + 1 == kRounds) {
@@ -473,6 +505,7 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
     }
   }
   stats.contacts = contacts_.size();
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return stats;
 }
 

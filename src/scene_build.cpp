@@ -81,6 +81,12 @@ BuiltScene buildScene(const Scene& scene, const SizeLimits& limits) {
     loadPinMasks(pins);  // the mask files, read here once (World::setPins reads no file)
     b.world->setPins(std::move(pins));
   }
+  if (scene.dim == 3 && (scene.numBodies() > 1 || scene.bodyContact.selfContact)) {
+    std::vector<const Layout*> layouts;
+    std::vector<const VoxelVolume*> volumes;
+    for (size_t i = 0; i < scene.numBodies(); ++i) layouts.push_back(&b.body(i).layout), volumes.push_back(&b.body(i).volume);
+    b.world->setBodyContacts(buildContactBodies(b.world->model(), layouts, volumes), scene.bodyContact);
+  }
   for (size_t i = 0; i < scene.numBodies(); ++i) {
     Vec3 v0 = scene.bodyAt(i).velocity;
     if (scene.dim == 2) v0.z() = 0;

@@ -217,6 +217,13 @@ class Fields {
     return checkInteger(require(key, integerText(lo, hi)), keyPath(key), lo, hi);
   }
 
+  bool optBool(const char* key, bool def) {
+    const json* v = take(key);
+    if (!v) return def;
+    if (!v->is_boolean()) failWrongType(key, *v, "true or false");
+    return v->get<bool>();
+  }
+
   std::optional<std::string> optString(const char* key) {
     const json* v = take(key);
     if (!v) return std::nullopt;
@@ -778,6 +785,16 @@ void readDomain(Fields f, Scene& scene) {
   f.finish();
 }
 
+void readBodyContact(Fields f, Scene& scene) {
+  BodyContactSettings& c = scene.bodyContact;
+  c.restitution = f.number("restitution", c.restitution, kUnit, "");
+  c.friction = f.number("friction", c.friction, kNonNegative, "");
+  c.selfContact = f.optBool("self_contact", c.selfContact);
+  if (scene.dim != 3) f.fail("self_contact", "contact between bodies needs 3D bodies");
+  coreCheck(f, [&] { validate(c); });
+  f.finish();
+}
+
 Keyframe readKeyframe(Fields& f) {
   Keyframe k;
   k.time = f.requireNumber("t", kNonNegative, "s");
@@ -917,6 +934,7 @@ Scene parseScene(const std::string& jsonText, const std::string& sourceName) {
   }
   if (auto s = top.optObject("simulation")) readSimulation(*s, scene);
   if (auto d = top.optObject("domain")) readDomain(*d, scene);
+  if (auto c = top.optObject("body_contact")) readBodyContact(*c, scene);
   for (Fields& mf : top.objectArray("manipulators", false))
     scene.manipulators.push_back(readManipulator(mf, scene.dim));
   for (Fields& pf : top.objectArray("pins", false)) scene.pins.push_back(readPin(pf, scene));

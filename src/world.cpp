@@ -448,8 +448,70 @@ void World::prepareTeam(int members) {
 }
 
 void World::step() {
-  if (sim_.integrator == IntegratorKind::Implicit) return stepImplicit(false);
-  if (sim_.integrator == IntegratorKind::LargeStep) return stepLargeStep();
+  if (bodyContacts_) saveBodyContactStart();
+  if (sim_.integrator == IntegratorKind::Implicit)
+    stepImplicit(false);
+  else if (sim_.integrator == IntegratorKind::LargeStep)
+    stepLargeStep();
+  else
+    stepExplicit();
+  if (bodyContacts_) stageBodyContacts();
+}
+
+// Soft-soft contact (body_contacts.h): the bodies' boundary vertices at the start of the step,
+// what the stage reads as the step's start (their swept band and the bounce).
+void World::saveBodyContactStart() {
+  for (const ContactBody& b : bodyContacts_->bodies())
+    for (uint32_t u : b.vertices) bodyContactStartX_[u] = state_.positions[u], bodyContactStartV_[u] = state_.velocities[u];
+}
+
+// After the step (and its pins, which the stage leaves in place: inverse mass 0), serially: the
+// result does not depend on the thread count. Walls go last for every vertex the stage moved, so
+// no vertex leaves the box (contacts.h; inelastic, as a vertex pinched between two surfaces).
+void World::stageBodyContacts() {
+  Vec3* x = state_.positions.data();
+  Vec3* v = state_.velocities.data();
+  bodyContactStats_ = bodyContacts_->resolve(
+      {x, v, bodyContactStartX_.data(), bodyContactStartV_.data(), bodyContactInvMass_.data()});
+  scratch_->maxContactDepth = std::max(scratch_->maxContactDepth, bodyContactStats_.maxDepth);
+  if (!domain_.enabled || bodyContacts_->contacts().empty()) return;
+  std::vector<uint32_t> moved;
+  for (const BodyContacts::Contact& c : bodyContacts_->contacts()) {
+    moved.push_back(c.vertex);
+    moved.insert(moved.end(), c.face.begin(), c.face.end());
+  }
+  std::sort(moved.begin(), moved.end());
+  moved.erase(std::unique(moved.begin(), moved.end()), moved.end());
+  for (uint32_t u : moved) {
+    if (bodyContactInvMass_[u] == 0) continue;
+    const StepStart start{bodyContactStartV_[u], dt_, sim_.integrator == IntegratorKind::SymplecticEuler};
+    resolveDomain(domain_, bodyContactStartX_[u], x[u], v[u], model_->dim, false, &start);
+  }
+}
+
+void World::setBodyContacts(std::vector<ContactBody> bodies, const BodyContactSettings& settings) {
+  if (model_->dim != 3 && !bodies.empty()) throw InputError("body_contact: contact between bodies needs 3D bodies");
+  for (const ContactBody& b : bodies)
+    if (b.vertexEnd > model_->numVertices() || b.vertexBegin > b.vertexEnd)
+      throw std::invalid_argument("World::setBodyContacts: a body's vertices lie outside the model");
+  auto c = std::make_unique<BodyContacts>(std::move(bodies), settings);
+  if (c->empty()) {
+    bodyContacts_.reset();
+    return;
+  }
+  bodyContacts_ = std::move(c);
+  bodyContactStartX_ = state_.positions, bodyContactStartV_ = state_.velocities;
+  updateBodyContactInvMass();
+}
+
+// The inverse masses the stage uses: the model's, 0 for pinned vertices (immovable).
+void World::updateBodyContactInvMass() {
+  if (!bodyContacts_) return;
+  bodyContactInvMass_ = model_->invMass;
+  for (uint32_t u : pinSet_.vertices) bodyContactInvMass_[u] = 0;
+}
+
+void World::stepExplicit() {
   const size_t V = model_->numVertices(), E = model_->numElements();
   const int members = int(std::max<size_t>(1, std::min<size_t>(size_t(sim_.threads), V / kMinVerticesPerThread)));
   moveManipulators(state_.time + dt_);  // the elements do not see them; the contacts see t + dt
@@ -511,6 +573,7 @@ void World::setPins(std::vector<PinSettings> pins) {
   for (const BodyRange& b : model_->bodies) bodies.push_back({b.vertexBegin, b.vertexEnd});
   pinSet_ = selectPins(pins, model_->restPositions, bodies);
   pins_ = std::move(pins);
+  updateBodyContactInvMass();
   projective_.reset(), largeStep_.reset();  // the implicit systems eliminate the pinned vertices: refactor
   applyPins(state_.time);
 }
@@ -856,6 +919,11 @@ size_t World::memoryBytes() const {
        bytes(scratch_->blockTouched) + bytes(scratch_->contactSurface);
   b += (elementSplit_.capacity() + vertexSplit_.capacity()) * sizeof(size_t);
   for (const Manipulator& m : manipulators_) b += sizeof(m) + bytes(m.settings.path.keys);
+  b += bytes(bodyContactStartX_) + bytes(bodyContactStartV_) + bytes(bodyContactInvMass_);
+  if (bodyContacts_)
+    for (const ContactBody& c : bodyContacts_->bodies())
+      b += bytes(c.vertices) + bytes(c.triangles) + bytes(c.vertexTriStart) + bytes(c.vertexTris) + bytes(c.nearStart) +
+           bytes(c.near);
   return b;
 }
 

@@ -56,6 +56,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "gradel/model.h"
 #include "gradel/surface.h"
 #include "gradel/types.h"
 
@@ -108,6 +109,12 @@ struct ElementRows {
 ContactBody buildContactBody(const DisplaySurface& surface, uint32_t vertexBegin, uint32_t vertexEnd, Real thickness,
                              const Vec3* rest, const uint8_t* onSurface, const ElementRows& elements);
 
+/// The contact surfaces of a world's bodies: body i (RestModel::bodies[i] of `world`, bodies.h)
+/// from its own layout and volume (the voxel display surface), thickness its voxel size.
+/// std::invalid_argument if the counts differ from the model's bodies.
+std::vector<ContactBody> buildContactBodies(const RestModel& world, const std::vector<const Layout*>& layouts,
+                                            const std::vector<const VoxelVolume*>& volumes);
+
 /// The combined state the stage reads and corrects (world vertex ids; all arrays of one length).
 struct BodyContactState {
   Vec3* positions = nullptr;                 ///< [m] end of the step: corrected in place.
@@ -123,6 +130,7 @@ struct BodyContactStats {
   size_t contacts = 0;    ///< Vertex-face contacts resolved.
   Real maxDepth = 0;      ///< [m] deepest vertex found, before correction.
   int rounds = 0;         ///< Detection rounds run.
+  double seconds = 0;     ///< Wall time of the call (measurements; no result depends on it).
 };
 
 /// The stage: contact surfaces of the bodies and the per-step scratch.
@@ -172,6 +180,9 @@ class BodyContacts {
   Vec3 gridOrigin_{0, 0, 0};
   Real gridCell_ = 1;
   std::vector<uint32_t> candidates_;
+  std::vector<uint32_t> seen_;  ///< Per triangle: the query that last listed it (dedupe).
+  uint32_t stamp_ = 0;
+  std::vector<uint8_t> active_;  ///< Per (vertex body, face body): contacts in the last round.
   std::vector<uint32_t> vertexContact_;  ///< Per world vertex touched: a contact already found this round.
 };
 

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "gradel/body_contacts.h"
 #include "gradel/contacts.h"
 #include "gradel/embedding.h"
 #include "gradel/integrator.h"
@@ -46,6 +47,9 @@ struct Scene {
   std::vector<ManipulatorSettings> manipulators;
   std::vector<PinSettings> pins;  ///< Boundary conditions (pins.h).
   OutputSettings output;
+  /// Contact between the bodies (and of a body with itself): `body_contact` (body_contacts.h).
+  /// On in 3D when there are several bodies or self_contact is set.
+  BodyContactSettings bodyContact;
 
   size_t numBodies() const { return 1 + moreBodies.size(); }
   const BodySettings& bodyAt(size_t i) const { return i == 0 ? body : moreBodies.at(i - 1); }

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "gradel/body_contacts.h"
 #include "gradel/contacts.h"
 #include "gradel/integrator.h"
 #include "gradel/large_step.h"
@@ -110,6 +111,14 @@ class World {
   Real forceAverageTime() const { return averageTime_; }
   void restartForceAverage();
 
+  /// Soft-soft contact between the bodies and, if set, of a body with itself (body_contacts.h):
+  /// their contact surfaces (buildContactBodies), made once; replaces any before. It runs after
+  /// each step, serially. InputError for a 2D model.
+  void setBodyContacts(std::vector<ContactBody> bodies, const BodyContactSettings& settings);
+  /// The stage (nullptr without body contacts) and what it found in the last step.
+  const BodyContacts* bodyContacts() const { return bodyContacts_.get(); }
+  const BodyContactStats& bodyContactStats() const { return bodyContactStats_; }
+
   void setThreads(int n) { sim_.threads = n < 1 ? 1 : n; }
 
   /// Boundary conditions (pins.h): replaces the pins and moves the pinned vertices to their
@@ -152,6 +161,10 @@ class World {
   void beginContactImpulses();
   void finishContactImpulses();
   void moveManipulators(Real tNext);
+  void stepExplicit();
+  void saveBodyContactStart();
+  void stageBodyContacts();
+  void updateBodyContactInvMass();
   void stepImplicit(bool largeStep);
   void stepLargeStep();
   void finishFrameStep(Real tNext);
@@ -181,6 +194,12 @@ class World {
   std::unique_ptr<ChunkQueue> elementQueue_, vertexQueue_;
   std::vector<size_t> elementSplit_, vertexSplit_;
   std::vector<Real> memberContactDepth_;
+  // Soft-soft contact: the stage, its last result, the boundary vertices' start of the step
+  // (full-size arrays, only the bodies' boundary vertices written) and the inverse masses it uses.
+  std::unique_ptr<BodyContacts> bodyContacts_;
+  BodyContactStats bodyContactStats_;
+  std::vector<Vec3> bodyContactStartX_, bodyContactStartV_;
+  std::vector<Real> bodyContactInvMass_;
   int teamMembers_ = 0;
   ContactForces stepForces_;      ///< The last step's contact forces.
   ContactForces averageImpulse_;  ///< [N s], [N m s] summed since restartForceAverage().
