@@ -317,7 +317,7 @@ TEST(MultiBodyScene, RunWritesPerBodyFramesPvdPartsAndMetricsRows) {
   std::istringstream csv(read(res / "metrics.csv"));
   std::string line;
   std::getline(csv, line);
-  EXPECT_EQ(line, MetricsCsv::header(1, /*bodyColumn=*/true));  // one manipulator
+  EXPECT_EQ(line, MetricsCsv::header(0, /*bodyColumn=*/true));  // no manipulator: the walls' force columns
   std::vector<std::vector<std::string>> rows;
   while (std::getline(csv, line)) {
     std::vector<std::string> cells;
@@ -330,6 +330,9 @@ TEST(MultiBodyScene, RunWritesPerBodyFramesPvdPartsAndMetricsRows) {
     EXPECT_EQ(rows[3 * f][0], "left");
     EXPECT_EQ(rows[3 * f + 1][0], "body1");
     EXPECT_EQ(rows[3 * f + 2][0], "all");
+    // The walls' force columns: filled on the "all" row only (forces are the world's).
+    EXPECT_EQ(rows[3 * f + 2].size(), 21u);
+    EXPECT_LT(rows[3 * f].size(), 21u);
     // px (column 5): the ball moves at +0.5 m/s, the box is pinned on one face and moves at -0.5
     // m/s elsewhere; the total is their sum.
     const double a = std::stod(rows[3 * f][5]), b = std::stod(rows[3 * f + 1][5]), all = std::stod(rows[3 * f + 2][5]);

@@ -143,7 +143,11 @@ TEST(ContactForces, StrikeImpulseIsMinusTheBodysMomentumChange) {
     }
     const Vec3 dp = momentum(w) - p0;
     ASSERT_GT(dp.x(), 1e-3) << integratorKindName(kind);  // the body was really pushed
-    EXPECT_LT((impulse + dp).norm(), 1e-9 * dp.norm())
+    // The implicit step's held forces are the holds' reactions A x - b in a filtered PCG of two
+    // iterations (projective.h): the residual it leaves on the free rows is momentum no hold
+    // accounts for, ~1e-8 of the change here (measured 1.1e-8); explicit steps are exact to rounding.
+    const Real tolerance = kind == IntegratorKind::Implicit ? 1e-7 : 1e-9;
+    EXPECT_LT((impulse + dp).norm(), tolerance * dp.norm())
         << integratorKindName(kind) << " impulse " << impulse.transpose() << " dp " << dp.transpose();
     EXPECT_LT(largest.x(), 0) << integratorKindName(kind);  // the body pushes the tool back
     // The average over the run carries the same impulse.
