@@ -164,14 +164,7 @@ namespace {
 
 constexpr const char* kFile = "scenes/two.json";
 
-std::string errorOf(const std::string& text) {
-  try {
-    parseScene(text, kFile);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+std::string errorOf(const std::string& text) { return test::sceneErrorOf(text, kFile); }
 
 // Two balls 12 cm apart flying at each other (no soft contact in this test: they do not reach).
 const char* kTwoBalls = R"({

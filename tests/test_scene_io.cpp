@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "gradel/scene.h"
+#include "test_support.h"
 
 namespace gradel {
 namespace {
@@ -17,14 +18,7 @@ namespace {
 constexpr const char* kFile = "scenes/x.json";
 
 // The InputError message of parsing `text`, or "" if it parsed.
-std::string errorOf(const std::string& text) {
-  try {
-    parseScene(text, kFile);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+std::string errorOf(const std::string& text) { return test::sceneErrorOf(text, kFile); }
 
 // Asserts that `text` fails with a message starting with "scenes/x.json: " that contains
 // `path` and `what`, on one line.

@@ -30,6 +30,16 @@ inline Body makeBody(const std::string& shape, int size, int dim, LayoutKind kin
   return b;
 }
 
+// The InputError message of parsing scene `text` as file `file`, or "" if it parsed.
+inline std::string sceneErrorOf(const std::string& text, const char* file) {
+  try {
+    parseScene(text, file);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
 /// Settings with no gravity and no damping: an isolated body.
 inline SimulationSettings isolated() {
   SimulationSettings s;
