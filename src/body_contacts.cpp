@@ -116,8 +116,8 @@ std::vector<ContactBody> buildContactBodies(const RestModel& world, const std::v
   for (size_t i = 0; i < world.bodies.size(); ++i) {
     const BodyRange& r = world.bodies[i];
     const DisplaySurface s = buildDisplaySurface(*layouts[i], *volumes[i], SurfaceKind::Voxel);
-    out.push_back(buildContactBody(s, r.vertexBegin, r.vertexEnd, r.voxelSize, world.restPositions.data() + r.vertexBegin,
-                                   world.onSurface.data() + r.vertexBegin,
+    out.push_back(buildContactBody(s, r.vertexBegin, r.vertexEnd, r.voxelSize,
+                                   world.restPositions.data() + r.vertexBegin, world.onSurface.data() + r.vertexBegin,
                                    {world.elemStart.data(), world.elemVerts.data(), r.elementBegin, r.elementEnd, 0}));
   }
   return out;
@@ -399,7 +399,7 @@ void BodyContacts::detectSelf(size_t a, const BodyContactState& s, BodyContactSt
       const Real s1 = n1.dot(p - x[tri[0]]);
       if (!(s1 < 0 && s1 > bestS)) return;  // behind the face's plane now, the shallowest first
       const Real s0 = unit(faceNormal(tri, x0)).dot(x0[v] - x0[tri[0]]);
-      if (!(s0 >= 0)) return;  // it was behind at the start already: it did not cross the face
+      if (!(s0 >= 0)) return;      // it was behind at the start already: it did not cross the face
       const Vec3 q = p - s1 * n1;  // its foot on the face's plane
       const ClosestPoint cp = closestPointOnTriangle(q, x[tri[0]], x[tri[1]], x[tri[2]]);
       const Vec3 c = cp.w[0] * x[tri[0]] + cp.w[1] * x[tri[1]] + cp.w[2] * x[tri[2]];
@@ -432,14 +432,22 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
       }
       bounds_[b] = box, moved_[b] = std::sqrt(moved2);
     }
-    // After the first round only the pairs (and bodies) that had contacts in the round before:
-    // a correction moves only vertices of the bodies it involves.
+    // After the first round only the pairs with a body that a correction of the round before
+    // moved: a contact of a's vertices against b's faces moves vertices of both, so it can push
+    // a vertex of b into a face of a (pair (b, a)) or into a third body's faces as well.
     round_.clear();
     const size_t B = bodies_.size();
+    movedBodies_.assign(B, 0);
+    for (size_t a = 0; a < B; ++a)
+      for (size_t b = 0; b < B; ++b)
+        if (active_[a * B + b]) movedBodies_[a] = movedBodies_[b] = 1;
     for (size_t a = 0; a < B; ++a)
       for (size_t b = 0; b < B; ++b) {
         if (a == b && !settings_.selfContact) continue;
-        if (round > 0 && !active_[a * B + b]) continue;
+        if (round > 0 && !movedBodies_[a] && !movedBodies_[b]) {
+          active_[a * B + b] = 0;
+          continue;
+        }
         const size_t before = round_.size();
         if (a == b)
           detectSelf(a, s, stats);

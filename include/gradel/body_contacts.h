@@ -183,6 +183,7 @@ class BodyContacts {
   std::vector<uint32_t> seen_;  ///< Per triangle: the query that last listed it (dedupe).
   uint32_t stamp_ = 0;
   std::vector<uint8_t> active_;  ///< Per (vertex body, face body): contacts in the last round.
+  std::vector<uint8_t> movedBodies_;  ///< Per body: a correction of the last round moved its vertices.
   std::vector<uint32_t> vertexContact_;  ///< Per world vertex touched: a contact already found this round.
 };
 
