@@ -102,6 +102,7 @@ set(GRADEL_TEST_SOURCES
   tests/test_model.cpp
   tests/test_output.cpp
   tests/test_pins.cpp
+  tests/test_region_damping.cpp
   tests/test_regions.cpp
   tests/test_rotation_fit.cpp
   tests/test_scene_io.cpp

@@ -96,6 +96,15 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   validate(sim_);
   validate(domain_, model_->dim);
   if (model_->dim == 2) sim_.gravity.z() = 0;  // a 2D body moves in its plane: the one place gravity is projected
+  // Damping: one rate unless the regions' rates differ between vertices (model.h).
+  const RestModel& rm = *model_;
+  uniformDamping_ = rm.vertexDamping(0, sim_.damping);
+  Real minDamping = uniformDamping_;
+  bool uniform = true;
+  for (size_t i = 1; rm.hasRegionDamping() && i < rm.numVertices(); ++i) {
+    const Real c = rm.vertexDamping(i, sim_.damping);
+    uniform = uniform && c == uniformDamping_, minDamping = std::min(minDamping, c);
+  }
   const Real period = sim_.dtPeriod == PeriodRule::Element ? model_->smallestPeriod : model_->smallestVertexPeriod;
   // The implicit integrator is stable at any dt: "auto" is one display frame.
   if (sim_.integrator == IntegratorKind::Auto) chooseIntegrator(period);
@@ -107,10 +116,16 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
     // damping, stable for dt < c / w^2. With w = 2 pi / period (the fastest mode), half that bound
     // (validate() has refused c = 0).
     const Real omega = 2 * M_PI / period;
-    autoDt = std::min(autoDt, 0.5 * sim_.damping / (omega * omega));
+    // The least damped vertex (regions' rates, model.h) bounds it.
+    autoDt = std::min(autoDt, 0.5 * minDamping / (omega * omega));
   }
   dt_ = sim_.dt > 0 ? sim_.dt : autoDt;
   if (!(dt_ > 0) || !std::isfinite(dt_)) throw InputError("dt: could not derive a positive time step");
+  if (!uniform) {
+    vertexDampFactor_.resize(rm.numVertices());
+    for (size_t i = 0; i < rm.numVertices(); ++i)
+      vertexDampFactor_[i] = dampingFactor(rm.vertexDamping(i, sim_.damping), dt_);
+  }
 
   const size_t V = model_->numVertices(), E = model_->numElements();
   state_.positions = model_->restPositions;
@@ -223,7 +238,8 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
   const size_t surfaces = manipulators_.size() + 1;
   const RestModel& m = *model_;
   const Real dt = dt_;
-  const Real damp = dampingFactor(sim_.damping, dt);  // integration.h
+  const Real damp = dampingFactor(uniformDamping_, dt);  // integration.h
+  const Real* vertexDamp = vertexDampFactor_.data();     // per vertex when the regions' rates differ
   const d4 g = loadVec3(sim_.gravity);
   Vec3* positions = state_.positions.data();
   Vec3* velocities = state_.velocities.data();
@@ -231,7 +247,7 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
   Real depth = 0;
   // One loop per integrator and per "contacts possible": neither test is made per vertex, and
   // without contacts nothing is kept for them.
-  auto run = [&](auto forward, auto contacts) {
+  auto run = [&](auto forward, auto contacts, auto perVertexDamping) {
     d4 start[kBlock], startVelocity[kBlock];
     for (size_t b = begin, be; b < end; b = be) {
       be = std::min(end, (b / kBlock + 1) * kBlock);  // blocks aligned to kBlock (the contact forces' partial sums)
@@ -240,10 +256,12 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
         const d4 a = force * invMass[i] + g;
         const d4 x0 = loadVec3(positions[i]), v0 = loadVec3(velocities[i]);
         d4 x = x0, v = v0;
+        Real vd = damp;
+        if constexpr (perVertexDamping()) vd = vertexDamp[i];
         if constexpr (forward())
-          forwardEulerStep(x, v, a, dt, damp);  // integration.h
+          forwardEulerStep(x, v, a, dt, vd);  // integration.h
         else
-          symplecticEulerStep(x, v, a, dt, damp);
+          symplecticEulerStep(x, v, a, dt, vd);
         storeVec3(positions[i], x), storeVec3(velocities[i], v);
         if constexpr (contacts()) {
           start[i - b] = x0, startVelocity[i - b] = v0;
@@ -269,10 +287,13 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
   };
   using Yes = std::true_type;
   using No = std::false_type;
+  auto runDamped = [&](auto forward, auto contacts) {
+    vertexDamp ? run(forward, contacts, Yes{}) : run(forward, contacts, No{});
+  };
   if (sim_.integrator == IntegratorKind::ForwardEuler)
-    cb ? run(Yes{}, Yes{}) : run(Yes{}, No{});
+    cb ? runDamped(Yes{}, Yes{}) : runDamped(Yes{}, No{});
   else
-    cb ? run(No{}, Yes{}) : run(No{}, No{});
+    cb ? runDamped(No{}, Yes{}) : runDamped(No{}, No{});
   return depth;
 }
 

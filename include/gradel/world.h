@@ -181,6 +181,10 @@ class World {
   State state_;
   std::unique_ptr<StepScratch> scratch_;  ///< Per-step scratch (world.cpp).
   Real dt_ = 0;
+  // Velocity damping of the explicit step (integration.h): one rate for every vertex (today's
+  // path), or per vertex when regions set different rates (model.h RestModel::vertexDamping).
+  Real uniformDamping_ = 0;             ///< [1/s] the rate of every vertex when vertexDampFactor_ is empty.
+  std::vector<Real> vertexDampFactor_;  ///< Per vertex: 1 / (1 + c_i dt); empty: all share uniformDamping_.
   std::string integratorChoice_;
   std::vector<PinSettings> pins_;
   PinSet pinSet_;
