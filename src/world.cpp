@@ -30,7 +30,7 @@ struct World::StepScratch {
   std::vector<Vec3> previousVelocities;  ///< [m/s] velocities then (the bounce's crossing speed, contacts.h).
   std::vector<Real> contactDepth;        ///< [m] per vertex, implicit step only: depth before correction.
   Real maxContactDepth = 0;              ///< [m] deepest vertex found (and corrected) in the last step.
-  // Contact impulses (World::stepContactForces): per surface (the manipulators, then the walls)
+  // Contact impulses (World::stepContactForces): per surface (the manipulators, then each of the kWalls walls)
   // the impulse the contact response gave the body [N s] and its moment [N m s] (about the
   // manipulator's centre, the walls' about the origin). The explicit step sums them per aligned
   // block of kVertexBlock vertices (blockImpulse, blocks x surfaces; blockTouched marks the blocks
@@ -235,7 +235,7 @@ World::ContactBounds World::contactBounds() const {
 Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
   using namespace simd;
   constexpr size_t kBlock = kVertexBlock;
-  const size_t surfaces = manipulators_.size() + 1;
+  const size_t surfaces = manipulators_.size() + kWalls;
   const RestModel& m = *model_;
   const Real dt = dt_;
   const Real damp = dampingFactor(uniformDamping_, dt);  // integration.h
@@ -323,10 +323,12 @@ Real World::resolveVertexContacts(const Vec3& previous, const Vec3& previousVelo
       if (d > 0 && surface) *surface = int(k);
       passDepth = std::max(passDepth, d);
     }
-    const Vec3 before = v;
-    const Real d = resolveDomain(domain_, previous, x, v, dim, bounce, &start).depth;
-    if (d > 0 || v != before) addImpulse(impulse[K], mass * (v - before), x, Vec3::Zero(), dim);
-    if (d > 0 && surface) *surface = int(K);
+    Vec3 wallDv[kWalls] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
+    const ContactResult r = resolveDomain(domain_, previous, x, v, dim, bounce, &start, wallDv);
+    const Real d = r.depth;
+    for (int w = 0; w < kWalls; ++w)
+      if (wallDv[w] != Vec3::Zero()) addImpulse(impulse[K + size_t(w)], mass * wallDv[w], x, Vec3::Zero(), dim);
+    if (d > 0 && surface) *surface = int(K) + r.wall;
     passDepth = std::max(passDepth, d);
     depth = std::max(depth, passDepth);
     if (passDepth == 0 || surfaces < 2) break;
@@ -347,7 +349,7 @@ void World::stageContacts(size_t begin, size_t end) {
 
 // Contact forces: every step starts with zero impulses on every surface ...
 void World::beginContactImpulses() {
-  const size_t surfaces = manipulators_.size() + 1;
+  const size_t surfaces = manipulators_.size() + kWalls;
   scratch_->impulse.assign(surfaces, ContactForce{});
   const size_t blocks = (model_->numVertices() + kVertexBlock - 1) / kVertexBlock;
   if (scratch_->blockImpulse.size() != blocks * surfaces) {
@@ -359,7 +361,7 @@ void World::beginContactImpulses() {
 // ... and ends with the explicit stage's blocks added in block order (the same sums at any
 // thread count), the step's forces (the impulse on the body, negated, over dt) and the average.
 void World::finishContactImpulses() {
-  const size_t surfaces = manipulators_.size() + 1;
+  const size_t K = manipulators_.size(), surfaces = K + kWalls;
   std::vector<ContactForce>& J = scratch_->impulse;
   for (size_t b = 0; b < scratch_->blockTouched.size(); ++b) {
     if (!scratch_->blockTouched[b]) continue;
@@ -368,13 +370,19 @@ void World::finishContactImpulses() {
       J[s].force += scratch_->blockImpulse[b * surfaces + s].force,
           J[s].torque += scratch_->blockImpulse[b * surfaces + s].torque;
   }
-  stepForces_.manipulators.resize(surfaces - 1);
-  averageImpulse_.manipulators.resize(surfaces - 1);
-  for (size_t s = 0; s < surfaces; ++s) {
-    ContactForce& f = s + 1 < surfaces ? stepForces_.manipulators[s] : stepForces_.walls;
-    ContactForce& a = s + 1 < surfaces ? averageImpulse_.manipulators[s] : averageImpulse_.walls;
-    f.force = -J[s].force / dt_, f.torque = -J[s].torque / dt_;
-    a.force -= J[s].force, a.torque -= J[s].torque;
+  stepForces_.manipulators.resize(K);
+  averageImpulse_.manipulators.resize(K);
+  // The walls together: their impulses summed in wall order (each the same at any thread count).
+  ContactForce allWalls;
+  for (size_t w = 0; w < size_t(kWalls); ++w) allWalls.force += J[K + w].force, allWalls.torque += J[K + w].torque;
+  for (size_t s = 0; s <= surfaces; ++s) {
+    const ContactForce& j = s < surfaces ? J[s] : allWalls;
+    ContactForce& f = s < K ? stepForces_.manipulators[s] : s < surfaces ? stepForces_.wall[s - K] : stepForces_.walls;
+    ContactForce& a = s < K          ? averageImpulse_.manipulators[s]
+                      : s < surfaces ? averageImpulse_.wall[s - K]
+                                     : averageImpulse_.walls;
+    f.force = -j.force / dt_, f.torque = -j.torque / dt_;
+    a.force -= j.force, a.torque -= j.torque;
   }
   averageTime_ += dt_;
 }
@@ -385,6 +393,7 @@ ContactForces World::averageContactForces() const {
   const Real s = averageTime_ > 0 ? 1 / averageTime_ : 0;
   for (ContactForce& c : f.manipulators) c.force *= s, c.torque *= s;
   f.walls.force *= s, f.walls.torque *= s;
+  for (ContactForce& c : f.wall) c.force *= s, c.torque *= s;
   return f;
 }
 
@@ -668,13 +677,14 @@ void World::stepImplicit(bool largeStep) {
       // contact pass adds its own velocity changes. The first pass's are dropped with its state.
       std::vector<int> heldSurface(held.size());
       for (size_t j = 0; j < held.size(); ++j) heldSurface[j] = scratch_->contactSurface[held[j]];
-      scratch_->impulse.assign(manipulators_.size() + 1, ContactForce{});
+      scratch_->impulse.assign(manipulators_.size() + kWalls, ContactForce{});
       state_.positions = x0, state_.velocities = v0, state_.rotations = q0;
       std::vector<Vec3> heldForces;
       projective_->step(state_.positions, state_.velocities, state_.rotations, g, sim_.damping, sim_.implicitIterations,
                         targets, sim_.rotationIterations, held, heldAt, heldNormal, &heldForces);
       for (size_t j = 0; j < held.size(); ++j) {
-        const size_t k = size_t(std::max(0, heldSurface[j]));  // every held vertex was moved by a surface
+        // Every held vertex was moved by a surface (a wall: K + its kWalls index).
+        const size_t k = size_t(std::max(0, heldSurface[j]));
         const Vec3 centre = k < manipulators_.size() ? manipulators_[k].position : Vec3::Zero();
         addImpulse(scratch_->impulse[k], heldForces[j] * dt_, heldAt[j], centre, model_->dim);
       }

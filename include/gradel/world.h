@@ -6,6 +6,7 @@
 // order), so results are identical at any thread count.
 #pragma once
 
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
@@ -40,11 +41,14 @@ struct ContactForce {
   Vec3 torque{0, 0, 0};  ///< [N m] about the manipulator's centre (walls: about the world origin).
 };
 
-/// The contact forces on every surface: one per manipulator (in index order) and the walls
-/// together. Newton's third law holds: their sum is minus the momentum the contacts gave the body.
+/// The contact forces on every surface: one per manipulator (in index order), each wall of the
+/// domain box (contacts.h kWalls: xmin, xmax, ymin, ymax, zmin, zmax; torques about the world
+/// origin) and the walls together. Newton's third law holds: the manipulators' and the walls'
+/// sum is minus the momentum the contacts gave the body.
 struct ContactForces {
   std::vector<ContactForce> manipulators;
-  ContactForce walls;
+  std::array<ContactForce, kWalls> wall;  ///< Per wall, by kWalls index.
+  ContactForce walls;                     ///< All walls: the sum of `wall` in index order.
 };
 
 /// Figures written per frame to metrics.csv.
