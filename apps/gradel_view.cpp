@@ -25,6 +25,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "gradel/render/body_table.h"
 #include "gradel/render/draw_list.h"
 #include "gradel/render/manipulator_drag.h"
 #include "gradel/render/render_command.h"
@@ -180,6 +181,22 @@ class Viewer {
                 w.model().numPairs());
     const std::vector<Real> es = w.elementStress();
     ImGui::Text("max stress %.4f", es.empty() ? 0.0 : *std::max_element(es.begin(), es.end()));
+    // Several bodies: a row of figures per body (render/body_table.h); the lines above are all of them.
+    if (built_.numBodies() > 1 &&
+        ImGui::BeginTable("bodies", 5,
+                          ImGuiTableFlags_Borders | ImGuiTableFlags_RowBg | ImGuiTableFlags_SizingFixedFit)) {
+      for (const char* h : {"body", "vertices", "kinetic [J]", "elastic [J]", "max stress"}) ImGui::TableSetupColumn(h);
+      ImGui::TableHeadersRow();
+      for (const BodyRow& r : bodyTable(built_)) {
+        ImGui::TableNextRow();
+        ImGui::TableNextColumn(), ImGui::TextUnformatted(r.name.c_str());
+        ImGui::TableNextColumn(), ImGui::Text("%zu", r.vertices);
+        ImGui::TableNextColumn(), ImGui::Text("%.3g", r.kineticEnergy);
+        ImGui::TableNextColumn(), ImGui::Text("%.3g", r.elasticEnergy);
+        ImGui::TableNextColumn(), ImGui::Text("%.4f", r.maxStress);
+      }
+      ImGui::EndTable();
+    }
     if (!status_.empty()) ImGui::TextColored(ImVec4(0.8f, 0.3f, 0.0f, 1), "%s", status_.c_str());
 
     // ---- run ----

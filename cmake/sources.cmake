@@ -60,6 +60,7 @@ set(GRADEL_IO_SOURCES
 # gradel_render (GRADEL_BUILD_RENDER): OpenGL 3.3 drawing, EGL offscreen context, PNG files (stb).
 set(GRADEL_RENDER_SOURCES
   src/image.cpp
+  src/render/body_table.cpp
   src/render/camera.cpp
   src/render/draw_list.cpp
   src/render/layout_picture.cpp
@@ -102,6 +103,7 @@ set(GRADEL_TEST_SOURCES
   tests/test_model.cpp
   tests/test_output.cpp
   tests/test_pins.cpp
+  tests/test_region_damping.cpp
   tests/test_regions.cpp
   tests/test_rotation_fit.cpp
   tests/test_scene_io.cpp

@@ -422,16 +422,22 @@ PYBIND11_MODULE(gradel, m) {
           "the steps of the last step()/advance_to() call (average=True), or of the last step alone.")
       .def(
           "wall_force",
-          [](Simulation& s, bool average) {
+          [](Simulation& s, const std::string& wall, bool average) {
+            int w = -1;  // all walls
+            for (int k = 0; k < kWalls; ++k)
+              if (wall == wallName(k)) w = k;
+            if (w < 0 && wall != "all")
+              throw py::value_error("unknown wall '" + wall + "' (expected all, xmin, xmax, ymin, ymax, zmin or zmax)");
             WorldLock lock(s);
-            const ContactForce f =
-                average ? s.world().averageContactForces().walls : s.world().stepContactForces().walls;
+            const ContactForces fs = average ? s.world().averageContactForces() : s.world().stepContactForces();
+            const ContactForce f = w < 0 ? fs.walls : fs.wall[size_t(w)];
             return py::make_tuple(std::vector<double>{f.force.x(), f.force.y(), f.force.z()},
                                   std::vector<double>{f.torque.x(), f.torque.y(), f.torque.z()});
           },
-          py::kw_only(), py::arg("average") = true,
-          "(force [N], torque [N m] about the origin) that the body exerts on the walls together (as "
-          "manipulator_force).")
+          py::arg("wall") = "all", py::kw_only(), py::arg("average") = true,
+          "(force [N], torque [N m] about the origin) that the body exerts on the walls together (wall='all') or "
+          "on one wall of the domain box: 'xmin', 'xmax', 'ymin' (the floor under gravity -y), 'ymax', 'zmin', "
+          "'zmax' (as manipulator_force).")
       .def_property_readonly("manipulator_positions",
                              [](Simulation& s) {
                                WorldLock lock(s);

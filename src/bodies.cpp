@@ -30,6 +30,8 @@ RestModel combineRestModels(const std::vector<std::shared_ptr<const RestModel>>&
   c.elemStart.push_back(0);
   c.smallestPeriod = std::numeric_limits<Real>::infinity();
   c.smallestVertexPeriod = std::numeric_limits<Real>::infinity();
+  const bool anyRegionDamping =
+      std::any_of(models.begin(), models.end(), [](const auto& m) { return m->hasRegionDamping(); });
   for (const auto& mp : models) {
     const RestModel& m = *mp;
     const uint32_t v0 = uint32_t(c.numVertices()), e0 = uint32_t(c.numElements()), p0 = uint32_t(c.numPairs());
@@ -49,6 +51,13 @@ RestModel combineRestModels(const std::vector<std::shared_ptr<const RestModel>>&
     for (BodyRange b : m.bodies.empty() ? std::vector<BodyRange>{wholeModelBody(m)} : m.bodies) {
       b.vertexBegin += v0, b.vertexEnd += v0, b.elementBegin += e0, b.elementEnd += e0;
       c.bodies.push_back(b);
+    }
+    // Damping per region (model.h): a model without its own rates takes the simulation's everywhere.
+    if (anyRegionDamping) {
+      if (m.hasRegionDamping())
+        append(c.dampingOwn, m.dampingOwn), append(c.dampingDefaultShare, m.dampingDefaultShare);
+      else
+        c.dampingOwn.resize(c.numVertices(), 0), c.dampingDefaultShare.resize(c.numVertices(), 1);
     }
     c.smallestPeriod = std::min(c.smallestPeriod, m.smallestPeriod);
     c.smallestVertexPeriod = std::min(c.smallestVertexPeriod, m.smallestVertexPeriod);

@@ -306,8 +306,13 @@ ContactResult resolveManipulator(const Manipulator& m, const Vec3& xPrev, Vec3& 
   return res;
 }
 
+const char* wallName(int wall) {
+  static const char* const names[kWalls] = {"xmin", "xmax", "ymin", "ymax", "zmin", "zmax"};
+  return wall >= 0 && wall < kWalls ? names[wall] : "none";
+}
+
 ContactResult resolveDomain(const DomainSettings& d, const Vec3& xPrev, Vec3& x, Vec3& v, int dim, bool bounce,
-                            const StepStart* start) {
+                            const StepStart* start, Vec3* wallDv) {
   ContactResult res;
   if (!d.enabled) return res;
   for (int a = 0; a < dim; ++a) {
@@ -324,7 +329,10 @@ ContactResult resolveDomain(const DomainSettings& d, const Vec3& xPrev, Vec3& x,
       for (int b = 0; b < dim; ++b)
         if (b != a) x[b] -= slip[b];
       const Real s0 = side > 0 ? xPrev[a] - d.min[a] : d.max[a] - xPrev[a];  // distance inside at the start
+      const Vec3 before = v;
       reflectVelocity(v, Vec3::Zero(), n, bounce ? d.restitution : 0.0, d.friction, s0, start, depth);
+      res.wall = 2 * a + (side < 0 ? 1 : 0);
+      if (wallDv) wallDv[res.wall] += v - before;
     }
   }
   return res;

@@ -216,10 +216,12 @@ LargeStepReport LargeStepSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v
       report.momentumKept = true;
     }
   }
-  if (damping > 0) {
-    const Real damp = dampingFactor(damping, dt_);  // integration.h
+  if (damping > 0 || m.hasRegionDamping()) {
     Real removed = 0;
-    for (size_t i = 0; i < V; ++i) removed += 0.5 * m.mass[i] * v[i].squaredNorm() * (1 - damp * damp), v[i] *= damp;
+    for (size_t i = 0; i < V; ++i) {
+      const Real damp = dampingFactor(m.vertexDamping(i, damping), dt_);  // integration.h; per region: model.h
+      removed += 0.5 * m.mass[i] * v[i].squaredNorm() * (1 - damp * damp), v[i] *= damp;
+    }
     budget_ -= removed;
   }
   const Real e = energy(x, v, q, gravity);

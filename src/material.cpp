@@ -24,6 +24,7 @@ MaterialSettings regionMaterial(const MaterialSettings& m, uint16_t label) {
       out.youngsModulus = r.youngsModulus;
       out.density = r.density;
       out.paperK = r.paperK;
+      out.damping = r.damping;
       return out;
     }
   if (label == 1) return out;

@@ -42,11 +42,58 @@ void assignMaterials(const Layout& layout, RestModel& m) {
 
 // Step 2b: lumped masses (material.h's rules, each element's cells with its own density), their
 // inverses and the total.
+// Per-vertex damping weights (model.h, RestModel::dampingOwn): each region's share of a vertex's
+// weight, accumulated in lumpMasses when some region sets its own damping rate.
+class DampingWeights {
+ public:
+  DampingWeights(const RestModel& m, size_t V) : m_(m) {
+    for (const MaterialSettings& r : m.materials) active_ = active_ || r.damping.has_value();
+    if (!active_) return;
+    weight_.assign(V, 0), own_.assign(V, 0), plain_.assign(V, 0), first_.assign(V, kNone), mixed_.assign(V, 0);
+  }
+  void add(uint32_t v, Real w, uint16_t material) {
+    if (!active_) return;
+    const std::optional<Real>& c = m_.materials[material].damping;
+    weight_[v] += w;
+    if (c)
+      own_[v] += w * *c;
+    else
+      plain_[v] += w;
+    if (first_[v] == kNone) first_[v] = material;
+    const std::optional<Real>& c0 = m_.materials[first_[v]].damping;
+    if (c0 != c) mixed_[v] = 1;
+  }
+  // A vertex of one rate (or of regions that all take the simulation's) gets it exactly.
+  void finish(RestModel& m) const {
+    if (!active_) return;
+    const size_t V = weight_.size();
+    m.dampingOwn.assign(V, 0), m.dampingDefaultShare.assign(V, 1);
+    for (size_t v = 0; v < V; ++v) {
+      if (first_[v] == kNone) continue;
+      const std::optional<Real>& c = m.materials[first_[v]].damping;
+      if (!mixed_[v])
+        m.dampingOwn[v] = c.value_or(0), m.dampingDefaultShare[v] = c ? 0 : 1;
+      else
+        m.dampingOwn[v] = own_[v] / weight_[v], m.dampingDefaultShare[v] = plain_[v] / weight_[v];
+    }
+  }
+
+ private:
+  static constexpr uint16_t kNone = 0xffff;
+  const RestModel& m_;
+  bool active_ = false;
+  std::vector<Real> weight_, own_, plain_;
+  std::vector<uint16_t> first_;
+  std::vector<uint8_t> mixed_;
+};
+
 void lumpMasses(const Layout& layout, RestModel& m) {
   const int D = layout.dim;
   const size_t V = layout.numVertices();
+  DampingWeights damping(m, V);
   if (m.material.scaling == Scaling::Paper && m.materials.size() == 1) {
     m.mass.assign(V, paperVertexMass(m.materials[0], layout.voxelSize));
+    for (uint32_t v = 0; v < V; ++v) damping.add(v, 1, 0);
   } else if (m.material.scaling == Scaling::Paper) {
     // One voxel's mass per vertex; a vertex on a border between regions takes the lightest of
     // the elements that own it (the shorter period, so dt = auto stays on the safe side).
@@ -54,7 +101,10 @@ void lumpMasses(const Layout& layout, RestModel& m) {
     for (size_t e = 0; e < layout.numElements(); ++e) {
       const Real mv = paperVertexMass(m.materials[m.elementMaterial[e]], layout.voxelSize);
       for (uint32_t p = layout.elemStart[e]; p < layout.elemStart[e + 1]; ++p)
-        if (layout.pairIsOwn[p]) m.mass[layout.elemVerts[p]] = std::min(m.mass[layout.elemVerts[p]], mv);
+        if (layout.pairIsOwn[p]) {
+          m.mass[layout.elemVerts[p]] = std::min(m.mass[layout.elemVerts[p]], mv);
+          damping.add(layout.elemVerts[p], mv, m.elementMaterial[e]);
+        }
     }
   } else {
     // Each filled cell (the whole block for a full element) gives its mass in equal parts to
@@ -75,10 +125,12 @@ void lumpMasses(const Layout& layout, RestModel& m) {
           const uint32_t id = layout.vertexAt(p);
           if (id == Layout::kNoVertex) throw std::logic_error("buildRestModel: a cell corner is not a model vertex");
           m.mass[id] += cornerMass;
+          damping.add(id, cornerMass, m.elementMaterial[e]);
         }
       }
     }
   }
+  damping.finish(m);
   m.invMass.resize(V);
   m.totalMass = 0;
   for (size_t i = 0; i < V; ++i) {
@@ -110,8 +162,8 @@ void buildElements(const Layout& layout, RestModel& m) {
       minMass = std::min(minMass, m.mass[m.elemVerts[p]]);
     }
     m.size[e] = (layout.kind == LayoutKind::Voxel ? 1 : 2) * layout.cellSize[e] * layout.voxelSize;
-    m.stiffness[e] = elementStiffness(m.materials[m.elementMaterial[e]], layout.dim, layout.voxelSize, layout.regionVoxels(e), m.size[e],
-                                      &m.restOffsets[b], n);
+    m.stiffness[e] = elementStiffness(m.materials[m.elementMaterial[e]], layout.dim, layout.voxelSize,
+                                      layout.regionVoxels(e), m.size[e], &m.restOffsets[b], n);
     // The lightest vertex bounds the element's period from below.
     smallest = std::min(smallest, springPeriod(minMass, m.stiffness[e]));
   }
@@ -199,7 +251,8 @@ size_t RestModel::memoryBytes() const {
   auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
   return sizeof(*this) + bytes(restPositions) + bytes(mass) + bytes(invMass) + bytes(onSurface) + bytes(stiffness) +
          bytes(size) + bytes(level) + bytes(elementMaterial) + bytes(elemStart) + bytes(elemVerts) +
-         bytes(restOffsets) + bytes(bodies) + bytes(materials) + bytes(materialLabel);
+         bytes(restOffsets) + bytes(bodies) + bytes(materials) + bytes(materialLabel) + bytes(dampingOwn) +
+         bytes(dampingDefaultShare);
 }
 
 }  // namespace gradel

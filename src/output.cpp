@@ -241,13 +241,14 @@ void writePvd(const fs::path& file, const std::vector<PvdFrame>& frames) {
 
 std::string MetricsCsv::header(size_t manipulators, bool bodyColumn) {
   std::string h = std::string(bodyColumn ? "body," : "") +
-      "time,kinetic_energy,elastic_energy,gravity_energy,px,py,pz,Lx,Ly,Lz,max_stress,max_penetration,"
-      "max_contact_depth,min_element_det";
+                  "time,kinetic_energy,elastic_energy,gravity_energy,px,py,pz,Lx,Ly,Lz,max_stress,max_penetration,"
+                  "max_contact_depth,min_element_det";
   auto forceColumns = [&](const std::string& p) {
     for (const char* c : {"fx", "fy", "fz", "tx", "ty", "tz"}) h += "," + p + c;
   };
   for (size_t k = 0; k < manipulators; ++k) forceColumns("m" + std::to_string(k) + "_");
   forceColumns("wall_");
+  for (int w = 0; w < kWalls; ++w) forceColumns(std::string("wall_") + wallName(w) + "_");  // per wall (contacts.h)
   return h;
 }
 
@@ -284,11 +285,12 @@ std::string MetricsCsv::row(const Metrics& m, size_t manipulators, bool forces) 
     for (int c = 0; c < 3; ++c) out += ',', appendNumber(out, f.torque[c]);
   };
   if (!forces) {
-    out.append(6 * (manipulators + 1), ',');
+    out.append(6 * (manipulators + 1 + kWalls), ',');
     return out;
   }
   for (const ContactForce& f : cf.manipulators) appendForce(f);
   appendForce(cf.walls);
+  for (const ContactForce& f : cf.wall) appendForce(f);
   return out;
 }
 

@@ -213,8 +213,8 @@ void ProjectiveSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vec
     s.solveInto(x);
     if (it + 1 < iterations) s.releaseAdhesive();
   }
-  const Real damp = dampingFactor(damping, dt);  // integration.h
-  for (size_t i = 0; i < V; ++i) v[i] = (x[i] - x0[i]) / dt * damp;
+  // integration.h; per vertex when the regions set their own rates (model.h).
+  for (size_t i = 0; i < V; ++i) v[i] = (x[i] - x0[i]) / dt * dampingFactor(m.vertexDamping(i, damping), dt);
   if (heldForces) {
     // The reaction of each hold still in place after the last pass: A x - b on its row.
     heldForces->assign(held.size(), Vec3::Zero());

@@ -698,6 +698,7 @@ void readMaterial(Fields f, MaterialSettings& m) {
     r.youngsModulus = rf.number("youngs_modulus", m.youngsModulus, kPositive, "Pa");
     r.density = rf.number("density", m.density, kPositive, "kg/m^3");
     r.paperK = rf.number("k", m.paperK, kPositive, "N");
+    r.damping = rf.optNumber("damping", kNonNegative, "1/s");
     rf.finish();
     m.regions.push_back(r);
   }

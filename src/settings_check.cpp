@@ -81,7 +81,9 @@ void validate(const MaterialSettings& s) {
     positive((at + "youngs_modulus").c_str(), r.youngsModulus);
     positive((at + "density").c_str(), r.density);
     positive((at + "k").c_str(), r.paperK);
+    if (r.damping) nonNegative((at + "damping").c_str(), *r.damping);
   }
+  if (s.damping) nonNegative("damping", *s.damping);
 }
 
 }  // namespace gradel

@@ -30,7 +30,7 @@ struct World::StepScratch {
   std::vector<Vec3> previousVelocities;  ///< [m/s] velocities then (the bounce's crossing speed, contacts.h).
   std::vector<Real> contactDepth;        ///< [m] per vertex, implicit step only: depth before correction.
   Real maxContactDepth = 0;              ///< [m] deepest vertex found (and corrected) in the last step.
-  // Contact impulses (World::stepContactForces): per surface (the manipulators, then the walls)
+  // Contact impulses (World::stepContactForces): per surface (the manipulators, then each of the kWalls walls)
   // the impulse the contact response gave the body [N s] and its moment [N m s] (about the
   // manipulator's centre, the walls' about the origin). The explicit step sums them per aligned
   // block of kVertexBlock vertices (blockImpulse, blocks x surfaces; blockTouched marks the blocks
@@ -96,6 +96,15 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   validate(sim_);
   validate(domain_, model_->dim);
   if (model_->dim == 2) sim_.gravity.z() = 0;  // a 2D body moves in its plane: the one place gravity is projected
+  // Damping: one rate unless the regions' rates differ between vertices (model.h).
+  const RestModel& rm = *model_;
+  uniformDamping_ = rm.vertexDamping(0, sim_.damping);
+  Real minDamping = uniformDamping_;
+  bool uniform = true;
+  for (size_t i = 1; rm.hasRegionDamping() && i < rm.numVertices(); ++i) {
+    const Real c = rm.vertexDamping(i, sim_.damping);
+    uniform = uniform && c == uniformDamping_, minDamping = std::min(minDamping, c);
+  }
   const Real period = sim_.dtPeriod == PeriodRule::Element ? model_->smallestPeriod : model_->smallestVertexPeriod;
   // The implicit integrator is stable at any dt: "auto" is one display frame.
   if (sim_.integrator == IntegratorKind::Auto) chooseIntegrator(period);
@@ -107,10 +116,16 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
     // damping, stable for dt < c / w^2. With w = 2 pi / period (the fastest mode), half that bound
     // (validate() has refused c = 0).
     const Real omega = 2 * M_PI / period;
-    autoDt = std::min(autoDt, 0.5 * sim_.damping / (omega * omega));
+    // The least damped vertex (regions' rates, model.h) bounds it.
+    autoDt = std::min(autoDt, 0.5 * minDamping / (omega * omega));
   }
   dt_ = sim_.dt > 0 ? sim_.dt : autoDt;
   if (!(dt_ > 0) || !std::isfinite(dt_)) throw InputError("dt: could not derive a positive time step");
+  if (!uniform) {
+    vertexDampFactor_.resize(rm.numVertices());
+    for (size_t i = 0; i < rm.numVertices(); ++i)
+      vertexDampFactor_[i] = dampingFactor(rm.vertexDamping(i, sim_.damping), dt_);
+  }
 
   const size_t V = model_->numVertices(), E = model_->numElements();
   state_.positions = model_->restPositions;
@@ -220,10 +235,11 @@ World::ContactBounds World::contactBounds() const {
 Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
   using namespace simd;
   constexpr size_t kBlock = kVertexBlock;
-  const size_t surfaces = manipulators_.size() + 1;
+  const size_t surfaces = manipulators_.size() + kWalls;
   const RestModel& m = *model_;
   const Real dt = dt_;
-  const Real damp = dampingFactor(sim_.damping, dt);  // integration.h
+  const Real damp = dampingFactor(uniformDamping_, dt);  // integration.h
+  const Real* vertexDamp = vertexDampFactor_.data();     // per vertex when the regions' rates differ
   const d4 g = loadVec3(sim_.gravity);
   Vec3* positions = state_.positions.data();
   Vec3* velocities = state_.velocities.data();
@@ -231,7 +247,7 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
   Real depth = 0;
   // One loop per integrator and per "contacts possible": neither test is made per vertex, and
   // without contacts nothing is kept for them.
-  auto run = [&](auto forward, auto contacts) {
+  auto run = [&](auto forward, auto contacts, auto perVertexDamping) {
     d4 start[kBlock], startVelocity[kBlock];
     for (size_t b = begin, be; b < end; b = be) {
       be = std::min(end, (b / kBlock + 1) * kBlock);  // blocks aligned to kBlock (the contact forces' partial sums)
@@ -240,10 +256,12 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
         const d4 a = force * invMass[i] + g;
         const d4 x0 = loadVec3(positions[i]), v0 = loadVec3(velocities[i]);
         d4 x = x0, v = v0;
+        Real vd = damp;
+        if constexpr (perVertexDamping()) vd = vertexDamp[i];
         if constexpr (forward())
-          forwardEulerStep(x, v, a, dt, damp);  // integration.h
+          forwardEulerStep(x, v, a, dt, vd);  // integration.h
         else
-          symplecticEulerStep(x, v, a, dt, damp);
+          symplecticEulerStep(x, v, a, dt, vd);
         storeVec3(positions[i], x), storeVec3(velocities[i], v);
         if constexpr (contacts()) {
           start[i - b] = x0, startVelocity[i - b] = v0;
@@ -269,10 +287,13 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
   };
   using Yes = std::true_type;
   using No = std::false_type;
+  auto runDamped = [&](auto forward, auto contacts) {
+    vertexDamp ? run(forward, contacts, Yes{}) : run(forward, contacts, No{});
+  };
   if (sim_.integrator == IntegratorKind::ForwardEuler)
-    cb ? run(Yes{}, Yes{}) : run(Yes{}, No{});
+    cb ? runDamped(Yes{}, Yes{}) : runDamped(Yes{}, No{});
   else
-    cb ? run(No{}, Yes{}) : run(No{}, No{});
+    cb ? runDamped(No{}, Yes{}) : runDamped(No{}, No{});
   return depth;
 }
 
@@ -302,10 +323,12 @@ Real World::resolveVertexContacts(const Vec3& previous, const Vec3& previousVelo
       if (d > 0 && surface) *surface = int(k);
       passDepth = std::max(passDepth, d);
     }
-    const Vec3 before = v;
-    const Real d = resolveDomain(domain_, previous, x, v, dim, bounce, &start).depth;
-    if (d > 0 || v != before) addImpulse(impulse[K], mass * (v - before), x, Vec3::Zero(), dim);
-    if (d > 0 && surface) *surface = int(K);
+    Vec3 wallDv[kWalls] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
+    const ContactResult r = resolveDomain(domain_, previous, x, v, dim, bounce, &start, wallDv);
+    const Real d = r.depth;
+    for (int w = 0; w < kWalls; ++w)
+      if (wallDv[w] != Vec3::Zero()) addImpulse(impulse[K + size_t(w)], mass * wallDv[w], x, Vec3::Zero(), dim);
+    if (d > 0 && surface) *surface = int(K) + r.wall;
     passDepth = std::max(passDepth, d);
     depth = std::max(depth, passDepth);
     if (passDepth == 0 || surfaces < 2) break;
@@ -326,7 +349,7 @@ void World::stageContacts(size_t begin, size_t end) {
 
 // Contact forces: every step starts with zero impulses on every surface ...
 void World::beginContactImpulses() {
-  const size_t surfaces = manipulators_.size() + 1;
+  const size_t surfaces = manipulators_.size() + kWalls;
   scratch_->impulse.assign(surfaces, ContactForce{});
   const size_t blocks = (model_->numVertices() + kVertexBlock - 1) / kVertexBlock;
   if (scratch_->blockImpulse.size() != blocks * surfaces) {
@@ -338,7 +361,7 @@ void World::beginContactImpulses() {
 // ... and ends with the explicit stage's blocks added in block order (the same sums at any
 // thread count), the step's forces (the impulse on the body, negated, over dt) and the average.
 void World::finishContactImpulses() {
-  const size_t surfaces = manipulators_.size() + 1;
+  const size_t K = manipulators_.size(), surfaces = K + kWalls;
   std::vector<ContactForce>& J = scratch_->impulse;
   for (size_t b = 0; b < scratch_->blockTouched.size(); ++b) {
     if (!scratch_->blockTouched[b]) continue;
@@ -347,13 +370,19 @@ void World::finishContactImpulses() {
       J[s].force += scratch_->blockImpulse[b * surfaces + s].force,
           J[s].torque += scratch_->blockImpulse[b * surfaces + s].torque;
   }
-  stepForces_.manipulators.resize(surfaces - 1);
-  averageImpulse_.manipulators.resize(surfaces - 1);
-  for (size_t s = 0; s < surfaces; ++s) {
-    ContactForce& f = s + 1 < surfaces ? stepForces_.manipulators[s] : stepForces_.walls;
-    ContactForce& a = s + 1 < surfaces ? averageImpulse_.manipulators[s] : averageImpulse_.walls;
-    f.force = -J[s].force / dt_, f.torque = -J[s].torque / dt_;
-    a.force -= J[s].force, a.torque -= J[s].torque;
+  stepForces_.manipulators.resize(K);
+  averageImpulse_.manipulators.resize(K);
+  // The walls together: their impulses summed in wall order (each the same at any thread count).
+  ContactForce allWalls;
+  for (size_t w = 0; w < size_t(kWalls); ++w) allWalls.force += J[K + w].force, allWalls.torque += J[K + w].torque;
+  for (size_t s = 0; s <= surfaces; ++s) {
+    const ContactForce& j = s < surfaces ? J[s] : allWalls;
+    ContactForce& f = s < K ? stepForces_.manipulators[s] : s < surfaces ? stepForces_.wall[s - K] : stepForces_.walls;
+    ContactForce& a = s < K          ? averageImpulse_.manipulators[s]
+                      : s < surfaces ? averageImpulse_.wall[s - K]
+                                     : averageImpulse_.walls;
+    f.force = -j.force / dt_, f.torque = -j.torque / dt_;
+    a.force -= j.force, a.torque -= j.torque;
   }
   averageTime_ += dt_;
 }
@@ -364,6 +393,7 @@ ContactForces World::averageContactForces() const {
   const Real s = averageTime_ > 0 ? 1 / averageTime_ : 0;
   for (ContactForce& c : f.manipulators) c.force *= s, c.torque *= s;
   f.walls.force *= s, f.walls.torque *= s;
+  for (ContactForce& c : f.wall) c.force *= s, c.torque *= s;
   return f;
 }
 
@@ -647,13 +677,14 @@ void World::stepImplicit(bool largeStep) {
       // contact pass adds its own velocity changes. The first pass's are dropped with its state.
       std::vector<int> heldSurface(held.size());
       for (size_t j = 0; j < held.size(); ++j) heldSurface[j] = scratch_->contactSurface[held[j]];
-      scratch_->impulse.assign(manipulators_.size() + 1, ContactForce{});
+      scratch_->impulse.assign(manipulators_.size() + kWalls, ContactForce{});
       state_.positions = x0, state_.velocities = v0, state_.rotations = q0;
       std::vector<Vec3> heldForces;
       projective_->step(state_.positions, state_.velocities, state_.rotations, g, sim_.damping, sim_.implicitIterations,
                         targets, sim_.rotationIterations, held, heldAt, heldNormal, &heldForces);
       for (size_t j = 0; j < held.size(); ++j) {
-        const size_t k = size_t(std::max(0, heldSurface[j]));  // every held vertex was moved by a surface
+        // Every held vertex was moved by a surface (a wall: K + its kWalls index).
+        const size_t k = size_t(std::max(0, heldSurface[j]));
         const Vec3 centre = k < manipulators_.size() ? manipulators_[k].position : Vec3::Zero();
         addImpulse(scratch_->impulse[k], heldForces[j] * dt_, heldAt[j], centre, model_->dim);
       }

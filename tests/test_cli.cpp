@@ -202,7 +202,7 @@ TEST_F(CliTest, RunMetricsHaveContactForceColumns) {
   std::vector<std::string> names, cells;
   for (std::istringstream h(header); std::getline(h, line, ',');) names.push_back(line);
   for (std::istringstream c(last); std::getline(c, line, ',');) cells.push_back(line);
-  ASSERT_EQ(names.size(), 14u + 12u);
+  ASSERT_EQ(names.size(), 14u + 12u + 36u);
   ASSERT_EQ(cells.size(), names.size());
   EXPECT_EQ(names[14], "m0_fx");
   EXPECT_EQ(names[19], "m0_tz");
@@ -210,6 +210,15 @@ TEST_F(CliTest, RunMetricsHaveContactForceColumns) {
   EXPECT_EQ(names[25], "wall_tz");
   EXPECT_GT(std::stod(cells[15]), 0) << last;  // m0_fy: the ball pushes the sphere up
   EXPECT_LT(std::stod(cells[21]), 0) << last;  // wall_fy: and the floor down
+  // Per wall (xmin, xmax, ymin, ...): the floor ymin carries all of it, the other walls nothing.
+  EXPECT_EQ(names[26], "wall_xmin_fx");
+  EXPECT_EQ(names[39], "wall_ymin_fy");
+  EXPECT_EQ(names[61], "wall_zmax_tz");
+  EXPECT_EQ(cells[39], cells[21]) << last;
+  for (size_t c = 26; c < names.size(); ++c)
+    if (names[c].rfind("wall_ymin_", 0) != 0) {
+      EXPECT_EQ(std::stod(cells[c]), 0) << names[c];
+    }
 }
 
 TEST_F(CliTest, RunDefaultOutIsOutSlashSceneName) {

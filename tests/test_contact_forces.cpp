@@ -4,6 +4,8 @@
 // count, and the columns of metrics.csv.
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -234,11 +236,78 @@ TEST(ContactForces, MetricsCsvHasTheForceColumns) {
       "max_contact_depth,min_element_det";
   EXPECT_EQ(MetricsCsv::header(2), base +
                                        ",m0_fx,m0_fy,m0_fz,m0_tx,m0_ty,m0_tz,m1_fx,m1_fy,m1_fz,m1_tx,m1_ty,m1_tz,"
-                                       "wall_fx,wall_fy,wall_fz,wall_tx,wall_ty,wall_tz");
+                                       "wall_fx,wall_fy,wall_fz,wall_tx,wall_ty,wall_tz,"
+                                       "wall_xmin_fx,wall_xmin_fy,wall_xmin_fz,wall_xmin_tx,wall_xmin_ty,wall_xmin_tz,"
+                                       "wall_xmax_fx,wall_xmax_fy,wall_xmax_fz,wall_xmax_tx,wall_xmax_ty,wall_xmax_tz,"
+                                       "wall_ymin_fx,wall_ymin_fy,wall_ymin_fz,wall_ymin_tx,wall_ymin_ty,wall_ymin_tz,"
+                                       "wall_ymax_fx,wall_ymax_fy,wall_ymax_fz,wall_ymax_tx,wall_ymax_ty,wall_ymax_tz,"
+                                       "wall_zmin_fx,wall_zmin_fy,wall_zmin_fz,wall_zmin_tx,wall_zmin_ty,wall_zmin_tz,"
+                                       "wall_zmax_fx,wall_zmax_fy,wall_zmax_fz,wall_zmax_tx,wall_zmax_ty,wall_zmax_tz");
   Metrics m;
   m.contactForces.manipulators = {ContactForce{Vec3(1, 2, 3), Vec3(4, 5, 6)}};
   m.contactForces.walls = ContactForce{Vec3(-7, 0, 0), Vec3::Zero()};
+  m.contactForces.wall[1] = ContactForce{Vec3(-7, 0, 0), Vec3::Zero()};  // xmax
   const std::string row = MetricsCsv::row(m, 1);
-  EXPECT_EQ(row.substr(row.size() - 25), ",1,2,3,4,5,6,-7,0,0,0,0,0");
+  EXPECT_NE(row.find(",1,2,3,4,5,6,-7,0,0,0,0,0,0,0,0,0,0,0,-7,0,0,0,0,0,0,0,0,0,0,0,"), std::string::npos) << row;
   EXPECT_THROW(MetricsCsv::row(m, 2), std::invalid_argument);  // never a row that does not fit its header
+}
+
+// Per wall (contacts.h kWalls): a cube resting on the floor (zmin) of a box of walls. The floor
+// carries its weight (within the damping's share, as in ToolAndFloorBalanceTheWeightAtRest), no
+// other wall is touched, and the walls together are the sum of the six.
+TEST(ContactForces, FloorAloneCarriesTheWeightOfARestingCube) {
+  for (IntegratorKind kind : {IntegratorKind::SymplecticEuler, IntegratorKind::Implicit}) {
+    ManipulatorSettings tool;
+    tool.radius = 0.01;
+    PressedCube c(tool, Vec3(0.5, 0.5, 0.5), kind);  // the tool far from the cube
+    const ContactForces f = c.settleAndAverage(0.4, 0.05);
+    const Vec3 W = c.weight(), floor = f.wall[4].force;
+    ASSERT_STREQ(wallName(4), "zmin");
+    const Real tolerance = kind == IntegratorKind::Implicit
+                               ? 1e-3 * W.norm()
+                               : c.world->settings().damping * c.world->dt() * floor.norm() / 2 + 1e-6 * W.norm();
+    EXPECT_LT((floor - W).norm(), tolerance) << integratorKindName(kind) << " floor " << floor.transpose();
+    ContactForce sum;
+    for (int w = 0; w < kWalls; ++w) {
+      sum.force += f.wall[w].force, sum.torque += f.wall[w].torque;
+      if (w != 4) {
+        EXPECT_EQ(f.wall[w].force, Vec3::Zero()) << integratorKindName(kind) << " " << wallName(w);
+      }
+    }
+    EXPECT_EQ(sum.force, f.walls.force);
+    EXPECT_EQ(sum.torque, f.walls.torque);
+    // About the origin, the floor's torque is r x F with r the cube's centre (0.03, 0.03, z).
+    EXPECT_NEAR(f.wall[4].torque.x(), 0.03 * floor.z(), 1e-3 * W.norm() * 0.03) << integratorKindName(kind);
+  }
+}
+
+// A free cube thrown into the corner of two walls (xmin, ymin; no gravity, damping or friction):
+// the walls' impulses, each summed over the steps, are minus the body's momentum change
+// (Newton's third law), each wall is pushed outwards along its own normal, and the other walls
+// get nothing.
+TEST(ContactForces, CornerHitSplitsTheImpulseBetweenTheTwoWalls) {
+  Body b = makeBody("box", 6, 3, LayoutKind::Voxel);
+  DomainSettings d;
+  d.enabled = true;
+  d.min = Vec3(-0.01, -0.02, -1), d.max = Vec3(1, 1, 1);
+  d.restitution = 0.5;
+  World w(b.model, isolated(), d, {});
+  for (Vec3& v : w.state().velocities) v = Vec3(-1, -1, 0);
+  const Vec3 p0 = momentum(w);
+  std::array<Vec3, kWalls> impulse;
+  impulse.fill(Vec3::Zero());
+  Vec3 total = Vec3::Zero();
+  while (w.time() < 0.06) {
+    w.step();
+    for (int k = 0; k < kWalls; ++k) impulse[k] += w.stepContactForces().wall[k].force * w.dt();
+    total += w.stepContactForces().walls.force * w.dt();
+  }
+  const Vec3 dp = momentum(w) - p0;
+  ASSERT_GT(dp.x(), 1e-3);  // both walls really hit
+  ASSERT_GT(dp.y(), 1e-3);
+  EXPECT_LT((total + dp).norm(), 1e-9 * dp.norm()) << "walls " << total.transpose() << " dp " << dp.transpose();
+  EXPECT_LT((impulse[0] + impulse[2] + dp).norm(), 1e-9 * dp.norm());
+  EXPECT_LT(impulse[0].x(), 0);                                // the body pushes xmin towards -x ...
+  EXPECT_LT(impulse[2].y(), 0);                                // ... and ymin towards -y
+  for (int k : {1, 3, 4, 5}) EXPECT_EQ(impulse[k], Vec3::Zero()) << wallName(k);
 }

@@ -20,6 +20,14 @@
 namespace gradel {
 namespace {
 namespace fs = std::filesystem;
+// metrics.csv's columns of each wall (after the walls together), contacts.h kWalls order.
+constexpr const char* kPerWallColumns =
+    ",wall_xmin_fx,wall_xmin_fy,wall_xmin_fz,wall_xmin_tx,wall_xmin_ty,wall_xmin_tz,wall_xmax_fx,wall_xmax_fy,wall_"
+    "xmax_fz,wall_xmax_tx,wall_xmax_ty,wall_xmax_tz,wall_ymin_fx,wall_ymin_fy,wall_ymin_fz,wall_ymin_tx,wall_ymin_ty,"
+    "wall_ymin_tz"
+    ",wall_ymax_fx,wall_ymax_fy,wall_ymax_fz,wall_ymax_tx,wall_ymax_ty,wall_ymax_tz,wall_zmin_fx,wall_zmin_fy,wall_"
+    "zmin_fz,wall_zmin_tx,wall_zmin_ty,wall_zmin_tz,wall_zmax_fx,wall_zmax_fy,wall_zmax_fz,wall_zmax_tx,wall_zmax_ty,"
+    "wall_zmax_tz";
 
 // A fresh, empty scratch directory per test, removed afterwards.
 class OutputTest : public ::testing::Test {
@@ -309,17 +317,20 @@ TEST_F(OutputTest, MetricsCsvHeaderAndRowsRoundTrip) {
   EXPECT_FALSE(std::getline(in, extra));
   EXPECT_EQ(header,
             "time,kinetic_energy,elastic_energy,gravity_energy,px,py,pz,Lx,Ly,Lz,max_stress,max_penetration,"
-            "max_contact_depth,min_element_det,wall_fx,wall_fy,wall_fz,wall_tx,wall_ty,wall_tz");
+            "max_contact_depth,min_element_det,wall_fx,wall_fy,wall_fz,wall_tx,wall_ty,wall_tz" +
+                std::string(kPerWallColumns));
   std::vector<double> values;
   std::istringstream cells(row1);
   for (std::string cell; std::getline(cells, cell, ',');) values.push_back(std::stod(cell));
-  ASSERT_EQ(values.size(), 20u);
+  ASSERT_EQ(values.size(), 20u + 36u);
   EXPECT_EQ(values[0], 0.1);
   EXPECT_EQ(values[1], 1.0 / 3.0);  // full precision
   EXPECT_EQ(values[6], 3.0);
   EXPECT_EQ(values[8], 5e-300);
   EXPECT_EQ(values[13], -0.5);
-  EXPECT_EQ(row2, "0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0");
+  std::string zeros = "0";
+  for (int i = 1; i < 20 + 36; ++i) zeros += ",0";  // the per-wall forces too
+  EXPECT_EQ(row2, zeros);
 }
 
 // ---- OutputDirectory ----------------------------------------------------------------

@@ -71,6 +71,12 @@ struct ManipulatorSettings {
   Path path;               ///< Scripted motion; empty = pose set from outside (setPose).
 };
 
+/// The walls of the domain box, by index: 2 a + 1 for the wall at max[a], 2 a at min[a] (a the
+/// axis): xmin, xmax, ymin, ymax, zmin, zmax (a 2D domain has the first four).
+constexpr int kWalls = 6;
+/// "xmin", "xmax", "ymin", "ymax", "zmin", "zmax".
+const char* wallName(int wall);
+
 struct DomainSettings {
   bool enabled = false;    ///< No walls when false.
   Vec3 min{-1, -1, -1};    ///< [m] lower corner of the box.
@@ -93,6 +99,7 @@ struct Manipulator {
 /// Result of resolving one vertex.
 struct ContactResult {
   Real depth = 0;  ///< [m] how far the vertex was inside before it was pushed out (0 = no contact).
+  int wall = -1;   ///< resolveDomain: the last wall (kWalls index) that pushed the vertex, -1 none.
 };
 
 /// The vertex's velocity at the start of the step and the step [s]: what the bounce needs to find
@@ -114,7 +121,9 @@ ContactResult resolveManipulator(const Manipulator& m, const Vec3& xPrev, Vec3& 
 
 /// Resolves one vertex against the domain walls, in place (bounce and start as above). xPrev as
 /// above: friction also acts on the position (see contacts.cpp, frictionSlipCorrection).
+/// `wallDv`, when given (kWalls entries), gets each wall's velocity change of the vertex added
+/// (the forces per wall); their sum is the vertex's total change to rounding.
 ContactResult resolveDomain(const DomainSettings& d, const Vec3& xPrev, Vec3& x, Vec3& v, int dim, bool bounce = true,
-                            const StepStart* start = nullptr);
+                            const StepStart* start = nullptr, Vec3* wallDv = nullptr);
 
 }  // namespace gradel

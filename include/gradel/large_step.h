@@ -64,7 +64,8 @@ class LargeStepSolver {
 
   /// One step of dt: x, v (per vertex), q (per element, warm start) in/out. pinStart / pinEnd:
   /// the pinned vertices' positions at the start and end of the step (order of `pinned`).
-  /// passes >= 1: the conjugate-gradient iterations of the step (a bounded cost).
+  /// passes >= 1: the conjugate-gradient iterations of the step (a bounded cost). Velocities
+  /// are damped per vertex by 1 / (1 + c dt), c = model.vertexDamping(i, damping) (model.h).
   LargeStepReport step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vector<Quat>& q, const Vec3& gravity,
                        Real damping, int passes, int rotationIterations, const std::vector<Vec3>& pinStart,
                        const std::vector<Vec3>& pinEnd);

@@ -23,11 +23,12 @@
 //
 // Regions (docs/layout.md, docs/scenes.md `material.regions`): a labelled volume (volume.h) gives
 //   each element one label (layout.h: no element mixes two), and each label its own Young's
-//   modulus, density and paper k. The scaling is the body's. Label 1 without an entry of its own
-//   takes the body's fields, so a binary volume (every voxel label 1) is the one-material body.
+//   modulus, density, paper k and (optionally) velocity damping rate. The scaling is the body's. Label 1 without an
+//   entry of its own takes the body's fields, so a binary volume (every voxel label 1) is the one-material body.
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -45,6 +46,10 @@ struct RegionMaterial {
   Real youngsModulus = 1.0e5;  ///< [Pa] as MaterialSettings::youngsModulus.
   Real density = 1000.0;       ///< [kg/m^3] as MaterialSettings::density.
   Real paperK = 10000.0;       ///< [N] as MaterialSettings::paperK.
+  /// [1/s] velocity damping rate of the region's vertices (v <- v / (1 + c dt), integrator.h);
+  /// unset: the simulation's `damping`. A vertex on a border takes its regions' mass-weighted
+  /// mean (model.h RestModel::vertexDamping).
+  std::optional<Real> damping;
 };
 
 struct MaterialSettings {
@@ -52,6 +57,8 @@ struct MaterialSettings {
   Real youngsModulus = 1.0e5;             ///< [Pa] consistent scaling: Young's-modulus-like E (soft rubber / gel).
   Real density = 1000.0;                  ///< [kg/m^3] both scalings (paper: mass per voxel = density * h^3).
   Real paperK = 10000.0;                  ///< [N] paper scaling: force per unit strain (the paper's k).
+  std::optional<Real> damping;            ///< [1/s] set only by a region's entry (regionMaterial);
+                                          ///< unset: the simulation's damping.
   std::vector<RegionMaterial> regions;    ///< Per-label materials, distinct labels; label 1 without
                                           ///< an entry takes the fields above.
 };

@@ -51,6 +51,15 @@ struct RestModel {
   std::vector<MaterialSettings> materials;  ///< Ascending label; the stiffness and masses above come from them.
   std::vector<uint16_t> materialLabel;      ///< The label of each entry of `materials` ({1} for a binary volume).
 
+  // ---- damping per region (material.regions[i].damping); both empty when no region sets one ----
+  // A vertex's rate is the mass-weighted mean over the regions whose cells give it mass (the
+  // lumped form of mass-proportional damping, sum_r c_r m_ir v_i; `paper` scaling: weighted by
+  // each owning element's voxel mass), a region without its own rate counting with the
+  // simulation's: c_i = dampingOwn[i] + dampingDefaultShare[i] * c_simulation (vertexDamping).
+  // A vertex inside one region gets that region's rate exactly.
+  std::vector<Real> dampingOwn;           ///< [1/s] per vertex: sum of weight share x rate over regions with a rate.
+  std::vector<Real> dampingDefaultShare;  ///< Per vertex: weight share of regions without a rate, in [0, 1].
+
   // ---- element -> vertex (compressed rows) ----
   std::vector<uint32_t> elemStart;  ///< Size elements + 1.
   std::vector<uint32_t> elemVerts;  ///< Vertex id per pair.
@@ -68,6 +77,13 @@ struct RestModel {
   size_t memoryBytes() const;
   size_t numPairs() const { return elemVerts.size(); }
   size_t numBodies() const { return bodies.size(); }
+  /// True if some region sets its own damping rate (dampingOwn is filled).
+  bool hasRegionDamping() const { return !dampingOwn.empty(); }
+  /// Vertex v's velocity damping rate [1/s] given the simulation's rate (the regions' rates above;
+  /// `simulationDamping` itself when no region sets one).
+  Real vertexDamping(size_t v, Real simulationDamping) const {
+    return dampingOwn.empty() ? simulationDamping : dampingOwn[v] + dampingDefaultShare[v] * simulationDamping;
+  }
   /// The body that holds vertex v (bodies are contiguous and ascending; a binary search).
   size_t bodyOfVertex(size_t v) const;
 };

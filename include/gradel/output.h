@@ -72,7 +72,9 @@ class MetricsCsv {
   /// max_penetration,max_contact_depth,min_element_det, then the frame-averaged contact forces
   /// (Metrics::contactForces) the bodies exert: per manipulator k = 0, 1, ...
   /// m<k>_fx,m<k>_fy,m<k>_fz [N],m<k>_tx,m<k>_ty,m<k>_tz [N m] (about its centre), then the walls
-  /// wall_fx,wall_fy,wall_fz,wall_tx,wall_ty,wall_tz (torque about the origin). With a body
+  /// wall_fx,wall_fy,wall_fz,wall_tx,wall_ty,wall_tz (all walls together, torque about the
+  /// origin), then the same six per wall, wall_<w>_fx .. wall_<w>_tz for w = xmin, xmax, ymin,
+  /// ymax, zmin, zmax (contacts.h kWalls; zero for a wall no vertex touched). With a body
   /// column, "body," first.
   static std::string header(size_t manipulators = 0, bool bodyColumn = false);
   /// One data line (no newline); std::invalid_argument if m has forces for another number of
@@ -89,7 +91,7 @@ class MetricsCsv {
   MetricsCsv(const MetricsCsv&) = delete;
   MetricsCsv& operator=(const MetricsCsv&) = delete;
 
-  void append(const Metrics& m);                           ///< Without a body column.
+  void append(const Metrics& m);  ///< Without a body column.
   /// With a body column; `forces` false leaves the force fields empty (per-body rows).
   void append(const std::string& body, const Metrics& m, bool forces = true);
   /// Flushes and closes; throws IoError if any write failed (disk full, ...).

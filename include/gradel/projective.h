@@ -43,8 +43,9 @@ class ProjectiveSolver {
 
   /// One step of dt: x, v (per vertex) and q (per element, warm start) in/out. `pinTargets` are
   /// the pinned vertices' positions at the end of the step (order of `pinned`); their velocities
-  /// are set to the displacement over dt. Velocities are scaled by 1 / (1 + damping dt) as in
-  /// the explicit integrators. `iterations` local/global passes (>= 1).
+  /// are set to the displacement over dt. Velocities are scaled by 1 / (1 + c dt) as in the
+  /// explicit integrators, c = model.vertexDamping(i, damping) (the regions' rates, model.h).
+  /// `iterations` local/global passes (>= 1).
   /// `held` / `heldTargets`: free vertices held at given positions during this step (contacts);
   /// `heldNormals` (empty, or one per held vertex): the surfaces' outward normals, which make the
   /// holds one-sided (see above). `heldForces`, when given, gets the force [N] that held each of

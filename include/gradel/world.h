@@ -6,6 +6,7 @@
 // order), so results are identical at any thread count.
 #pragma once
 
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
@@ -40,11 +41,14 @@ struct ContactForce {
   Vec3 torque{0, 0, 0};  ///< [N m] about the manipulator's centre (walls: about the world origin).
 };
 
-/// The contact forces on every surface: one per manipulator (in index order) and the walls
-/// together. Newton's third law holds: their sum is minus the momentum the contacts gave the body.
+/// The contact forces on every surface: one per manipulator (in index order), each wall of the
+/// domain box (contacts.h kWalls: xmin, xmax, ymin, ymax, zmin, zmax; torques about the world
+/// origin) and the walls together. Newton's third law holds: the manipulators' and the walls'
+/// sum is minus the momentum the contacts gave the body.
 struct ContactForces {
   std::vector<ContactForce> manipulators;
-  ContactForce walls;
+  std::array<ContactForce, kWalls> wall;  ///< Per wall, by kWalls index.
+  ContactForce walls;                     ///< All walls: the sum of `wall` in index order.
 };
 
 /// Figures written per frame to metrics.csv.
@@ -181,6 +185,10 @@ class World {
   State state_;
   std::unique_ptr<StepScratch> scratch_;  ///< Per-step scratch (world.cpp).
   Real dt_ = 0;
+  // Velocity damping of the explicit step (integration.h): one rate for every vertex (today's
+  // path), or per vertex when regions set different rates (model.h RestModel::vertexDamping).
+  Real uniformDamping_ = 0;             ///< [1/s] the rate of every vertex when vertexDampFactor_ is empty.
+  std::vector<Real> vertexDampFactor_;  ///< Per vertex: 1 / (1 + c_i dt); empty: all share uniformDamping_.
   std::string integratorChoice_;
   std::vector<PinSettings> pins_;
   PinSet pinSet_;

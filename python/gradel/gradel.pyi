@@ -110,8 +110,9 @@ class Simulation:
     def manipulator_force(self, index: int, *, average: bool = True) -> Tuple[list[float], list[float]]:
         """(force [N], torque [N m] about its centre) the body exerts on a manipulator: averaged over
         the last step()/advance_to() call, or (average=False) of its last step."""
-    def wall_force(self, *, average: bool = True) -> Tuple[list[float], list[float]]:
-        """(force [N], torque [N m] about the origin) the body exerts on the walls together."""
+    def wall_force(self, wall: str = "all", *, average: bool = True) -> Tuple[list[float], list[float]]:
+        """(force [N], torque [N m] about the origin) the body exerts on the walls together
+        (wall="all") or on one wall: "xmin", "xmax", "ymin", "ymax", "zmin", "zmax"."""
     @property
     def manipulator_positions(self) -> npt.NDArray[np.float64]: ...
     def step(self, n: int = 1) -> None: ...

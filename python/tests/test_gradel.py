@@ -93,6 +93,27 @@ def test_manipulator_pushes_the_body():
         sim.move_manipulator(5, [0, 0, 0])
 
 
+def test_wall_force_per_wall(tmp_path):
+    # A box resting on the floor (ymin) of a domain: the floor carries its weight, no other wall anything.
+    scene = tmp_path / "rest.json"
+    scene.write_text("""{
+      "body": {"shape": "box", "size": 4, "layout": "voxel", "position": [0, 0, 0]},
+      "simulation": {"gravity": [0, -9.81, 0], "damping": 20},
+      "domain": {"min": [-0.5, 0, -0.5], "max": [0.5, 1, 0.5], "restitution": 0}
+    }""")
+    sim = gradel.Simulation.from_scene(str(scene))
+    sim.advance_to(0.4)
+    sim.advance_to(0.45)
+    weight = sim.masses.sum() * 9.81
+    floor, _ = sim.wall_force("ymin")
+    assert floor[1] == pytest.approx(-weight, rel=0.02)
+    assert sim.wall_force("all")[0] == floor  # the only wall touched: the total, bit for bit
+    for w in ("xmin", "xmax", "ymax", "zmin", "zmax"):
+        assert sim.wall_force(w)[0] == [0.0, 0.0, 0.0]
+    with pytest.raises(ValueError):
+        sim.wall_force("floor")
+
+
 def test_layouts_materials_integrators_and_scene_files():
     body = gradel.Body.from_file(sample("mushroom.vox"), voxel_size=0.01)
     counts = {k: gradel.Simulation(body, layout=k).num_elements for k in ("gradational", "uniform", "voxel")}

@@ -3,13 +3,17 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <optional>
 #include <set>
 
 #include "gradel/image.h"
+#include "gradel/render/body_table.h"
 #include "gradel/render/draw_list.h"
 #include "gradel/render/layout_picture.h"
+#include "gradel/render/manipulator_drag.h"
 #include "gradel/render/offscreen.h"
 #include "gradel/render/renderer.h"
 #include "gradel/scene.h"
@@ -192,6 +196,70 @@ TEST(RenderHeadless, EveryBodyIsInTheBodyViewAtItsWorldVertices) {
   ASSERT_TRUE(all.embedded);       // both isosurfaces, each bound to its own body's vertices
   EXPECT_GE(*std::max_element(all.embedded->weightVertex.begin(), all.embedded->weightVertex.end()), b1);
   EXPECT_LT(*std::min_element(all.embedded->weightVertex.begin(), all.embedded->weightVertex.end()), b1);
+}
+
+// The viewer's panel with several bodies (render/body_table.h): a row per body, its own
+// vertices and figures; only the moving body has kinetic energy.
+TEST(ViewerLogic, BodyTableHasARowPerBodyWithItsOwnFigures) {
+  const BuiltScene built = buildScene(parseScene(R"({"bodies": [{"name": "still", "shape": "sphere", "size": 6},
+      {"shape": "box", "size": 3, "position": [0.2, 0, 0], "velocity": [0, 2, 0]}],
+      "simulation": {"gravity": [0, 0, 0]}})",
+                                                 "two"));
+  const std::vector<BodyRow> rows = bodyTable(built);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].name, "still");
+  EXPECT_EQ(rows[1].name, "body1");
+  EXPECT_EQ(rows[0].vertices, built.range(0).numVertices());
+  EXPECT_EQ(rows[1].vertices, built.range(1).numVertices());
+  EXPECT_NE(rows[0].vertices, rows[1].vertices);
+  EXPECT_EQ(rows[1].elements, built.range(1).numElements());
+  EXPECT_LT(rows[0].kineticEnergy, 1e-20);  // at rest (metrics take the half-step velocity: ~1e-30 J)
+  EXPECT_NEAR(rows[1].kineticEnergy, 0.5 * rows[1].mass * 4, 1e-12);  // 1/2 m v^2 at 2 m/s
+  EXPECT_NEAR(rows[1].velocity.y(), 2, 1e-12);
+  EXPECT_GT(rows[1].centre.x(), 0.2);
+  EXPECT_LT(rows[0].centre.x(), 0.1);
+  // One body: one row, the whole model.
+  const BuiltScene one = buildScene(parseScene(R"({"body": {"shape": "sphere", "size": 6}})", "one"));
+  ASSERT_EQ(bodyTable(one).size(), 1u);
+  EXPECT_EQ(bodyTable(one)[0].vertices, one.world->model().numVertices());
+}
+
+// The viewer's drag (render/manipulator_drag.h) with two bodies: a manipulator picked at its
+// pixel and dragged, frame by frame as the viewer feeds it, into body 1 pushes body 1 (which
+// was at rest) and leaves body 0 alone: the drag moves a manipulator, whose contacts see every
+// body's vertices.
+TEST(ViewerLogic, DraggedManipulatorPushesWhicheverBodyItMeets) {
+  BuiltScene built = buildScene(parseScene(R"({"bodies": [
+      {"shape": "sphere", "size": 8, "position": [-0.15, 0, 0]},
+      {"shape": "sphere", "size": 8, "position": [0.15, 0, 0]}],
+      "simulation": {"gravity": [0, 0, 0], "damping": 0},
+      "manipulators": [{"type": "sphere", "radius": 0.02, "path": [{"t": 0, "position": [0.19, 0.2, 0.04]}]}]})",
+                                           "drag"));
+  World& w = *built.world;
+  Camera cam;  // looking down -z at the scene
+  cam.yaw = 0, cam.pitch = 0, cam.target = Vec3(0, 0.1, 0), cam.distance = 0.8;
+  const Vec3 at = cam.project(w.manipulators()[0].position, kW, kH);
+  ASSERT_EQ(pickManipulator(cam, w, at.x(), at.y(), kW, kH), std::optional<size_t>(0));
+  ManipulatorDrag drag = grabManipulator(cam, w, 0, at.x(), at.y(), kW, kH);
+  EXPECT_TRUE(w.manipulators()[0].settings.path.keys.empty());  // the user's now
+  // Down through body 1 (centre (0.19, 0.04, 0.04) at rest), in frames of 1/60 s.
+  const Vec3 target = cam.project(Vec3(0.19, -0.1, 0.04), kW, kH);
+  const double frame = 1.0 / 60;
+  auto momentum = [&](size_t b) {
+    Vec3 p = Vec3::Zero();
+    for (uint32_t v = built.range(b).vertexBegin; v < built.range(b).vertexEnd; ++v)
+      p += w.model().mass[v] * w.state().velocities[v];
+    return p;
+  };
+  for (int f = 1; f <= 20; ++f) {
+    drag.from = drag.to;
+    dragInPlane(cam, drag, at.x() + (target.x() - at.x()) * f / 20, at.y() + (target.y() - at.y()) * f / 20, kW, kH);
+    const int steps = int(std::ceil(frame / w.dt()));
+    for (int k = 0; k < steps; ++k) feedDrag(w, drag, double(k + 1) / steps, frame), w.step();
+  }
+  EXPECT_LT(momentum(1).y(), -1e-4) << momentum(1).transpose();     // body 1 pushed down
+  EXPECT_LT(momentum(0).norm(), 1e-12) << momentum(0).transpose();  // body 0 untouched
+  EXPECT_NEAR(w.manipulators()[0].position.y(), -0.1, 0.01);
 }
 
 TEST(RenderHeadless, CliWritesPngFramesThatShowTheBody) {
