@@ -10,6 +10,7 @@ set(GRADEL_CORE_SOURCES
   src/contacts.cpp
   src/divergence.cpp
   src/element.cpp
+  src/element_stiffness.cpp
   src/element_stage.cpp
   src/embedding.cpp
   src/huge_pages.cpp
@@ -86,6 +87,7 @@ set(GRADEL_TEST_SOURCES
   tests/test_divergence.cpp
   tests/test_dynamics.cpp
   tests/test_element.cpp
+  tests/test_element_stiffness.cpp
   tests/test_element_stage.cpp
   tests/test_embedding.cpp
   tests/test_frame_loop.cpp

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "gradel/element.h"
+#include "gradel/element_stiffness.h"
 #include "gradel/integration.h"
 #include "thread_team.h"
 
@@ -32,6 +33,33 @@ RigidFit rigidFit(const RestModel& m, const std::vector<Vec3>& x, const std::vec
   r.omega = lu.rank() == 3 ? Vec3(lu.solve(r.momentum)) : Vec3::Zero();
   if (m.dim == 2) r.omega.x() = r.omega.y() = 0;
   return r;
+}
+
+// Runs perElement(begin, end) over element ranges, then (after a barrier) perVertex(begin, end)
+// over vertex ranges, split between the team's members (or on this thread).
+template <class PerElement, class PerVertex>
+void elementsThenVertices(ThreadTeam* team, size_t E, size_t V, PerElement&& perElement, PerVertex&& perVertex) {
+  if (!team || team->members() == 1) {
+    perElement(size_t(0), E), perVertex(size_t(0), V);
+    return;
+  }
+  team->run([&](int t) {
+    const size_t T = size_t(team->members());
+    perElement(E * size_t(t) / T, E * size_t(t + 1) / T);
+    team->barrier();
+    perVertex(V * size_t(t) / T, V * size_t(t + 1) / T);
+  });
+}
+
+// Sums each vertex's pair slots in element order (pairStart / pairs: its pairs) into out[i],
+// for the vertices [begin, end).
+void gatherPairs(const std::vector<uint32_t>& pairStart, const std::vector<uint32_t>& pairs,
+                 const std::vector<Vec3>& pair, size_t begin, size_t end, std::vector<Vec3>& out) {
+  for (size_t i = begin; i < end; ++i) {
+    Vec3 sum = Vec3::Zero();
+    for (uint32_t k = pairStart[i]; k < pairStart[i + 1]; ++k) sum += pair[pairs[k]];
+    out[i] = sum;
+  }
 }
 
 }  // namespace
@@ -71,40 +99,25 @@ Real LargeStepSolver::energy(const std::vector<Vec3>& x, const std::vector<Vec3>
 void LargeStepSolver::forces(const std::vector<Vec3>& x, std::vector<Quat>& q, std::vector<Vec3>& f,
                              int iterations) const {
   const RestModel& m = *model_;
-  const size_t E = m.numElements(), V = m.numVertices();
-  f.resize(V);
+  f.resize(m.numVertices());
   std::vector<Vec3> pair(m.numPairs());
-  auto elements = [&](size_t begin, size_t end) {
-    for (size_t el = begin; el < end; ++el) {
-      const uint32_t b = m.elemStart[el], n = m.elemStart[el + 1] - b;
-      elementForces(m.dim, x.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[el], q[el], &pair[b],
-                    iterations);
-    }
-  };
-
-  auto gather = [&](size_t begin, size_t end) {
-    for (size_t i = begin; i < end; ++i) {
-      Vec3 sum = Vec3::Zero();
-      for (uint32_t k = vertexPairStart_[i]; k < vertexPairStart_[i + 1]; ++k) sum += pair[vertexPairs_[k]];
-      f[i] = sum;
-    }
-  };
-  if (!team_ || team_->members() == 1) {
-    elements(0, E), gather(0, V);
-  } else {
-    team_->run([&](int t) {
-      const size_t T = size_t(team_->members());
-      elements(E * size_t(t) / T, E * size_t(t + 1) / T);
-      team_->barrier();
-      gather(V * size_t(t) / T, V * size_t(t + 1) / T);
-    });
-  }
+  elementsThenVertices(
+      team_, m.numElements(), m.numVertices(),
+      [&](size_t begin, size_t end) {
+        for (size_t el = begin; el < end; ++el) {
+          const uint32_t b = m.elemStart[el], n = m.elemStart[el + 1] - b;
+          elementForces(m.dim, x.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[el], q[el], &pair[b],
+                        iterations);
+        }
+      },
+      [&](size_t begin, size_t end) { gatherPairs(vertexPairStart_, vertexPairs_, pair, begin, end, f); });
 }
 
 // Newton on Phi(x) = 1/(2 h^2) |x - y|_M^2 + E(x): each Newton system
 // (M / h^2 + K(x)) dx = -grad Phi is solved by conjugate gradients preconditioned with the
-// projective-dynamics matrix (M / h^2 + sum_e k_e G_e^T G_e, factored once), K(x) p by a
-// forward difference of the elastic forces. `passes` bounds the CG iterations of the step.
+// projective-dynamics matrix (M / h^2 + sum_e k_e G_e^T G_e, factored once), K(x) p analytic
+// (element_stiffness.h, each element's frame fitted once per Newton iteration). `passes` bounds
+// the CG iterations of the step.
 int LargeStepSolver::minimise(const ProjectiveSolver& pre, Real h, const std::vector<Vec3>& y,
                               const std::vector<char>& free, Real scale, int passes, int fitIterations,
                               std::vector<Vec3>& x, std::vector<Quat>& q) const {
@@ -118,8 +131,36 @@ int LargeStepSolver::minimise(const ProjectiveSolver& pre, Real h, const std::ve
     for (size_t i = 0; i < V; ++i)
       if (!free[i]) z[i].setZero();
   };
-  std::vector<Vec3> f, fp, r(V), z, p(V), Ap(V), xp(V), dx(V);
-  std::vector<Quat> qp;
+  std::vector<Vec3> f, Kp, r(V), z, p(V), Ap(V), dx(V), pair(m.numPairs());
+  // K(x) p (element_stiffness.h): each element's frame at the Newton iterate, then per product
+  // each element's K_e p into its pair slots and per vertex their sum (as forces(): the same bits
+  // at any thread count).
+  std::vector<StiffnessFrame> frames(m.numElements());
+  auto fitFrames = [&] {
+    elementsThenVertices(
+        team_, m.numElements(), 0,
+        [&](size_t begin, size_t end) {
+          for (size_t el = begin; el < end; ++el) {
+            const uint32_t b = m.elemStart[el], n = m.elemStart[el + 1] - b;
+            const Mat3 A = elementCovariance(x.data(), &m.elemVerts[b], &m.restOffsets[b], int(n));
+            frames[el] = elementStiffnessFrame(m.dim, A, q[el], &m.restOffsets[b], int(n));
+          }
+        },
+        [](size_t, size_t) {});
+  };
+  auto stiffness = [&](const std::vector<Vec3>& d, std::vector<Vec3>& out) {
+    out.resize(V);
+    elementsThenVertices(
+        team_, m.numElements(), V,
+        [&](size_t begin, size_t end) {
+          for (size_t el = begin; el < end; ++el) {
+            const uint32_t b = m.elemStart[el], n = m.elemStart[el + 1] - b;
+            elementStiffnessProduct(frames[el], d.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[el],
+                                    &pair[b]);
+          }
+        },
+        [&](size_t begin, size_t end) { gatherPairs(vertexPairStart_, vertexPairs_, pair, begin, end, out); });
+  };
   auto dot = [&](const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
     Real sum = 0;
     for (size_t i = 0; i < V; ++i) sum += a[i].dot(b[i]);
@@ -128,6 +169,7 @@ int LargeStepSolver::minimise(const ProjectiveSolver& pre, Real h, const std::ve
   int budget = std::max(passes, 1);
   for (int newton = 0; newton < 4 && budget > 0; ++newton) {
     forces(x, q, f, fitIterations);
+    fitFrames();
     Real rNorm = 0;
     for (size_t i = 0; i < V; ++i) {
       r[i] = free[i] ? Vec3(f[i] - m.mass[i] * invH2 * (x[i] - y[i])) : Vec3::Zero();
@@ -141,15 +183,8 @@ int LargeStepSolver::minimise(const ProjectiveSolver& pre, Real h, const std::ve
     const Real rz0 = rz;
     for (; budget > 0; --budget) {
       ++iterations;
-      Real pMax = 0, xMax = 0;
-      for (size_t i = 0; i < V; ++i) pMax = std::max(pMax, p[i].norm()), xMax = std::max(xMax, x[i].norm());
-      if (pMax == 0) break;
-      const Real eps = 1e-7 * std::max(xMax, Real(1e-3)) / pMax;
-      for (size_t i = 0; i < V; ++i) xp[i] = x[i] + eps * p[i];
-      qp = q;
-      forces(xp, qp, fp, fitIterations);
-      for (size_t i = 0; i < V; ++i)
-        Ap[i] = free[i] ? Vec3(m.mass[i] * invH2 * p[i] - (fp[i] - f[i]) / eps) : Vec3::Zero();
+      stiffness(p, Kp);
+      for (size_t i = 0; i < V; ++i) Ap[i] = free[i] ? Vec3(m.mass[i] * invH2 * p[i] + Kp[i]) : Vec3::Zero();
       const Real pAp = dot(p, Ap);
       if (!(pAp > 0)) {
         if (newton == 0 && dx[0].isZero() && iterations == 1) dx = z;  // no curvature: take the PD step

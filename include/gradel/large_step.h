@@ -18,10 +18,10 @@
 // The solve. The projective-dynamics local/global iteration (projective.h) converges far too
 // slowly on bending to serve the midpoint: its error is doubled by the extrapolation, and 300
 // passes still left the clamped bar unstable (measured). Here each Newton system
-// (M / h^2 + K(x)) dx = -grad Phi(x) is solved by preconditioned conjugate gradients: K(x) p is a
-// forward difference of the element forces (elementForces, rotations refitted, 20 iterations
-// warm-started), the preconditioner is the projective-dynamics matrix M / h^2 + sum_e k_e G_e^T G_e
-// (K(x) without the rotations' derivative), one back-solve per CG iteration. `passes` bounds the
+// (M / h^2 + K(x)) dx = -grad Phi(x) is solved by preconditioned conjugate gradients: K(x) p is
+// analytic (element_stiffness.h, clamped to >= 0 per element; a forward difference of the forces
+// blew up the 8-across bar), the preconditioner is the projective matrix M / h^2 + sum k_e G_e^T G_e,
+// one back-solve (3 coordinates per sweep of L; docs/speed.md) per CG iteration. `passes` bounds the
 // CG iterations of a step (bounded time); up to 4 Newton iterations share them. Warm start:
 // x_m^0 = x_n + h v_n + h^2 a_{n-1} (the last step's acceleration: a body at rest starts at its
 // equilibrium); the rotations are warm-started from the last fit.
