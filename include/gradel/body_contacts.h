@@ -12,8 +12,17 @@
 //                triangles that reach into the overlap go into a hashed grid (cells of two
 //                thicknesses, a sorted array of (cell, triangle)) and only the surface vertices in
 //                the overlap are looked up, so the narrow phase grows with the contact area.
+//                Round 0 of a step lists each pair's candidates for boxes grown by a margin (the
+//                larger thickness), visiting only the blocks of 256 surface vertices and the
+//                patches of 32 faces near each other (Morton order) whose boxes meet them; a later
+//                round reuses the lists while every vertex a correction moved (the only ones that
+//                moved) stayed within the margin, and recomputes only the blocks holding such a
+//                vertex: the rounds after the first cost the overlap, not the whole surface.
+//                (The lists are supersets: the exact tests run as before, same bits.)
 //   narrow phase the nearest triangle of the other body within r = thickness + the largest
-//                distances both bodies' surfaces moved in the step; inside when the vertex lies
+//                distances both bodies' surfaces moved in the step (a triangle whose box lies
+//                farther than the best so far is skipped; of equally near ones the lowest id
+//                wins, whatever the cells' order); inside when the vertex lies
 //                behind the nearest feature's angle-weighted pseudo-normal (the face normal in a
 //                face, the sum of its faces' normals on an edge, the angle-weighted sum at a
 //                corner: Baerentzen & Aanaes 2005), the sign test that is exact for a closed
