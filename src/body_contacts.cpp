@@ -235,6 +235,15 @@ Vec3 relative(const BodyContacts::Contact& c, const Vec3* y) {
 
 constexpr Real kSkin = 1e-6;  // [thickness] a corrected vertex ends this far outside
 
+// A triangle whose box lies farther than this times the best squared distance so far (plus a
+// tiny absolute slack) cannot be nearer than the best, nor as near: the slack covers rounding.
+constexpr Real kPrune = 1 + 1e-9;
+
+// Squared distance from p to a box (0 inside): a lower bound of the distance to what it holds.
+Real boxDistance2(const Vec3& lo, const Vec3& hi, const Vec3& p) {
+  return (lo - p).cwiseMax(p - hi).cwiseMax(Vec3::Zero()).squaredNorm();
+}
+
 }  // namespace
 
 BodyContacts::BodyContacts(std::vector<ContactBody> bodies, const BodyContactSettings& settings)
@@ -245,12 +254,135 @@ BodyContacts::BodyContacts(std::vector<ContactBody> bodies, const BodyContactSet
   skin_ = kSkin * thinnest;
   bounds_.resize(bodies_.size());
   active_.assign(bodies_.size() * bodies_.size(), 0);
+  cache_.resize(bodies_.size() * bodies_.size());
   moved_.resize(bodies_.size());
+  uint32_t vertexEnd = 0;
+  blockStart_.assign(1, 0);
+  for (const ContactBody& b : bodies_) {
+    vertexEnd = std::max(vertexEnd, b.vertexEnd);
+    blockStart_.push_back(blockStart_.back() + uint32_t((b.vertices.size() + kBoundsBlock - 1) / kBoundsBlock));
+  }
+  blockOf_.assign(vertexEnd, ContactBody::kNone);
+  for (size_t b = 0; b < bodies_.size(); ++b)
+    for (uint32_t i = 0; i < bodies_[b].vertices.size(); ++i)
+      blockOf_[bodies_[b].vertices[i]] = blockStart_[b] + i / kBoundsBlock;
+  blockBox_.resize(blockStart_.back());
+  blockMoved2_.resize(blockStart_.back());
+  blockDirty_.assign(blockStart_.back(), 0);
+  isTouched_.assign(vertexEnd, 0);
 }
 
-void BodyContacts::buildGrid(const ContactBody& faces, const Box& region, const Vec3* x) {
+// Each body's surface box now and how far its surface moved in the step, from boxes per block of
+// surface vertices: round 0 all of them, a later round only the blocks holding a vertex that a
+// correction moved (min and max: the same result as one pass over every vertex).
+void BodyContacts::updateBounds(int round, const BodyContactState& s) {
+  const Vec3* x = s.positions;
+  const Vec3* x0 = s.previousPositions;
+  auto blockBounds = [&](size_t b, uint32_t k) {
+    const ContactBody& body = bodies_[b];
+    const uint32_t i0 = (k - blockStart_[b]) * kBoundsBlock;
+    const uint32_t i1 = std::min<uint32_t>(i0 + kBoundsBlock, uint32_t(body.vertices.size()));
+    Box box{Vec3::Constant(std::numeric_limits<Real>::infinity()),
+            Vec3::Constant(-std::numeric_limits<Real>::infinity())};
+    Real moved2 = 0;
+    for (uint32_t i = i0; i < i1; ++i) {
+      const uint32_t u = body.vertices[i];
+      box.lo = box.lo.cwiseMin(x[u]), box.hi = box.hi.cwiseMax(x[u]);
+      moved2 = std::max(moved2, (x[u] - x0[u]).squaredNorm());
+    }
+    blockBox_[k] = box, blockMoved2_[k] = moved2;
+  };
+  if (round == 0) {
+    for (size_t b = 0; b < bodies_.size(); ++b)
+      for (uint32_t k = blockStart_[b]; k < blockStart_[b + 1]; ++k) blockBounds(b, k);
+  } else {
+    for (uint32_t k : dirtyBlocks_) {
+      const size_t b = size_t(std::upper_bound(blockStart_.begin(), blockStart_.end(), k) - blockStart_.begin()) - 1;
+      blockBounds(b, k);
+    }
+  }
+  for (size_t b = 0; b < bodies_.size(); ++b) {
+    Box box{Vec3::Constant(std::numeric_limits<Real>::infinity()),
+            Vec3::Constant(-std::numeric_limits<Real>::infinity())};
+    Real moved2 = 0;
+    for (uint32_t k = blockStart_[b]; k < blockStart_[b + 1]; ++k) {
+      box.lo = box.lo.cwiseMin(blockBox_[k].lo), box.hi = box.hi.cwiseMax(blockBox_[k].hi);
+      moved2 = std::max(moved2, blockMoved2_[k]);
+    }
+    bounds_[b] = box, moved_[b] = std::sqrt(moved2);
+  }
+}
+
+// The bodies' triangles in patches of kPatch near each other (built at the first call, in the
+// Morton order of their centres then: any order gives the same result, a compact one fewer
+// patches to visit) and each patch's box now.
+void BodyContacts::updatePatches(const Vec3* x) {
+  if (patches_.empty()) {
+    patches_.resize(bodies_.size());
+    std::vector<std::pair<uint64_t, uint32_t>> keyed;
+    for (size_t b = 0; b < bodies_.size(); ++b) {
+      const ContactBody& body = bodies_[b];
+      Patches& P = patches_[b];
+      Vec3 lo = Vec3::Constant(std::numeric_limits<Real>::infinity());
+      for (uint32_t u : body.vertices)
+        if (x[u].allFinite()) lo = lo.cwiseMin(x[u]);
+      keyed.clear();
+      for (uint32_t t = 0; t < body.triangles.size(); ++t) {
+        const auto& tri = body.triangles[t];
+        const Vec3 c = (x[tri[0]] + x[tri[1]] + x[tri[2]] - 3 * lo) / (3 * body.thickness);
+        uint64_t key = 0;
+        if (c.allFinite())
+          for (int bit = 20; bit >= 0; --bit)
+            for (int a = 2; a >= 0; --a) {
+              const uint64_t q = uint64_t(std::clamp(c[a], Real(0), Real((1 << 21) - 1)));
+              key = key << 1 | (q >> bit & 1);
+            }
+        keyed.push_back({key, t});
+      }
+      std::sort(keyed.begin(), keyed.end());
+      P.tris.clear(), P.vertStart.assign(1, 0), P.verts.clear();
+      for (const auto& k : keyed) P.tris.push_back(k.second);
+      for (size_t j0 = 0; j0 < P.tris.size(); j0 += kPatch) {
+        const size_t first = P.verts.size();
+        for (size_t j = j0; j < std::min(P.tris.size(), j0 + kPatch); ++j)
+          for (uint32_t u : body.triangles[P.tris[j]]) P.verts.push_back(u);
+        std::sort(P.verts.begin() + long(first), P.verts.end());
+        P.verts.erase(std::unique(P.verts.begin() + long(first), P.verts.end()), P.verts.end());
+        P.vertStart.push_back(uint32_t(P.verts.size()));
+      }
+      P.box.resize(P.vertStart.size() - 1);
+    }
+  }
+  for (Patches& P : patches_)
+    for (size_t k = 0; k + 1 < P.vertStart.size(); ++k) {
+      Box box{Vec3::Constant(std::numeric_limits<Real>::infinity()),
+              Vec3::Constant(-std::numeric_limits<Real>::infinity())};
+      for (uint32_t j = P.vertStart[k]; j < P.vertStart[k + 1]; ++j)
+        box.lo = box.lo.cwiseMin(x[P.verts[j]]), box.hi = box.hi.cwiseMax(x[P.verts[j]]);
+      P.box[k] = box;
+    }
+}
+
+// A contact's vertices may move from now on: remember where they were when the stage began (no
+// correction has moved them yet) and mark their bounds blocks.
+void BodyContacts::markTouched(const Contact& c, const Vec3* x) {
+  auto mark = [&](uint32_t u) {
+    if (isTouched_[u]) return;
+    isTouched_[u] = 1;
+    touched_.push_back(u);
+    touchedStart_.push_back(x[u]);
+    const uint32_t k = blockOf_[u];
+    if (k != ContactBody::kNone && !blockDirty_[k]) blockDirty_[k] = 1, dirtyBlocks_.push_back(k);
+  };
+  mark(c.vertex);
+  for (uint32_t u : c.face) mark(u);
+}
+
+void BodyContacts::buildGrid(const ContactBody& faces, const Box& region, const Vec3* x,
+                             const std::vector<uint32_t>* subset) {
   grid_.clear();
   if (seen_.size() < faces.triangles.size()) seen_.assign(faces.triangles.size(), stamp_);
+  if (triBox_.size() < faces.triangles.size()) triBox_.resize(faces.triangles.size());
   constexpr Real kMaxCells = 1 << 20;
   const Real extent = (region.hi - region.lo).maxCoeff();
   gridCell_ = std::max(gridCell_, extent / kMaxCells);
@@ -259,18 +391,23 @@ void BodyContacts::buildGrid(const ContactBody& faces, const Box& region, const 
   auto cellOf = [&](Real v, int a) {
     return int64_t(std::clamp(std::floor((v - gridOrigin_[a]) * inv), Real(0), kMaxCells - 1));
   };
-  for (uint32_t t = 0; t < faces.triangles.size(); ++t) {
+  auto add = [&](uint32_t t) {
     const auto& tri = faces.triangles[t];
     const Vec3 lo = x[tri[0]].cwiseMin(x[tri[1]]).cwiseMin(x[tri[2]]);
     const Vec3 hi = x[tri[0]].cwiseMax(x[tri[1]]).cwiseMax(x[tri[2]]);
-    if ((hi.array() < region.lo.array()).any() || (lo.array() > region.hi.array()).any()) continue;
-    if (!lo.allFinite() || !hi.allFinite()) continue;
+    if ((hi.array() < region.lo.array()).any() || (lo.array() > region.hi.array()).any()) return;
+    if (!lo.allFinite() || !hi.allFinite()) return;
+    triBox_[t] = {lo, hi};
     const int64_t i0 = cellOf(lo.x(), 0), i1 = cellOf(hi.x(), 0), j0 = cellOf(lo.y(), 1), j1 = cellOf(hi.y(), 1),
                   k0 = cellOf(lo.z(), 2), k1 = cellOf(hi.z(), 2);
     for (int64_t k = k0; k <= k1; ++k)
       for (int64_t j = j0; j <= j1; ++j)
         for (int64_t i = i0; i <= i1; ++i) grid_.push_back({uint64_t(k) << 42 | uint64_t(j) << 21 | uint64_t(i), t});
-  }
+  };
+  if (subset)
+    for (uint32_t t : *subset) add(t);
+  else
+    for (uint32_t t = 0; t < faces.triangles.size(); ++t) add(t);
   std::sort(grid_.begin(), grid_.end());
 }
 
@@ -293,39 +430,91 @@ void BodyContacts::forCandidateTriangles(const Vec3& lo, const Vec3& hi, F&& f) 
       for (; it != grid_.end() && it->first <= (row | uint64_t(i1)); ++it)
         if (seen_[it->second] != stamp_) seen_[it->second] = stamp_, candidates_.push_back(it->second);
     }
-  // Ascending ids: ties between equally near triangles go to the lowest, whatever the cells' order.
-  std::sort(candidates_.begin(), candidates_.end());
+  // In the cells' order: the callers break ties between equally near triangles by the lowest id.
   for (uint32_t t : candidates_) f(t);
 }
 
 // Surface vertices of body a against the faces of body b (the pseudo-normal test, see the header).
-void BodyContacts::detectPair(size_t a, size_t b, const BodyContactState& s, BodyContactStats& stats) {
+void BodyContacts::detectPair(size_t a, size_t b, int round, const BodyContactState& s, BodyContactStats& stats) {
   const ContactBody& A = bodies_[a];
   const ContactBody& B = bodies_[b];
   const Real r = std::max(A.thickness, B.thickness) + moved_[a] + moved_[b];
   // The vertices of a within r of b's box; the faces of b that reach within r of those.
   Box q{bounds_[a].lo.cwiseMax(bounds_[b].lo - Vec3::Constant(r)),
         bounds_[a].hi.cwiseMin(bounds_[b].hi + Vec3::Constant(r))};
-  if ((q.lo.array() > q.hi.array()).any()) return;
+  PairCache& cache = cache_[a * bodies_.size() + b];
+  if ((q.lo.array() > q.hi.array()).any()) {
+    cache.valid = false;
+    return;
+  }
   const Box region{q.lo - Vec3::Constant(r), q.hi + Vec3::Constant(r)};
-  gridCell_ = std::max(2 * B.thickness, r);
-  buildGrid(B, region, s.positions);
-  if (grid_.empty()) return;
   const Vec3* x = s.positions;
-  for (uint32_t i = 0; i < A.vertices.size(); ++i) {
+  auto inBox = [](const Vec3& p, const Box& box) {
+    return !((p.array() < box.lo.array()).any() || (p.array() > box.hi.array()).any());  // NaN: inside (as before)
+  };
+  auto meets = [](const Box& u, const Box& w) {
+    return !((u.hi.array() < w.lo.array()).any() || (u.lo.array() > w.hi.array()).any());
+  };
+  // Round 0 lists the candidates of boxes grown by a margin; a later round reuses them when its
+  // boxes, grown by the farthest any vertex moved since (drift_), lie inside those: a vertex in q
+  // now was in the grown q then, a face meeting region now met the grown region then.
+  bool reuse = false;
+  if (round == 0) {
+    const Real margin = std::max(A.thickness, B.thickness);
+    cache.valid = true;
+    cache.q = {q.lo - Vec3::Constant(margin), q.hi + Vec3::Constant(margin)};
+    cache.region = {region.lo - Vec3::Constant(margin), region.hi + Vec3::Constant(margin)};
+    cache.vertices.clear(), cache.triangles.clear();
+    // Only the bounds blocks (vertices) and patches (faces) whose boxes meet the grown boxes.
+    for (uint32_t k = blockStart_[a]; k < blockStart_[a + 1]; ++k) {
+      if (!meets(blockBox_[k], cache.q)) continue;
+      const uint32_t i0 = (k - blockStart_[a]) * kBoundsBlock;
+      const uint32_t i1 = std::min<uint32_t>(i0 + kBoundsBlock, uint32_t(A.vertices.size()));
+      for (uint32_t i = i0; i < i1; ++i)
+        if (inBox(x[A.vertices[i]], cache.q)) cache.vertices.push_back(i);
+    }
+    const Patches& P = patches_[b];
+    for (size_t k = 0; k < P.box.size(); ++k) {
+      if (!meets(P.box[k], cache.region)) continue;
+      const size_t t1 = std::min(P.tris.size(), (k + 1) * kPatch);
+      for (size_t j = k * kPatch; j < t1; ++j) {
+        const auto& tri = B.triangles[P.tris[j]];
+        const Box tb{x[tri[0]].cwiseMin(x[tri[1]]).cwiseMin(x[tri[2]]),
+                     x[tri[0]].cwiseMax(x[tri[1]]).cwiseMax(x[tri[2]])};
+        if (meets(tb, cache.region)) cache.triangles.push_back(P.tris[j]);
+      }
+    }
+    reuse = true;
+  } else if (cache.valid) {
+    const Real d = drift_ * (1 + 1e-9) + 1e-9 * std::max(A.thickness, B.thickness);  // rounding slack
+    auto within = [d](const Box& inner, const Box& outer) {
+      return ((inner.lo.array() - d) >= outer.lo.array()).all() && ((inner.hi.array() + d) <= outer.hi.array()).all();
+    };
+    reuse = within(q, cache.q) && within(region, cache.region);
+    cache.valid = reuse;  // once it fails, the step's later rounds scan everything
+  }
+  gridCell_ = std::max(2 * B.thickness, r);
+  buildGrid(B, region, s.positions, reuse ? &cache.triangles : nullptr);
+  if (grid_.empty()) return;
+  const uint32_t count = reuse ? uint32_t(cache.vertices.size()) : uint32_t(A.vertices.size());
+  const Real slack2 = 1e-24 * B.thickness * B.thickness;  // rounding of a box beside a point on a face
+  for (uint32_t k = 0; k < count; ++k) {
+    const uint32_t i = reuse ? cache.vertices[k] : k;
     const uint32_t v = A.vertices[i];
     const Vec3& p = x[v];
-    if ((p.array() < q.lo.array()).any() || (p.array() > q.hi.array()).any()) continue;
+    if (!inBox(p, q)) continue;
     ++stats.candidates;
     Real best = r * r;
     uint32_t bestTri = ContactBody::kNone;
     ClosestPoint bestCp{};
     forCandidateTriangles(p - Vec3::Constant(r), p + Vec3::Constant(r), [&](uint32_t t) {
+      if (boxDistance2(triBox_[t].lo, triBox_[t].hi, p) > best * kPrune + slack2) return;  // cannot be nearer (nor tie)
       const auto& tri = B.triangles[t];
       const ClosestPoint cp = closestPointOnTriangle(p, x[tri[0]], x[tri[1]], x[tri[2]]);
       const Vec3 c = cp.w[0] * x[tri[0]] + cp.w[1] * x[tri[1]] + cp.w[2] * x[tri[2]];
       const Real d2 = (p - c).squaredNorm();
-      if (d2 < best) best = d2, bestTri = t, bestCp = cp;  // candidates ascend: ties keep the lowest id
+      if (d2 < best || (d2 == best && bestTri != ContactBody::kNone && t < bestTri))  // ties: the lowest id
+        best = d2, bestTri = t, bestCp = cp;
     });
     if (bestTri == ContactBody::kNone) continue;
     const auto& tri = B.triangles[bestTri];
@@ -347,6 +536,7 @@ void BodyContacts::detectPair(size_t a, size_t b, const BodyContactState& s, Bod
       uint32_t facing = ContactBody::kNone;
       ClosestPoint facingCp{};
       for (uint32_t t : candidates_) {
+        if (boxDistance2(triBox_[t].lo, triBox_[t].hi, p) > bestFacing * kPrune + slack2) continue;
         const auto& u = B.triangles[t];
         const Vec3 fn = unit(faceNormal(u, x));
         if (!(fn.dot(nv) < 0)) continue;
@@ -354,7 +544,8 @@ void BodyContacts::detectPair(size_t a, size_t b, const BodyContactState& s, Bod
         const Vec3 cu = cp.w[0] * x[u[0]] + cp.w[1] * x[u[1]] + cp.w[2] * x[u[2]];
         if (!(fn.dot(p - cu) < 0)) continue;  // in front of its plane: no push out of it
         const Real d2 = (p - cu).squaredNorm();
-        if (d2 < bestFacing) bestFacing = d2, facing = t, facingCp = cp;
+        if (d2 < bestFacing || (d2 == bestFacing && facing != ContactBody::kNone && t < facing))
+          bestFacing = d2, facing = t, facingCp = cp;
       }
       if (facing != ContactBody::kNone) {
         const auto& u = B.triangles[facing];
@@ -377,7 +568,7 @@ void BodyContacts::detectSelf(size_t a, const BodyContactState& s, BodyContactSt
   const Real r = A.thickness + 2 * moved_[a];
   const Box region{bounds_[a].lo - Vec3::Constant(r), bounds_[a].hi + Vec3::Constant(r)};
   gridCell_ = std::max(2 * A.thickness, r);
-  buildGrid(A, region, s.positions);
+  buildGrid(A, region, s.positions, nullptr);
   const Vec3 *x = s.positions, *x0 = s.previousPositions;
   for (uint32_t i = 0; i < A.vertices.size(); ++i) {
     const uint32_t v = A.vertices[i];
@@ -397,7 +588,8 @@ void BodyContacts::detectSelf(size_t a, const BodyContactState& s, BodyContactSt
       if (isNear(tri[0]) || isNear(tri[1]) || isNear(tri[2])) return;
       const Vec3 n1 = unit(f1);
       const Real s1 = n1.dot(p - x[tri[0]]);
-      if (!(s1 < 0 && s1 > bestS)) return;  // behind the face's plane now, the shallowest first
+      // Behind the face's plane now, the shallowest first (ties: the lowest id).
+      if (!(s1 < 0 && (s1 > bestS || (s1 == bestS && bestTri != ContactBody::kNone && t < bestTri)))) return;
       const Real s0 = unit(faceNormal(tri, x0)).dot(x0[v] - x0[tri[0]]);
       if (!(s0 >= 0)) return;      // it was behind at the start already: it did not cross the face
       const Vec3 q = p - s1 * n1;  // its foot on the face's plane
@@ -420,17 +612,17 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
   Vec3* x = s.positions;
   Vec3* v = s.velocities;
   const Real* im = s.invMass;
+  for (uint32_t u : touched_) isTouched_[u] = 0;
+  for (uint32_t k : dirtyBlocks_) blockDirty_[k] = 0;
+  touched_.clear(), touchedStart_.clear(), dirtyBlocks_.clear();
+  drift_ = 0;
+  if (bodies_.size() >= 2) updatePatches(x);
   for (int round = 0; round < kRounds; ++round) {
     // Broad phase: each body's surface box now and how far its surface moved in the step.
-    for (size_t b = 0; b < bodies_.size(); ++b) {
-      Box box{Vec3::Constant(std::numeric_limits<Real>::infinity()),
-              Vec3::Constant(-std::numeric_limits<Real>::infinity())};
-      Real moved2 = 0;
-      for (uint32_t u : bodies_[b].vertices) {
-        box.lo = box.lo.cwiseMin(x[u]), box.hi = box.hi.cwiseMax(x[u]);
-        moved2 = std::max(moved2, (x[u] - s.previousPositions[u]).squaredNorm());
-      }
-      bounds_[b] = box, moved_[b] = std::sqrt(moved2);
+    updateBounds(round, s);
+    for (size_t k = 0; k < touched_.size(); ++k) {
+      const Real d = (x[touched_[k]] - touchedStart_[k]).norm();
+      drift_ = std::isnan(d) ? std::numeric_limits<Real>::infinity() : std::max(drift_, d);
     }
     // After the first round only the pairs with a body that a correction of the round before
     // moved: a contact of a's vertices against b's faces moves vertices of both, so it can push
@@ -452,7 +644,7 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
         if (a == b)
           detectSelf(a, s, stats);
         else
-          detectPair(a, b, s, stats);
+          detectPair(a, b, round, s, stats);
         active_[a * B + b] = round_.size() > before;
       }
     stats.rounds = round + 1;
@@ -475,6 +667,7 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
     // undoes the tangential slip of the step up to friction x depth (once, when first found).
     const size_t first = contacts_.size();
     contacts_.insert(contacts_.end(), round_.begin(), round_.end());
+    for (const Contact& c : round_) markTouched(c, x);
     for (int it = 0; it < kIterations; ++it)
       for (size_t k = 0; k < contacts_.size(); ++k) {
         const Contact& c = contacts_[k];

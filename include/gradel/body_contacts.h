@@ -12,8 +12,17 @@
 //                triangles that reach into the overlap go into a hashed grid (cells of two
 //                thicknesses, a sorted array of (cell, triangle)) and only the surface vertices in
 //                the overlap are looked up, so the narrow phase grows with the contact area.
+//                Round 0 of a step lists each pair's candidates for boxes grown by a margin (the
+//                larger thickness), visiting only the blocks of 256 surface vertices and the
+//                patches of 32 faces near each other (Morton order) whose boxes meet them; a later
+//                round reuses the lists while every vertex a correction moved (the only ones that
+//                moved) stayed within the margin, and recomputes only the blocks holding such a
+//                vertex: the rounds after the first cost the overlap, not the whole surface.
+//                (The lists are supersets: the exact tests run as before, same bits.)
 //   narrow phase the nearest triangle of the other body within r = thickness + the largest
-//                distances both bodies' surfaces moved in the step; inside when the vertex lies
+//                distances both bodies' surfaces moved in the step (a triangle whose box lies
+//                farther than the best so far is skipped; of equally near ones the lowest id
+//                wins, whatever the cells' order); inside when the vertex lies
 //                behind the nearest feature's angle-weighted pseudo-normal (the face normal in a
 //                face, the sum of its faces' normals on an edge, the angle-weighted sum at a
 //                corner: Baerentzen & Aanaes 2005), the sign test that is exact for a closed
@@ -74,8 +83,8 @@ void validate(const BodyContactSettings& s);
 
 /// One body's contact surface (rest data: built once, read-only). Vertex ids are the world's.
 struct ContactBody {
-  uint32_t vertexBegin = 0, vertexEnd = 0;         ///< The body's vertices [begin, end).
-  Real thickness = 0;                              ///< [m] about the body's voxel size: grid cell and search band.
+  uint32_t vertexBegin = 0, vertexEnd = 0;  ///< The body's vertices [begin, end).
+  Real thickness = 0;                       ///< [m] about the body's voxel size: grid cell and search band.
   /// Its boundary vertices (world ids, ascending): the surface's corners and the model's other
   /// onSurface vertices (inside a merged polygon of a coarse element's face).
   std::vector<uint32_t> vertices;
@@ -146,15 +155,15 @@ class BodyContacts {
   const BodyContactSettings& settings() const { return settings_; }
   bool empty() const { return bodies_.size() < 2 && !settings_.selfContact; }
 
-  static constexpr int kRounds = 8;       ///< Detection rounds per step at most.
-  static constexpr int kIterations = 4;   ///< Gauss-Seidel sweeps over the contacts per round.
+  static constexpr int kRounds = 8;      ///< Detection rounds per step at most.
+  static constexpr int kIterations = 4;  ///< Gauss-Seidel sweeps over the contacts per round.
 
   struct Contact {
-    uint32_t vertex;                ///< World id of the vertex.
-    std::array<uint32_t, 3> face;   ///< World ids of the touched face's corners.
-    std::array<Real, 3> w;          ///< Barycentric weights of the contact point on the face.
-    Vec3 n;                         ///< Unit normal, out of the face's body.
-    Real depth;                     ///< [m] how far inside, before correction.
+    uint32_t vertex;               ///< World id of the vertex.
+    std::array<uint32_t, 3> face;  ///< World ids of the touched face's corners.
+    std::array<Real, 3> w;         ///< Barycentric weights of the contact point on the face.
+    Vec3 n;                        ///< Unit normal, out of the face's body.
+    Real depth;                    ///< [m] how far inside, before correction.
   };
   /// The contacts the last resolve() found (all rounds, in order).
   const std::vector<Contact>& contacts() const { return contacts_; }
@@ -163,11 +172,23 @@ class BodyContacts {
   struct Box {
     Vec3 lo, hi;
   };
-  void detectPair(size_t a, size_t b, const BodyContactState& s, BodyContactStats& stats);
+  // Round 0 of a step keeps, per ordered pair of bodies, the candidates of a band `margin` wider
+  // than its boxes; a later round reuses them while every vertex a correction moved stayed
+  // within the margin (resolve): the rounds after the first cost the overlap, not the surface.
+  struct PairCache {
+    bool valid = false;
+    Box q, region;                    ///< Round 0's vertex box and face box, grown by the margin.
+    std::vector<uint32_t> vertices;   ///< Indices into the vertex body's `vertices` inside q then.
+    std::vector<uint32_t> triangles;  ///< Triangles of the face body meeting `region` then.
+  };
+  void detectPair(size_t a, size_t b, int round, const BodyContactState& s, BodyContactStats& stats);
   void detectSelf(size_t a, const BodyContactState& s, BodyContactStats& stats);
-  void buildGrid(const ContactBody& faces, const Box& region, const Vec3* x);
+  void buildGrid(const ContactBody& faces, const Box& region, const Vec3* x, const std::vector<uint32_t>* subset);
   template <class F>
   void forCandidateTriangles(const Vec3& lo, const Vec3& hi, F&& f);
+  void updateBounds(int round, const BodyContactState& s);
+  void updatePatches(const Vec3* x);
+  void markTouched(const Contact& c, const Vec3* x);
 
   std::vector<ContactBody> bodies_;
   BodyContactSettings settings_;
@@ -175,16 +196,39 @@ class BodyContacts {
   // scratch
   std::vector<Box> bounds_;
   std::vector<Real> moved_;  ///< Per body: the largest distance a surface vertex moved in the step [m].
+  // The bounds per block of kBoundsBlock surface vertices (body b's blocks from blockStart_[b]):
+  // a later round recomputes only the blocks holding a vertex that a correction moved.
+  static constexpr uint32_t kBoundsBlock = 256;
+  std::vector<uint32_t> blockStart_;
+  std::vector<Box> blockBox_;
+  std::vector<Real> blockMoved2_;
+  std::vector<uint8_t> blockDirty_;
+  std::vector<uint32_t> dirtyBlocks_;
+  std::vector<uint32_t> blockOf_;   ///< Per world vertex: its bounds block (kNone: not on a contact surface).
+  std::vector<uint32_t> touched_;   ///< World ids of the vertices of the step's contacts (first-seen order).
+  std::vector<Vec3> touchedStart_;  ///< Their positions when the stage began.
+  std::vector<uint8_t> isTouched_;  ///< Per world vertex.
+  Real drift_ = 0;                  ///< [m] the farthest a touched vertex moved since the stage began.
+  std::vector<PairCache> cache_;    ///< Per ordered pair (a * bodies + b).
+  // Per body: its triangles in patches of kPatch near each other, so that round 0 visits only the
+  // faces of the patches whose box meets a pair's region (updatePatches).
+  static constexpr size_t kPatch = 32;
+  struct Patches {
+    std::vector<uint32_t> tris;              ///< Triangle ids, patch k at [k kPatch, (k + 1) kPatch).
+    std::vector<uint32_t> vertStart, verts;  ///< Per patch its distinct corners (CSR).
+    std::vector<Box> box;                    ///< Per patch: the box of its corners this step.
+  };
+  std::vector<Patches> patches_;
   std::vector<Contact> contacts_, round_;
   std::vector<std::pair<uint64_t, uint32_t>> grid_;  ///< (cell key, triangle), sorted.
   Vec3 gridOrigin_{0, 0, 0};
   Real gridCell_ = 1;
   std::vector<uint32_t> candidates_;
   std::vector<uint32_t> seen_;  ///< Per triangle: the query that last listed it (dedupe).
+  std::vector<Box> triBox_;     ///< Per triangle in the grid: its box (the narrow phase's cheap test).
   uint32_t stamp_ = 0;
   std::vector<uint8_t> active_;  ///< Per (vertex body, face body): contacts in the last round.
   std::vector<uint8_t> movedBodies_;  ///< Per body: a correction of the last round moved its vertices.
-  std::vector<uint32_t> vertexContact_;  ///< Per world vertex touched: a contact already found this round.
 };
 
 /// Winding number of a closed triangle surface (world ids into x) about p: 1 inside, 0 outside
