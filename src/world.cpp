@@ -503,7 +503,7 @@ Real World::bodyContactMargin() const {
 }
 
 std::vector<PairConstraint> World::bodyPairConstraints(const std::vector<Vec3>& x, Real margin,
-                                                      std::vector<uint64_t>& keys) {
+                                                       std::vector<uint64_t>& keys) {
   std::vector<BodyContacts::Proximity> near;
   bodyContacts_->proximity(x.data(), margin, near);
   std::vector<PairConstraint> pairs;
