@@ -51,8 +51,8 @@
 // ties between triangles broken by id): the result does not depend on the thread count.
 // 3D only: a 2D body's display surface is a flat region, not a closed surface.
 // Frame-size steps (implicit, large_step): the step's solve carries the contacts itself, as
-// one-sided constraints of its PCG (proximity() lists the vertex-face pairs at the start of the
-// step, projective.h PairConstraint); resolve() then runs after the step as the safety net.
+// one-sided constraints of its PCG (proximity() lists the vertex-face pairs after the step's first,
+// contact-free solve; projective.h PairConstraint); resolve() then runs after the step as the safety net.
 #pragma once
 
 #include <array>
