@@ -78,6 +78,7 @@ set(GRADEL_CLI_RENDER_SOURCES apps/render_cli.cpp)
 set(GRADEL_TEST_SOURCES
   tests/test_bodies.cpp
   tests/test_body_contacts.cpp
+  tests/test_body_contacts_large.cpp
   tests/test_broad_phase.cpp
   tests/test_cantilever.cpp
   tests/test_cli.cpp

@@ -711,3 +711,70 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
 }
 
 }  // namespace gradel
+
+namespace gradel {
+
+// Frame-size integrators (header): the broad phase of a step and the proximity list.
+bool BodyContacts::mayTouch(const Vec3* x, const Vec3* xEnd, Real margin) const {
+  std::vector<Box> box(bodies_.size());
+  for (size_t b = 0; b < bodies_.size(); ++b) {
+    box[b] = {Vec3::Constant(std::numeric_limits<Real>::infinity()),
+              Vec3::Constant(-std::numeric_limits<Real>::infinity())};
+    for (uint32_t u : bodies_[b].vertices)
+      box[b].lo = box[b].lo.cwiseMin(x[u]).cwiseMin(xEnd[u]), box[b].hi = box[b].hi.cwiseMax(x[u]).cwiseMax(xEnd[u]);
+  }
+  for (size_t a = 0; a < box.size(); ++a)
+    for (size_t b = a + 1; b < box.size(); ++b)
+      if (((box[a].lo.array() - margin) <= box[b].hi.array()).all() &&
+          ((box[b].lo.array() - margin) <= box[a].hi.array()).all())
+        return true;
+  return false;
+}
+
+void BodyContacts::proximity(const Vec3* x, Real margin, std::vector<Proximity>& out) {
+  out.clear();
+  const size_t B = bodies_.size();
+  std::vector<Box> box(B);
+  for (size_t b = 0; b < B; ++b) {
+    box[b] = {Vec3::Constant(std::numeric_limits<Real>::infinity()),
+              Vec3::Constant(-std::numeric_limits<Real>::infinity())};
+    for (uint32_t u : bodies_[b].vertices) box[b].lo = box[b].lo.cwiseMin(x[u]), box[b].hi = box[b].hi.cwiseMax(x[u]);
+  }
+  for (size_t a = 0; a < B; ++a)
+    for (size_t b = 0; b < B; ++b) {
+      if (a == b) continue;
+      const ContactBody& A = bodies_[a];
+      const ContactBody& F = bodies_[b];
+      const Box q{box[a].lo.cwiseMax(box[b].lo - Vec3::Constant(margin)),
+                  box[a].hi.cwiseMin(box[b].hi + Vec3::Constant(margin))};
+      if ((q.lo.array() > q.hi.array()).any()) continue;
+      gridCell_ = std::max(2 * F.thickness, margin);
+      buildGrid(F, {q.lo - Vec3::Constant(margin), q.hi + Vec3::Constant(margin)}, x);
+      if (grid_.empty()) continue;
+      for (uint32_t v : A.vertices) {
+        const Vec3& p = x[v];
+        if ((p.array() < q.lo.array()).any() || (p.array() > q.hi.array()).any()) continue;
+        Real best = margin * margin;
+        uint32_t bestTri = ContactBody::kNone;
+        ClosestPoint bestCp{};
+        forCandidateTriangles(p - Vec3::Constant(margin), p + Vec3::Constant(margin), [&](uint32_t t) {
+          const auto& tri = F.triangles[t];
+          const ClosestPoint cp = closestPointOnTriangle(p, x[tri[0]], x[tri[1]], x[tri[2]]);
+          const Real d2 = (p - (cp.w[0] * x[tri[0]] + cp.w[1] * x[tri[1]] + cp.w[2] * x[tri[2]])).squaredNorm();
+          if (d2 < best) best = d2, bestTri = t, bestCp = cp;  // candidates ascend: ties keep the lowest id
+        });
+        if (bestTri == ContactBody::kNone) continue;
+        const auto& tri = F.triangles[bestTri];
+        const Vec3 c = bestCp.w[0] * x[tri[0]] + bestCp.w[1] * x[tri[1]] + bestCp.w[2] * x[tri[2]];
+        const Vec3 pn = unit(pseudoNormal(F, bestTri, bestCp.feature, x));
+        const Real dist = std::sqrt(best);
+        const bool behind = (p - c).dot(pn) < 0;
+        // Out of the face's body: along p - c in front, c - p behind; the pseudo-normal on the surface.
+        Vec3 n = dist > 1e-9 * F.thickness ? Vec3((behind ? c - p : p - c) / dist) : pn;
+        if (n.squaredNorm() == 0) continue;
+        out.push_back({v, uint32_t(b), tri, bestCp.w, n, behind ? -dist : dist});
+      }
+    }
+}
+
+}  // namespace gradel

@@ -114,15 +114,85 @@ struct ProjectiveSolver::Impl {
     for (size_t k = 0; k < t.size(); ++k) heldTargets.row(Eigen::Index(k)) = t[k].transpose();
   }
 
+  // Pair constraints (contacts between bodies, projective.h): per pair its k, and the pairs
+  // active in this pass (lambda + k (gap - c(x)) > 0 at the pass's start).
+  std::vector<PairConstraint>* pairs = nullptr;
+  std::vector<Real> pairK;
+  std::vector<uint32_t> activePairs;
+  static constexpr int kPairIterations = 8;  ///< PCG iterations per global solve with active pairs.
+
+  // n . (x_p - sum w_k x_k) over the free (or, pinnedOnly, the pinned) vertices of the pair.
+  Real pairValue(const PairConstraint& c, const std::vector<Vec3>& x, bool pinnedOnly) const {
+    Real v = 0;
+    if ((freeIndex[c.vertex] < 0) == pinnedOnly) v += c.n.dot(x[c.vertex]);
+    for (int k = 0; k < 3; ++k)
+      if ((freeIndex[c.face[size_t(k)]] < 0) == pinnedOnly) v -= c.w[size_t(k)] * c.n.dot(x[c.face[size_t(k)]]);
+    return v;
+  }
+  // J y on the reduced rows, and out += s J^T.
+  Real pairRow(const PairConstraint& c, const Rhs& y) const {
+    Real v = 0;
+    if (freeIndex[c.vertex] >= 0) v += y.row(freeIndex[c.vertex]).dot(c.n.transpose());
+    for (int k = 0; k < 3; ++k)
+      if (const int32_t r = freeIndex[c.face[size_t(k)]]; r >= 0) v -= c.w[size_t(k)] * y.row(r).dot(c.n.transpose());
+    return v;
+  }
+  void addPairT(const PairConstraint& c, Real s, Rhs& out) const {
+    if (freeIndex[c.vertex] >= 0) out.row(freeIndex[c.vertex]) += s * c.n.transpose();
+    for (int k = 0; k < 3; ++k)
+      if (const int32_t r = freeIndex[c.face[size_t(k)]]; r >= 0) out.row(r) -= s * c.w[size_t(k)] * c.n.transpose();
+  }
+  // The matrix with the active pairs: (A + sum k J^T J) y.
+  Rhs apply(const Rhs& y) const {
+    Rhs out = A * y;
+    for (uint32_t j : activePairs) addPairT((*pairs)[j], pairK[j] * pairRow((*pairs)[j], y), out);
+    return out;
+  }
+  void preparePairs(std::vector<PairConstraint>* p) {
+    pairs = p && !p->empty() ? p : nullptr;
+    pairK.clear(), activePairs.clear();
+    if (!pairs) return;
+    const RestModel& m = *model;
+    for (const PairConstraint& c : *pairs) {
+      Real W = freeIndex.at(c.vertex) >= 0 ? m.invMass[c.vertex] : 0;
+      for (int k = 0; k < 3; ++k)
+        if (freeIndex.at(c.face[size_t(k)]) >= 0) W += c.w[size_t(k)] * c.w[size_t(k)] * m.invMass[c.face[size_t(k)]];
+      pairK.push_back(W > 0 && dt > 0 ? 1 / (dt * dt * W) : 0);
+    }
+  }
+  // The pass's active pairs and their right-hand side J^T (lambda + k (gap - c_pinned)).
+  void addPairTerms(const std::vector<Vec3>& x) {
+    activePairs.clear();
+    if (!pairs) return;
+    for (uint32_t j = 0; j < pairs->size(); ++j) {
+      const PairConstraint& c = (*pairs)[j];
+      if (!(pairK[j] > 0)) continue;
+      const Real pinnedPart = pairValue(c, x, true);
+      if (!(c.lambda + pairK[j] * (c.gap - pinnedPart - pairValue(c, x, false)) > 0)) continue;
+      activePairs.push_back(j);
+      addPairT(c, c.lambda + pairK[j] * (c.gap - pinnedPart), rhs);
+    }
+  }
+  // The multipliers after a pass: lambda <- max(0, lambda + k (gap - c(x))).
+  void updatePairs(const std::vector<Vec3>& x) {
+    if (!pairs) return;
+    for (uint32_t j = 0; j < pairs->size(); ++j) {
+      PairConstraint& c = (*pairs)[j];
+      c.lambda = std::max(Real(0), c.lambda + pairK[j] * (c.gap - pairValue(c, x, true) - pairValue(c, x, false)));
+    }
+  }
+
   // One-sided holds: lets go of the held rows whose reaction (A x - b on the row: the force the
   // hold exerts) points into the surface. Order kept, so the result does not depend on anything
   // but the data.
   void releaseAdhesive() {
     if (heldNormals.empty() || heldRows.empty()) return;
+    const Rhs Asol = activePairs.empty() ? Rhs() : apply(sol);
     size_t kept = 0;
     for (size_t k = 0; k < heldRows.size(); ++k) {
       const int32_t r = heldRows[k];
-      const Vec3 reaction = (A.row(r) * sol).transpose() - rhs.row(r).transpose();
+      const Vec3 reaction = (activePairs.empty() ? Vec3((A.row(r) * sol).transpose()) : Vec3(Asol.row(r).transpose())) -
+                            rhs.row(r).transpose();
       if (reaction.dot(heldNormals[k]) < 0) continue;
       heldRows[kept] = r, heldNormals[kept] = heldNormals[k], heldSource[kept] = heldSource[k];
       heldTargets.row(Eigen::Index(kept)) = heldTargets.row(Eigen::Index(k));
@@ -133,8 +203,11 @@ struct ProjectiveSolver::Impl {
   }
 
   void solveInto(std::vector<Vec3>& x) {
-    if (heldRows.empty()) {
+    if (heldRows.empty() && activePairs.empty()) {
       sol = solve(rhs);
+    } else if (!activePairs.empty()) {
+      solvePairs(x);
+      return;
     } else {
       // The three coordinates are three independent PCGs (per-column step lengths).
       sol.resize(rhs.rows(), 3);
@@ -164,6 +237,51 @@ struct ProjectiveSolver::Impl {
         rz = rzNew;
         p = z + (p.array().rowwise() * beta).matrix();
       }
+    }
+    for (size_t i = 0; i < freeIndex.size(); ++i)
+      if (freeIndex[i] >= 0) x[i] = sol.row(freeIndex[i]).transpose();
+  }
+
+  // The global solve with active pairs (and any holds): the filtered PCG on A + sum k J^T J, one
+  // CG over the three coordinates (the pairs couple them through n n^T), preconditioned by the
+  // factor of A. Without holds or pins the warm start is first shifted by a translation that
+  // zeroes each coordinate's residual sum (A 1 = M 1 / dt^2, J 1 = 0): the CG then keeps it at
+  // zero, so the solve keeps linear momentum whatever the iteration count.
+  void solvePairs(std::vector<Vec3>& x) {
+    sol.resize(rhs.rows(), 3);
+    for (size_t i = 0; i < freeIndex.size(); ++i)
+      if (freeIndex[i] >= 0) sol.row(freeIndex[i]) = x[i].transpose();
+    for (size_t k = 0; k < heldRows.size(); ++k) sol.row(heldRows[k]) = heldTargets.row(Eigen::Index(k));
+    auto zeroHeld = [&](Rhs& m) {
+      for (int32_t r : heldRows) m.row(r).setZero();
+    };
+    Rhs r = rhs - apply(sol);
+    if (heldRows.empty() && pinned.empty() && dt > 0) {
+      Real massSum = 0;
+      for (size_t i = 0; i < freeIndex.size(); ++i) massSum += model->mass[i];
+      const Eigen::Matrix<Real, 1, 3> shift = r.colwise().sum() * (dt * dt / massSum);
+      sol.rowwise() += shift;
+      for (size_t i = 0; i < freeIndex.size(); ++i) r.row(freeIndex[i]) -= model->mass[i] / (dt * dt) * shift;
+    }
+    zeroHeld(r);
+    Rhs z = solve(r);
+    zeroHeld(z);
+    Rhs p = z, Ap;
+    Real rz = (r.array() * z.array()).sum();
+    const Real rz0 = rz;
+    for (int it = 0; it < kPairIterations && rz > kHeldTolerance * rz0; ++it) {
+      Ap = apply(p);
+      zeroHeld(Ap);
+      const Real pAp = (p.array() * Ap.array()).sum();
+      if (!(pAp > 0)) break;
+      const Real alpha = rz / pAp;
+      sol += alpha * p;
+      r -= alpha * Ap;
+      z = solve(r);
+      zeroHeld(z);
+      const Real rzNew = (r.array() * z.array()).sum();
+      p = z + (rzNew / rz) * p;
+      rz = rzNew;
     }
     for (size_t i = 0; i < freeIndex.size(); ++i)
       if (freeIndex[i] >= 0) x[i] = sol.row(freeIndex[i]).transpose();
@@ -222,9 +340,11 @@ size_t ProjectiveSolver::numFree() const { return size_t(impl_->rhs.rows()); }
 void ProjectiveSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vector<Quat>& q, const Vec3& gravity,
                             Real damping, int iterations, const std::vector<Vec3>& pinTargets, int rotationIterations,
                             const std::vector<uint32_t>& held, const std::vector<Vec3>& heldTargets,
-                            const std::vector<Vec3>& heldNormals, std::vector<Vec3>* heldForces) {
+                            const std::vector<Vec3>& heldNormals, std::vector<Vec3>* heldForces,
+                            std::vector<PairConstraint>* pairs) {
   Impl& s = *impl_;
   s.prepareHeld(held, heldTargets, heldNormals);
+  s.preparePairs(pairs);
   const RestModel& m = *s.model;
   const Real dt = s.dt, invDt2 = 1.0 / (dt * dt);
   const size_t V = m.numVertices();
@@ -243,7 +363,9 @@ void ProjectiveSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vec
     for (size_t i = 0; i < V; ++i)
       if (s.freeIndex[i] >= 0) s.rhs.row(s.freeIndex[i]) = (m.mass[i] * invDt2 * y[i]).transpose();
     s.addElementTerms(x, q, rotationIterations);
+    s.addPairTerms(x);
     s.solveInto(x);
+    s.updatePairs(x);
     if (it + 1 < iterations) s.releaseAdhesive();
   }
   // integration.h; per vertex when the regions set their own rates (model.h).
@@ -251,12 +373,16 @@ void ProjectiveSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vec
   if (heldForces) {
     // The reaction of each hold still in place after the last pass: A x - b on its row.
     heldForces->assign(held.size(), Vec3::Zero());
+    const Rhs Asol = s.activePairs.empty() ? Rhs() : s.apply(s.sol);
     for (size_t k = 0; k < s.heldRows.size(); ++k) {
       const int32_t r = s.heldRows[k];
-      (*heldForces)[s.heldSource[k]] = ((s.A.row(r) * s.sol).transpose() - s.rhs.row(r).transpose());
+      (*heldForces)[s.heldSource[k]] =
+          (s.activePairs.empty() ? Vec3((s.A.row(r) * s.sol).transpose()) : Vec3(Asol.row(r).transpose())) -
+          s.rhs.row(r).transpose();
     }
   }
   s.heldRows.clear();
+  s.pairs = nullptr, s.activePairs.clear();
 }
 
 void ProjectiveSolver::applyInverse(const std::vector<Vec3>& r, std::vector<Vec3>& z) const {

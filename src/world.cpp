@@ -45,6 +45,9 @@ struct World::StepScratch {
 namespace {
 // The explicit vertex stage's blocks: the broad phase's unit and the contact forces' partial sums.
 constexpr size_t kVertexBlock = 16;
+// Pair constraints (body contacts in the implicit solve) hold a vertex this far [voxel size of
+// the face's body] outside the face: the post-step stage (skin 1e-6) then has nothing to do.
+constexpr Real kPairGap = 1e-4;
 // One vertex's contact impulse J = m dv on the body from `surface` at x, about `centre` (2D: in the plane).
 inline void addImpulse(ContactForce& acc, const Vec3& J, const Vec3& x, const Vec3& centre, int dim) {
   Vec3 r = x - centre;
@@ -519,6 +522,52 @@ void World::stageBodyContacts() {
   }
 }
 
+// Frame-size integrators: the body contacts as pair constraints of the implicit solve
+// (projective.h), from the boundary vertices within `margin` of another body at positions x,
+// each warm-started with the multiplier its vertex had against the same
+// body in the last step. `keys` gets (vertex << 32 | face's body) per pair.
+Real World::bodyContactMargin() const {
+  Real margin = 0;
+  for (const ContactBody& b : bodyContacts_->bodies()) margin = std::max(margin, b.thickness);
+  return margin;
+}
+
+std::vector<PairConstraint> World::bodyPairConstraints(const std::vector<Vec3>& x, Real margin,
+                                                       std::vector<uint64_t>& keys) {
+  std::vector<BodyContacts::Proximity> near;
+  bodyContacts_->proximity(x.data(), margin, near);
+  std::vector<PairConstraint> pairs;
+  keys.clear();
+  for (const BodyContacts::Proximity& c : near) {
+    const uint64_t key = uint64_t(c.vertex) << 32 | c.faceBody;
+    auto it = std::lower_bound(bodyContactLambda_.begin(), bodyContactLambda_.end(), std::make_pair(key, Real(0)),
+                               [](const auto& a, const auto& b) { return a.first < b.first; });
+    const Real lambda = it != bodyContactLambda_.end() && it->first == key ? it->second : 0;
+    const Real gap = kPairGap * bodyContacts_->bodies()[c.faceBody].thickness;
+    pairs.push_back({c.vertex, c.face, c.w, c.n, gap, lambda});
+    keys.push_back(key);
+  }
+  return pairs;
+}
+
+void World::keepBodyPairLambdas(const std::vector<PairConstraint>& pairs, const std::vector<uint64_t>& keys) {
+  bodyContactLambda_.clear();
+  for (size_t j = 0; j < pairs.size(); ++j)
+    if (pairs[j].lambda > 0) bodyContactLambda_.push_back({keys[j], pairs[j].lambda});
+  std::sort(bodyContactLambda_.begin(), bodyContactLambda_.end());  // proximity lists by vertex within a pair of bodies
+}
+
+// The large step's broad phase for the bodies: the boxes of their boundary vertices over the
+// step (start and free-flight end), grown by the bodies' voxel size, overlap.
+bool World::bodyContactsMayTouch() const {
+  if (!bodyContacts_) return false;
+  std::vector<Vec3> end(state_.positions.size());
+  for (const ContactBody& b : bodyContacts_->bodies())
+    for (uint32_t u : b.vertices)
+      end[u] = state_.positions[u] + dt_ * state_.velocities[u] + 0.5 * dt_ * dt_ * sim_.gravity;
+  return bodyContacts_->mayTouch(state_.positions.data(), end.data(), bodyContactMargin());
+}
+
 void World::setBodyContacts(std::vector<ContactBody> bodies, const BodyContactSettings& settings) {
   if (model_->dim != 3 && !bodies.empty()) throw InputError("body_contact: contact between bodies needs 3D bodies");
   for (const ContactBody& b : bodies)
@@ -656,22 +705,33 @@ void World::stepImplicit(bool largeStep) {
   projective_->step(state_.positions, state_.velocities, state_.rotations, g, sim_.damping, sim_.implicitIterations,
                     targets, sim_.rotationIterations);
   moveManipulators(tNext);
-  if (contacts) {
+  if (contacts || bodyContacts_) {
     // The contact pass finds the vertices that ended inside a surface; the step is solved again
     // with them held at their projected positions, so that the support reaches the whole body
     // within the step (projecting only those vertices afterwards lets a body sink and crush at
     // frame-size steps). A last pass then applies the contact rules to the final state.
     // The holds are one-sided (projective.h): each carries the direction it pushed its vertex out.
+    // Contacts between bodies: every boundary vertex near another body at the end of the first
+    // solve is a pair constraint of the second (projective.h); the stage after the step
+    // (stageBodyContacts) is the safety net.
     const std::vector<Vec3> freeEnd = state_.positions;
-    if (largeStep) sweepManipulatorPaths(tNext - dt_);
-    stageContacts(0, model_->numVertices());
     std::vector<uint32_t> held;
     std::vector<Vec3> heldAt, heldNormal;
-    for (uint32_t i = 0; i < model_->numVertices(); ++i)
-      if (scratch_->contactDepth[i] > 0)
-        held.push_back(i), heldAt.push_back(state_.positions[i]),
-            heldNormal.push_back((state_.positions[i] - freeEnd[i]).normalized());
-    if (!held.empty()) {
+    if (contacts) {
+      if (largeStep) sweepManipulatorPaths(tNext - dt_);
+      stageContacts(0, model_->numVertices());
+      for (uint32_t i = 0; i < model_->numVertices(); ++i)
+        if (scratch_->contactDepth[i] > 0)
+          held.push_back(i), heldAt.push_back(state_.positions[i]),
+              heldNormal.push_back((state_.positions[i] - freeEnd[i]).normalized());
+    }
+    std::vector<uint64_t> pairKeys;
+    std::vector<PairConstraint> pairs;
+    // Found at the end of the first solve, within the voxel size. (Found at the start of the
+    // step instead, out to the voxel size plus twice the step's largest motion, the balls of
+    // two-balls.json at large step bounced back into each other: measured.)
+    if (bodyContacts_) pairs = bodyPairConstraints(state_.positions, bodyContactMargin(), pairKeys);
+    if (!held.empty() || !pairs.empty()) {
       // Contact forces: the held solve's multipliers (the force holding each vertex, times dt)
       // are the impulse the contacts give the body, each on the surface that moved it; the last
       // contact pass adds its own velocity changes. The first pass's are dropped with its state.
@@ -681,15 +741,20 @@ void World::stepImplicit(bool largeStep) {
       state_.positions = x0, state_.velocities = v0, state_.rotations = q0;
       std::vector<Vec3> heldForces;
       projective_->step(state_.positions, state_.velocities, state_.rotations, g, sim_.damping, sim_.implicitIterations,
-                        targets, sim_.rotationIterations, held, heldAt, heldNormal, &heldForces);
+                        targets, sim_.rotationIterations, held, heldAt, heldNormal, &heldForces, &pairs);
       for (size_t j = 0; j < held.size(); ++j) {
         // Every held vertex was moved by a surface (a wall: K + its kWalls index).
         const size_t k = size_t(std::max(0, heldSurface[j]));
         const Vec3 centre = k < manipulators_.size() ? manipulators_[k].position : Vec3::Zero();
         addImpulse(scratch_->impulse[k], heldForces[j] * dt_, heldAt[j], centre, model_->dim);
       }
-      if (largeStep) sweepManipulatorPaths(tNext - dt_);
-      stageContacts(0, model_->numVertices());
+      keepBodyPairLambdas(pairs, pairKeys);
+      if (contacts) {
+        if (largeStep) sweepManipulatorPaths(tNext - dt_);
+        stageContacts(0, model_->numVertices());
+      }
+    } else {
+      bodyContactLambda_.clear();
     }
   }
   finishFrameStep(tNext);
@@ -718,6 +783,12 @@ void World::stepLargeStep() {
   const bool contacts = !manipulators_.empty() || domain_.enabled;
   const Real tNext = state_.time + dt_;
   beginContactImpulses();
+  if (bodyContactsMayTouch()) {  // contacts between bodies: constraints of the implicit step
+    stepImplicit(true);
+    largeStep_->resetEnergyBudget();
+    return;
+  }
+  bodyContactLambda_.clear();
   if (contacts) {
     const std::vector<Manipulator> before = manipulators_;
     moveManipulators(tNext);

@@ -59,6 +59,9 @@
 // Everything runs serially in a fixed order (pairs of bodies in index order, vertices in id order,
 // ties between triangles broken by id): the result does not depend on the thread count.
 // 3D only: a 2D body's display surface is a flat region, not a closed surface.
+// Frame-size steps (implicit, large_step): the step's solve carries the contacts itself, as
+// one-sided constraints of its PCG (proximity() lists the vertex-face pairs after the step's first,
+// contact-free solve; projective.h PairConstraint); resolve() then runs after the step as the safety net.
 #pragma once
 
 #include <array>
@@ -167,6 +170,27 @@ class BodyContacts {
   };
   /// The contacts the last resolve() found (all rounds, in order).
   const std::vector<Contact>& contacts() const { return contacts_; }
+
+  // ---- For the frame-size integrators (implicit, large_step): the contacts as constraints of
+  // their solve (projective.h, PairConstraint), this stage after the step as the safety net.
+
+  /// A surface vertex near a face of another body: the nearest triangle of that body within
+  /// `margin`, whether the vertex is in front of it or behind (the pseudo-normal sign test).
+  struct Proximity {
+    uint32_t vertex;               ///< World id of the vertex.
+    uint32_t faceBody;             ///< Index of the face's body (bodies()).
+    std::array<uint32_t, 3> face;  ///< World ids of the nearest face's corners.
+    std::array<Real, 3> w;         ///< Barycentric weights of the nearest point on it.
+    Vec3 n;                        ///< Unit normal out of the face's body at that point.
+    Real gap;                      ///< [m] n . (vertex - point): < 0 inside.
+  };
+  /// Every body-body Proximity at positions x (pairs of bodies in index order, vertices in id
+  /// order, ties to the lowest triangle id: the same list at any thread count). The pairs of
+  /// bodies whose boxes, grown by `margin`, overlap; self-contact is not included.
+  void proximity(const Vec3* x, Real margin, std::vector<Proximity>& out);
+  /// Broad phase of a step: whether two bodies' boxes over the step (the box of each boundary
+  /// vertex's start x and predicted end xEnd), grown by `margin`, overlap.
+  bool mayTouch(const Vec3* x, const Vec3* xEnd, Real margin) const;
 
  private:
   struct Box {

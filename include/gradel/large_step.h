@@ -39,6 +39,8 @@
 // Contacts are not in this solve: World::stepLargeStep runs a step that could touch anything as
 // a projective-dynamics (backward Euler) step with held contacts (stepImplicit, see world.cpp and
 // projective.h: the held vertices are constraints of a filtered PCG there, no back-solve each).
+// So does a step in which two bodies may touch (body_contacts.h, BodyContacts::mayTouch): their
+// contacts are pair constraints of that solve (projective.h, PairConstraint).
 #pragma once
 
 #include <memory>

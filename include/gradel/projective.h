@@ -23,14 +23,37 @@
 // was held flat on the floor. Velocities are (x_{n+1} - x_n) / dt. The scheme is
 // unconditionally stable and dissipative (numerical damping grows with omega dt); it is what lets
 // a stiff body run at dt = 1/60 s.
+// Contacts between bodies (pair constraints): a vertex p near a face of another body, the face's
+// point at barycentric weights w (sum 1), normal n: n . (x_p - sum_k w_k x_k) >= gap. They enter
+// the solve as an augmented Lagrangian (one-sided): the energy 1/(2 k) max(0, lambda + k (gap - c(x)))^2
+// adds k J^T J to the matrix of the filtered PCG (J the constraint's row: n on p, -w_k n on the
+// face's corners) and J^T (lambda + k gap) to its right-hand side; after each local/global pass
+// lambda <- max(0, lambda + k (gap - c(x))). The force J^T lambda has zero sum (sum_k w_k = 1):
+// equal and opposite on the two bodies, so the step keeps linear momentum (the PCG keeps the
+// residual's sum at zero when the warm start has it, and the warm start is shifted so). k is the
+// pair's effective mass over dt^2, 1 / (dt^2 (1/m_p + sum_k w_k^2 / m_k)): the PCG, preconditioned
+// by the factor of the matrix without the contacts, stays well conditioned, and a pass moves a
+// free pair as the post-step projection would. lambda [N] is warm-started by the caller (a
+// resting contact carries its load from the first pass).
 #pragma once
 
+#include <array>
 #include <memory>
 #include <vector>
 
 #include "gradel/model.h"
 
 namespace gradel {
+
+/// One contact between bodies in the solve (see above).
+struct PairConstraint {
+  uint32_t vertex;               ///< The vertex p.
+  std::array<uint32_t, 3> face;  ///< The face's corners.
+  std::array<Real, 3> w;         ///< Barycentric weights of the face's point (sum 1).
+  Vec3 n;                        ///< Unit normal out of the face's body.
+  Real gap = 0;                  ///< [m] the least n . (x_p - sum w_k x_k).
+  Real lambda = 0;               ///< [N] multiplier: warm start in, the last pass's out.
+};
 
 class ProjectiveSolver {
  public:
@@ -50,11 +73,13 @@ class ProjectiveSolver {
   /// `heldNormals` (empty, or one per held vertex): the surfaces' outward normals, which make the
   /// holds one-sided (see above). `heldForces`, when given, gets the force [N] that held each of
   /// them in the last pass (the hold's reaction A x - b on its row; 0 for a pinned or released
-  /// one): the contact forces' share of a held solve.
+  /// one): the contact forces' share of a held solve. `pairs` (in/out): contacts between bodies
+  /// (see above), their multipliers updated.
   void step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vector<Quat>& q, const Vec3& gravity, Real damping,
             int iterations, const std::vector<Vec3>& pinTargets, int rotationIterations = 4,
             const std::vector<uint32_t>& held = {}, const std::vector<Vec3>& heldTargets = {},
-            const std::vector<Vec3>& heldNormals = {}, std::vector<Vec3>* heldForces = nullptr);
+            const std::vector<Vec3>& heldNormals = {}, std::vector<Vec3>* heldForces = nullptr,
+            std::vector<PairConstraint>* pairs = nullptr);
 
   /// Static equilibrium under gravity with the pins at `pinTargets`: the same local/global
   /// iteration with the inertia term dropped (needs at least one pin per body). Runs until the

@@ -169,6 +169,10 @@ class World {
   void saveBodyContactStart();
   void stageBodyContacts();
   void updateBodyContactInvMass();
+  Real bodyContactMargin() const;
+  std::vector<PairConstraint> bodyPairConstraints(const std::vector<Vec3>& x, Real margin, std::vector<uint64_t>& keys);
+  void keepBodyPairLambdas(const std::vector<PairConstraint>& pairs, const std::vector<uint64_t>& keys);
+  bool bodyContactsMayTouch() const;
   void stepImplicit(bool largeStep);
   void stepLargeStep();
   void finishFrameStep(Real tNext);
@@ -208,6 +212,8 @@ class World {
   BodyContactStats bodyContactStats_;
   std::vector<Vec3> bodyContactStartX_, bodyContactStartV_;
   std::vector<Real> bodyContactInvMass_;
+  /// Frame-size integrators: the last step's body-contact multipliers [N] by (vertex << 32 | face's body), sorted.
+  std::vector<std::pair<uint64_t, Real>> bodyContactLambda_;
   int teamMembers_ = 0;
   ContactForces stepForces_;      ///< The last step's contact forces.
   ContactForces averageImpulse_;  ///< [N s], [N m s] summed since restartForceAverage().
