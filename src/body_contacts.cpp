@@ -749,7 +749,7 @@ void BodyContacts::proximity(const Vec3* x, Real margin, std::vector<Proximity>&
                   box[a].hi.cwiseMin(box[b].hi + Vec3::Constant(margin))};
       if ((q.lo.array() > q.hi.array()).any()) continue;
       gridCell_ = std::max(2 * F.thickness, margin);
-      buildGrid(F, {q.lo - Vec3::Constant(margin), q.hi + Vec3::Constant(margin)}, x);
+      buildGrid(F, {q.lo - Vec3::Constant(margin), q.hi + Vec3::Constant(margin)}, x, nullptr);
       if (grid_.empty()) continue;
       for (uint32_t v : A.vertices) {
         const Vec3& p = x[v];
@@ -761,7 +761,8 @@ void BodyContacts::proximity(const Vec3* x, Real margin, std::vector<Proximity>&
           const auto& tri = F.triangles[t];
           const ClosestPoint cp = closestPointOnTriangle(p, x[tri[0]], x[tri[1]], x[tri[2]]);
           const Real d2 = (p - (cp.w[0] * x[tri[0]] + cp.w[1] * x[tri[1]] + cp.w[2] * x[tri[2]])).squaredNorm();
-          if (d2 < best) best = d2, bestTri = t, bestCp = cp;  // candidates ascend: ties keep the lowest id
+          if (d2 < best || (d2 == best && bestTri != ContactBody::kNone && t < bestTri))
+            best = d2, bestTri = t, bestCp = cp;  // ties: the lowest id
         });
         if (bestTri == ContactBody::kNone) continue;
         const auto& tri = F.triangles[bestTri];
