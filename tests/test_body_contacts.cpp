@@ -537,29 +537,8 @@ struct SceneRun {
       c += world().model().mass[u] * world().state().velocities[u], m += world().model().mass[u];
     return c / m;
   }
-  // Boundary vertices of any body inside any other.
-  size_t inside() {
-    const auto& bodies = world().bodyContacts()->bodies();
-    const Vec3* x = world().state().positions.data();
-    size_t n = 0;
-    for (size_t a = 0; a < bodies.size(); ++a)
-      for (size_t b = 0; b < bodies.size(); ++b) {
-        if (a == b) continue;
-        Vec3 lo = Vec3::Constant(1e300), hi = -lo;
-        for (uint32_t u : bodies[b].vertices) lo = lo.cwiseMin(x[u]), hi = hi.cwiseMax(x[u]);
-        for (uint32_t u : bodies[a].vertices) {
-          if ((x[u].array() < lo.array()).any() || (x[u].array() > hi.array()).any()) continue;
-          if (windingNumber(x[u], bodies[b].triangles, x) <= 0.5) continue;
-          Real d = std::numeric_limits<Real>::infinity();
-          for (const auto& t : bodies[b].triangles) {
-            const ClosestPoint cp = closestPointOnTriangle(x[u], x[t[0]], x[t[1]], x[t[2]]);
-            d = std::min(d, (x[u] - (cp.w[0] * x[t[0]] + cp.w[1] * x[t[1]] + cp.w[2] * x[t[2]])).norm());
-          }
-          if (d > 1e-12) ++n;
-        }
-      }
-    return n;
-  }
+  // Boundary vertices of any body inside any other (test::verticesInsideOtherBodies).
+  size_t inside() { return test::verticesInsideOtherBodies(world()); }
   Vec3 momentum() {
     Vec3 p = Vec3::Zero();
     for (size_t u = 0; u < world().model().numVertices(); ++u) p += world().model().mass[u] * world().state().velocities[u];

@@ -4,9 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <random>
 
+#include "gradel/body_contacts.h"
 #include "gradel/layout.h"
 #include "gradel/model.h"
 #include "gradel/scene.h"
@@ -28,6 +30,31 @@ inline Body makeBody(const std::string& shape, int size, int dim, LayoutKind kin
   b.layout = buildLayout(b.volume, kind);
   b.model = std::make_shared<RestModel>(buildRestModel(b.layout, b.volume, material, origin));
   return b;
+}
+
+/// Boundary vertices of any body of `w` inside any other body: inside the other's closed contact
+/// surface by its winding number and more than 1e-12 m from it (soft-soft contact tests).
+inline size_t verticesInsideOtherBodies(const World& w) {
+  const auto& bodies = w.bodyContacts()->bodies();
+  const Vec3* x = w.state().positions.data();
+  size_t n = 0;
+  for (size_t a = 0; a < bodies.size(); ++a)
+    for (size_t b = 0; b < bodies.size(); ++b) {
+      if (a == b) continue;
+      Vec3 lo = Vec3::Constant(1e300), hi = -lo;
+      for (uint32_t u : bodies[b].vertices) lo = lo.cwiseMin(x[u]), hi = hi.cwiseMax(x[u]);
+      for (uint32_t u : bodies[a].vertices) {
+        if ((x[u].array() < lo.array()).any() || (x[u].array() > hi.array()).any()) continue;
+        if (windingNumber(x[u], bodies[b].triangles, x) <= 0.5) continue;
+        Real d = std::numeric_limits<Real>::infinity();
+        for (const auto& t : bodies[b].triangles) {
+          const ClosestPoint cp = closestPointOnTriangle(x[u], x[t[0]], x[t[1]], x[t[2]]);
+          d = std::min(d, (x[u] - (cp.w[0] * x[t[0]] + cp.w[1] * x[t[1]] + cp.w[2] * x[t[2]])).norm());
+        }
+        if (d > 1e-12) ++n;
+      }
+    }
+  return n;
 }
 
 // The InputError message of parsing scene `text` as file `file`, or "" if it parsed.
