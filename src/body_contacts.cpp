@@ -282,12 +282,11 @@ void BodyContacts::updateBounds(int round, const BodyContactState& s) {
     const ContactBody& body = bodies_[b];
     const uint32_t i0 = (k - blockStart_[b]) * kBoundsBlock;
     const uint32_t i1 = std::min<uint32_t>(i0 + kBoundsBlock, uint32_t(body.vertices.size()));
-    Box box{Vec3::Constant(std::numeric_limits<Real>::infinity()),
-            Vec3::Constant(-std::numeric_limits<Real>::infinity())};
+    Box box;
     Real moved2 = 0;
     for (uint32_t i = i0; i < i1; ++i) {
       const uint32_t u = body.vertices[i];
-      box.lo = box.lo.cwiseMin(x[u]), box.hi = box.hi.cwiseMax(x[u]);
+      box.add(x[u]);
       moved2 = std::max(moved2, (x[u] - x0[u]).squaredNorm());
     }
     blockBox_[k] = box, blockMoved2_[k] = moved2;
@@ -302,11 +301,10 @@ void BodyContacts::updateBounds(int round, const BodyContactState& s) {
     }
   }
   for (size_t b = 0; b < bodies_.size(); ++b) {
-    Box box{Vec3::Constant(std::numeric_limits<Real>::infinity()),
-            Vec3::Constant(-std::numeric_limits<Real>::infinity())};
+    Box box;
     Real moved2 = 0;
     for (uint32_t k = blockStart_[b]; k < blockStart_[b + 1]; ++k) {
-      box.lo = box.lo.cwiseMin(blockBox_[k].lo), box.hi = box.hi.cwiseMax(blockBox_[k].hi);
+      box.add(blockBox_[k]);
       moved2 = std::max(moved2, blockMoved2_[k]);
     }
     bounds_[b] = box, moved_[b] = std::sqrt(moved2);
@@ -355,10 +353,8 @@ void BodyContacts::updatePatches(const Vec3* x) {
   }
   for (Patches& P : patches_)
     for (size_t k = 0; k + 1 < P.vertStart.size(); ++k) {
-      Box box{Vec3::Constant(std::numeric_limits<Real>::infinity()),
-              Vec3::Constant(-std::numeric_limits<Real>::infinity())};
-      for (uint32_t j = P.vertStart[k]; j < P.vertStart[k + 1]; ++j)
-        box.lo = box.lo.cwiseMin(x[P.verts[j]]), box.hi = box.hi.cwiseMax(x[P.verts[j]]);
+      Box box;
+      for (uint32_t j = P.vertStart[k]; j < P.vertStart[k + 1]; ++j) box.add(x[P.verts[j]]);
       P.box[k] = box;
     }
 }
@@ -717,12 +713,8 @@ namespace gradel {
 // Frame-size integrators (header): the broad phase of a step and the proximity list.
 bool BodyContacts::mayTouch(const Vec3* x, const Vec3* xEnd, Real margin) const {
   std::vector<Box> box(bodies_.size());
-  for (size_t b = 0; b < bodies_.size(); ++b) {
-    box[b] = {Vec3::Constant(std::numeric_limits<Real>::infinity()),
-              Vec3::Constant(-std::numeric_limits<Real>::infinity())};
-    for (uint32_t u : bodies_[b].vertices)
-      box[b].lo = box[b].lo.cwiseMin(x[u]).cwiseMin(xEnd[u]), box[b].hi = box[b].hi.cwiseMax(x[u]).cwiseMax(xEnd[u]);
-  }
+  for (size_t b = 0; b < bodies_.size(); ++b)
+    for (uint32_t u : bodies_[b].vertices) box[b].add(x[u]), box[b].add(xEnd[u]);
   for (size_t a = 0; a < box.size(); ++a)
     for (size_t b = a + 1; b < box.size(); ++b)
       if (((box[a].lo.array() - margin) <= box[b].hi.array()).all() &&
@@ -735,11 +727,8 @@ void BodyContacts::proximity(const Vec3* x, Real margin, std::vector<Proximity>&
   out.clear();
   const size_t B = bodies_.size();
   std::vector<Box> box(B);
-  for (size_t b = 0; b < B; ++b) {
-    box[b] = {Vec3::Constant(std::numeric_limits<Real>::infinity()),
-              Vec3::Constant(-std::numeric_limits<Real>::infinity())};
-    for (uint32_t u : bodies_[b].vertices) box[b].lo = box[b].lo.cwiseMin(x[u]), box[b].hi = box[b].hi.cwiseMax(x[u]);
-  }
+  for (size_t b = 0; b < B; ++b)
+    for (uint32_t u : bodies_[b].vertices) box[b].add(x[u]);
   for (size_t a = 0; a < B; ++a)
     for (size_t b = 0; b < B; ++b) {
       if (a == b) continue;

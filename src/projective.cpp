@@ -182,18 +182,24 @@ struct ProjectiveSolver::Impl {
     }
   }
 
+  // The reaction of held row r, A x - b on the row (the force the hold exerts); with active pairs
+  // A is A + sum k J^T J, whose product with sol is Asol = appliedWithPairs() (else unused).
+  Rhs appliedWithPairs() const { return activePairs.empty() ? Rhs() : apply(sol); }
+  Vec3 heldReaction(int32_t r, const Rhs& Asol) const {
+    return (activePairs.empty() ? Vec3((A.row(r) * sol).transpose()) : Vec3(Asol.row(r).transpose())) -
+           rhs.row(r).transpose();
+  }
+
   // One-sided holds: lets go of the held rows whose reaction (A x - b on the row: the force the
   // hold exerts) points into the surface. Order kept, so the result does not depend on anything
   // but the data.
   void releaseAdhesive() {
     if (heldNormals.empty() || heldRows.empty()) return;
-    const Rhs Asol = activePairs.empty() ? Rhs() : apply(sol);
+    const Rhs Asol = appliedWithPairs();
     size_t kept = 0;
     for (size_t k = 0; k < heldRows.size(); ++k) {
       const int32_t r = heldRows[k];
-      const Vec3 reaction = (activePairs.empty() ? Vec3((A.row(r) * sol).transpose()) : Vec3(Asol.row(r).transpose())) -
-                            rhs.row(r).transpose();
-      if (reaction.dot(heldNormals[k]) < 0) continue;
+      if (heldReaction(r, Asol).dot(heldNormals[k]) < 0) continue;
       heldRows[kept] = r, heldNormals[kept] = heldNormals[k], heldSource[kept] = heldSource[k];
       heldTargets.row(Eigen::Index(kept)) = heldTargets.row(Eigen::Index(k));
       ++kept;
@@ -373,13 +379,8 @@ void ProjectiveSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vec
   if (heldForces) {
     // The reaction of each hold still in place after the last pass: A x - b on its row.
     heldForces->assign(held.size(), Vec3::Zero());
-    const Rhs Asol = s.activePairs.empty() ? Rhs() : s.apply(s.sol);
-    for (size_t k = 0; k < s.heldRows.size(); ++k) {
-      const int32_t r = s.heldRows[k];
-      (*heldForces)[s.heldSource[k]] =
-          (s.activePairs.empty() ? Vec3((s.A.row(r) * s.sol).transpose()) : Vec3(Asol.row(r).transpose())) -
-          s.rhs.row(r).transpose();
-    }
+    const Rhs Asol = s.appliedWithPairs();
+    for (size_t k = 0; k < s.heldRows.size(); ++k) (*heldForces)[s.heldSource[k]] = s.heldReaction(s.heldRows[k], Asol);
   }
   s.heldRows.clear();
   s.pairs = nullptr, s.activePairs.clear();

@@ -495,7 +495,8 @@ void World::step() {
 // what the stage reads as the step's start (their swept band and the bounce).
 void World::saveBodyContactStart() {
   for (const ContactBody& b : bodyContacts_->bodies())
-    for (uint32_t u : b.vertices) bodyContactStartX_[u] = state_.positions[u], bodyContactStartV_[u] = state_.velocities[u];
+    for (uint32_t u : b.vertices)
+      bodyContactStartX_[u] = state_.positions[u], bodyContactStartV_[u] = state_.velocities[u];
 }
 
 // After the step (and its pins, which the stage leaves in place: inverse mass 0), serially: the
@@ -504,8 +505,8 @@ void World::saveBodyContactStart() {
 void World::stageBodyContacts() {
   Vec3* x = state_.positions.data();
   Vec3* v = state_.velocities.data();
-  bodyContactStats_ = bodyContacts_->resolve(
-      {x, v, bodyContactStartX_.data(), bodyContactStartV_.data(), bodyContactInvMass_.data()});
+  bodyContactStats_ =
+      bodyContacts_->resolve({x, v, bodyContactStartX_.data(), bodyContactStartV_.data(), bodyContactInvMass_.data()});
   scratch_->maxContactDepth = std::max(scratch_->maxContactDepth, bodyContactStats_.maxDepth);
   if (!domain_.enabled || bodyContacts_->contacts().empty()) return;
   std::vector<uint32_t> moved;
@@ -522,16 +523,17 @@ void World::stageBodyContacts() {
   }
 }
 
-// Frame-size integrators: the body contacts as pair constraints of the implicit solve
-// (projective.h), from the boundary vertices within `margin` of another body at positions x,
-// each warm-started with the multiplier its vertex had against the same
-// body in the last step. `keys` gets (vertex << 32 | face's body) per pair.
+// Frame-size integrators: the search band of body contacts, the largest voxel size of the bodies.
 Real World::bodyContactMargin() const {
   Real margin = 0;
   for (const ContactBody& b : bodyContacts_->bodies()) margin = std::max(margin, b.thickness);
   return margin;
 }
 
+// The body contacts as pair constraints of the implicit solve (projective.h), from the boundary
+// vertices within `margin` of another body at positions x, each warm-started with the multiplier
+// its vertex had against the same body in the last step. `keys` gets (vertex << 32 | face's body)
+// per pair.
 std::vector<PairConstraint> World::bodyPairConstraints(const std::vector<Vec3>& x, Real margin,
                                                        std::vector<uint64_t>& keys) {
   std::vector<BodyContacts::Proximity> near;

@@ -66,6 +66,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "gradel/model.h"
@@ -193,8 +194,11 @@ class BodyContacts {
   bool mayTouch(const Vec3* x, const Vec3* xEnd, Real margin) const;
 
  private:
-  struct Box {
-    Vec3 lo, hi;
+  struct Box {  ///< Axis-aligned; default: empty (grows with add).
+    Vec3 lo = Vec3::Constant(std::numeric_limits<Real>::infinity());
+    Vec3 hi = Vec3::Constant(-std::numeric_limits<Real>::infinity());
+    void add(const Vec3& p) { lo = lo.cwiseMin(p), hi = hi.cwiseMax(p); }
+    void add(const Box& b) { lo = lo.cwiseMin(b.lo), hi = hi.cwiseMax(b.hi); }
   };
   // Round 0 of a step keeps, per ordered pair of bodies, the candidates of a band `margin` wider
   // than its boxes; a later round reuses them while every vertex a correction moved stayed
@@ -251,7 +255,7 @@ class BodyContacts {
   std::vector<uint32_t> seen_;  ///< Per triangle: the query that last listed it (dedupe).
   std::vector<Box> triBox_;     ///< Per triangle in the grid: its box (the narrow phase's cheap test).
   uint32_t stamp_ = 0;
-  std::vector<uint8_t> active_;  ///< Per (vertex body, face body): contacts in the last round.
+  std::vector<uint8_t> active_;       ///< Per (vertex body, face body): contacts in the last round.
   std::vector<uint8_t> movedBodies_;  ///< Per body: a correction of the last round moved its vertices.
 };
 
