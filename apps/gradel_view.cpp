@@ -107,10 +107,16 @@ class Viewer {
     // A body from a mesh file shows that mesh (embedded) first; other bodies the smooth surface.
     view_.surface = built_.embedded ? SurfaceMode::Embedded : SurfaceMode::Smooth;
     view_.forces = true;  // the contact force arrows on the tools
-    // The body keeps its physical size when the resolution changes.
-    const VoxelVolume& v = built_.volume;
-    bodyExtent_ = v.voxelSize() * std::max(v.nx(), v.ny());
-    sizeVoxels_ = std::clamp(std::max(v.nx(), v.ny()), 4, 48);
+    // Each body keeps its physical size when its resolution changes.
+    edits_.clear();
+    for (size_t i = 0; i < built_.numBodies(); ++i) {
+      const VoxelVolume& v = built_.body(i).volume;
+      BodyEdit e;
+      e.extent = v.voxelSize() * std::max(v.nx(), v.ny());
+      e.sizeVoxels = std::clamp(std::max(v.nx(), v.ny()), 4, 48);
+      edits_.push_back(e);
+    }
+    editBody_ = 0;
   }
 
   // Rebuilds the world from scene_ (settings changed); reframes the camera on a new scene.
@@ -220,6 +226,14 @@ class Viewer {
     if (ImGui::Button("Play (free manipulator)")) load(parseScene(kPlayScene, "play"));
     ImGui::SameLine();
     sceneButton("2D strike", "strike-2d.json");
+    // Several bodies and materials (issue 12).
+    sceneButton("Two balls", "two-balls.json");
+    ImGui::SameLine();
+    sceneButton("Stack", "stack.json");
+    ImGui::SameLine();
+    sceneButton("Grasp body", "grasp-body.json");
+    ImGui::SameLine();
+    sceneButton("Phantom", "phantom.json");
 
     // ---- view ----
     section("View");
@@ -247,15 +261,26 @@ class Viewer {
     bool changed = false, reshaped = false;
     static const char* shapes[] = {"sphere", "box", "cylinder"};
     static const char* layouts[] = {"gradational", "uniform", "voxel"};
-    if (ImGui::Combo("shape", &shapeIndex_, shapes, scene_.dim == 3 ? 3 : 2)) changed = reshaped = true;
-    if (ImGui::SliderInt("size [voxels]", &sizeVoxels_, 4, 48)) changed = reshaped = true;
-    int layout = int(scene_.body.layout);
-    if (ImGui::Combo("layout", &layout, layouts, 3)) scene_.body.layout = LayoutKind(layout), changed = true;
-    float E = float(scene_.body.material.youngsModulus), rho = float(scene_.body.material.density);
+    // With several bodies the settings below are those of the body picked here.
+    editBody_ = std::min(editBody_, int(scene_.numBodies()) - 1);
+    if (scene_.numBodies() > 1 && ImGui::BeginCombo("edit body", scene_.bodyAt(size_t(editBody_)).name.c_str())) {
+      for (size_t i = 0; i < scene_.numBodies(); ++i)
+        if (ImGui::Selectable(scene_.bodyAt(i).name.c_str(), int(i) == editBody_)) editBody_ = int(i);
+      ImGui::EndCombo();
+    }
+    BodySettings& body = scene_.bodyAt(size_t(editBody_));
+    BodyEdit& edit = edits_.at(size_t(editBody_));
+    if (ImGui::Combo("shape", &edit.shapeIndex, shapes, scene_.dim == 3 ? 3 : 2)) changed = reshaped = true;
+    if (ImGui::SliderInt("size [voxels]", &edit.sizeVoxels, 4, 48)) changed = reshaped = true;
+    int layout = int(body.layout);
+    if (ImGui::Combo("layout", &layout, layouts, 3)) body.layout = LayoutKind(layout), changed = true;
+    float E = float(body.material.youngsModulus), rho = float(body.material.density);
     if (ImGui::SliderFloat("E [Pa]", &E, 1e3f, 1e7f, "%.3g", ImGuiSliderFlags_Logarithmic))
-      scene_.body.material.youngsModulus = E, changed = true;
-    if (ImGui::SliderFloat("density", &rho, 100.f, 5000.f, "%.0f kg/m3"))
-      scene_.body.material.density = rho, changed = true;
+      body.material.youngsModulus = E, changed = true;
+    if (ImGui::SliderFloat("density", &rho, 100.f, 5000.f, "%.0f kg/m3")) body.material.density = rho, changed = true;
+    if (!body.material.regions.empty())
+      ImGui::TextWrapped("this body has %zu materials per region: E and density above are the default for other labels",
+                         body.material.regions.size());
     float damping = float(scene_.simulation.damping);
     if (ImGui::SliderFloat("damping [1/s]", &damping, 0.f, 20.f, "%.2f"))
       scene_.simulation.damping = damping, changed = true;
@@ -296,9 +321,9 @@ class Viewer {
     ImGui::TextWrapped("Drag a manipulator with the left button; wheel or Shift+drag moves it in depth.");
 
     if (changed) {
-      if (reshaped) {  // a preset shape of the same physical size replaces the scene's volume
-        scene_.body.shape = presetShape(shapes[shapeIndex_], sizeVoxels_, scene_.dim, bodyExtent_ / sizeVoxels_);
-        scene_.body.source = nullptr;
+      if (reshaped) {  // a preset shape of the same physical size replaces the body's volume
+        body.shape = presetShape(shapes[edit.shapeIndex], edit.sizeVoxels, scene_.dim, edit.extent / edit.sizeVoxels);
+        body.source = nullptr;
       }
       keepManipulatorPoses(*built_.world, scene_);
       try {
@@ -392,17 +417,21 @@ class Viewer {
   void addManipulator(ManipulatorShape shape) {
     ManipulatorSettings m;
     m.shape = scene_.dim == 2 ? ManipulatorShape::Circle : shape;
-    m.radius = 0.25 * bodyExtent_;
-    m.halfLength = 0.6 * bodyExtent_;
+    const Real extent = edits_.at(size_t(editBody_)).extent;  // sized to the body being edited
+    m.radius = 0.25 * extent;
+    m.halfLength = 0.6 * extent;
     m.axis = Vec3(0, 1, 0);
     m.restitution = 0.3;
     m.friction = scene_.domain.friction;
-    Vec3 lo, hi;
-    sceneBounds(*built_.world, &lo, &hi);
-    // Beside the body, on the side away from the other manipulators.
-    const Vec3 c = built_.world->state().positions.empty() ? Vec3::Zero() : Vec3((lo + hi) / 2);
+    // Beside the body being edited, on the side away from the other manipulators.
+    const std::vector<Vec3>& x = built_.world->state().positions;
+    const BodyRange& range = built_.range(size_t(editBody_));
+    Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
+    if (range.vertexEnd > range.vertexBegin) lo = hi = x[range.vertexBegin];
+    for (uint32_t i = range.vertexBegin; i < range.vertexEnd; ++i) lo = lo.cwiseMin(x[i]), hi = hi.cwiseMax(x[i]);
+    const Vec3 c = (lo + hi) / 2;
     const Real side = scene_.manipulators.size() % 2 == 0 ? -1 : 1;
-    Vec3 p = c + Vec3(side * (0.5 * bodyExtent_ + m.radius + 0.05), 0, 0);
+    Vec3 p = c + Vec3(side * (0.5 * extent + m.radius + 0.05), 0, 0);
     if (scene_.dim == 2) p.z() = 0;
     m.path.keys = {Keyframe{0, p, std::nullopt}};
     keepManipulatorPoses(*built_.world, scene_);
@@ -423,8 +452,13 @@ class Viewer {
   float speed_ = 1.0f;
   double realTime_ = 0;
   long steps_ = 0;
-  int shapeIndex_ = 0, sizeVoxels_ = 12;
-  Real bodyExtent_ = 0.12;
+  /// The panel's shape settings of one body (the scene holds the rest).
+  struct BodyEdit {
+    int shapeIndex = 0, sizeVoxels = 12;
+    Real extent = 0.12;  ///< [m] kept when the resolution changes.
+  };
+  std::vector<BodyEdit> edits_;  ///< Per body.
+  int editBody_ = 0;             ///< The body the "Body" settings edit.
   std::string status_;
 };
 

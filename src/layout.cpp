@@ -64,51 +64,106 @@ int cellCoord(int c, int axis) { return (c >> axis) & 1; }
 ///   Voxel: every filled cell becomes its own single-cell element.
 /// A placed group holding several labels becomes one element per label (its cells of that label,
 /// in the order of each label's first cell), so no element mixes two regions; with one label this
-/// is the paper's one element per group. Decisions read the level's volume as it was at the start
-/// of the scan, so they do not depend on scan order; the groups that got elements are "emptied"
-/// (step 2) by writing 0 into the next level (step 3), where a cell holds the group's label iff the
-/// group was full of one label and got no element.
+/// is the paper's one element per group.
+/// Borders between labels (gradational, `labelled`): where a group is placed because it touches
+/// another label (or holds two), every filled group of its parent block (the 2x2x2 groups that
+/// make one group of the next level) is placed too. Without that, the border's layer of fine
+/// elements is one group thick, and the next level's group behind it is incomplete: a plate
+/// parallel to the border (fig. 6), 3/8 as stiff across itself as along (material.h), so a bar of
+/// two materials in series was 1.7 % softer than its halves (docs/layout.md). With it, the fine
+/// layer is a whole parent block thick and the levels behind an aligned border are complete
+/// elements. A binary volume has no such border: the paper's rule, unchanged.
+/// Decisions read the level's volume as it was at the start of the scan, so they do not depend
+/// on scan order; the groups that got elements are "emptied" (step 2) by writing 0 into the next
+/// level (step 3), where a cell holds the group's label iff the group was full of one label and
+/// got no element.
 template <class T>
-std::vector<uint16_t> scanLevel(const GridView<T>& g, int dim, int level, LayoutKind kind, std::vector<Placed>& out,
-                                std::array<int, 3>& nextDims) {
+std::vector<uint16_t> scanLevel(const GridView<T>& g, int dim, int level, LayoutKind kind, bool labelled,
+                                std::vector<Placed>& out, std::array<int, 3>& nextDims) {
   const int groupsZ = dim == 3 ? (g.n[2] + 1) / 2 : 1;
   nextDims = {(g.n[0] + 1) / 2, (g.n[1] + 1) / 2, groupsZ};
-  std::vector<uint16_t> next(size_t(nextDims[0]) * size_t(nextDims[1]) * size_t(nextDims[2]), 0);
+  const size_t groups = size_t(nextDims[0]) * size_t(nextDims[1]) * size_t(nextDims[2]);
+  std::vector<uint16_t> next(groups, 0);
   const int cs = 1 << level;  // cell edge [voxels]
   const int cells = cellCount(dim);
   const uint8_t full = fullMask(dim);
-  size_t nextIndex = 0;
+  // The group at (gx, gy, gz): its filled cells' mask, their labels, and whether it is mixed.
+  auto readGroup = [&](int gx, int gy, int gz, uint16_t* lab, uint16_t& first, bool& mixed) {
+    const int bx = 2 * gx, by = 2 * gy, bz = dim == 3 ? 2 * gz : 0;  // first cell of the group
+    uint8_t mask = 0;
+    first = 0;  // label of the group's first filled cell
+    mixed = false;
+    for (int c = 0; c < cells; ++c) {
+      lab[c] = g.at(bx + cellCoord(c, 0), by + cellCoord(c, 1), bz + cellCoord(c, 2));
+      if (lab[c] == 0) continue;
+      mask |= uint8_t(1u << c);
+      if (first == 0) first = lab[c];
+      mixed = mixed || lab[c] != first;
+    }
+    return mask;
+  };
+  // Does a filled cell of the group have a face neighbour of another non-zero label?
+  auto touchesOtherLabel = [&](int gx, int gy, int gz, const uint16_t* lab) {
+    const int bx = 2 * gx, by = 2 * gy, bz = dim == 3 ? 2 * gz : 0;
+    for (int c = 0; c < cells; ++c) {
+      if (lab[c] == 0) continue;
+      const int i = bx + cellCoord(c, 0), j = by + cellCoord(c, 1), k = bz + cellCoord(c, 2);
+      for (int ax = 0; ax < dim; ++ax)
+        for (int d = -1; d <= 1; d += 2) {
+          const uint16_t n = g.at(i + (ax == 0) * d, j + (ax == 1) * d, k + (ax == 2) * d);
+          if (n != 0 && n != lab[c]) return true;
+        }
+    }
+    return false;
+  };
+  // The paper's placement rule for one group (see above), given its filled cells.
+  auto paperRule = [&](int gx, int gy, int gz, uint8_t mask, uint16_t first, bool mixed) {
+    if (kind == LayoutKind::Uniform || mask != full || mixed) return true;
+    // A full group of one label: inner face neighbours are of its label, so only the outward
+    // neighbour of each cell on each axis can make it a surface cell (empty or another label).
+    const int bx = 2 * gx, by = 2 * gy, bz = dim == 3 ? 2 * gz : 0;
+    for (int c = 0; c < cells; ++c) {
+      const int i = bx + cellCoord(c, 0), j = by + cellCoord(c, 1), k = bz + cellCoord(c, 2);
+      const int di = cellCoord(c, 0) ? 1 : -1, dj = cellCoord(c, 1) ? 1 : -1, dk = cellCoord(c, 2) ? 1 : -1;
+      if (g.at(i + di, j, k) != first || g.at(i, j + dj, k) != first || (dim == 3 && g.at(i, j, k + dk) != first))
+        return true;
+    }
+    return false;
+  };
   uint16_t lab[8];
+  // Borders between labels: the parent blocks that hold a group placed at a border.
+  const std::array<int, 3> blocks{(nextDims[0] + 1) / 2, (nextDims[1] + 1) / 2, (nextDims[2] + 1) / 2};
+  auto blockOf = [&](int gx, int gy, int gz) {
+    return size_t(gx / 2) + size_t(blocks[0]) * (size_t(gy / 2) + size_t(blocks[1]) * size_t(gz / 2));
+  };
+  std::vector<char> borderBlock;
+  if (labelled && kind == LayoutKind::Gradational) {
+    borderBlock.assign(size_t(blocks[0]) * size_t(blocks[1]) * size_t(blocks[2]), 0);
+    for (int gz = 0; gz < nextDims[2]; ++gz)
+      for (int gy = 0; gy < nextDims[1]; ++gy)
+        for (int gx = 0; gx < nextDims[0]; ++gx) {
+          uint16_t first;
+          bool mixed;
+          const uint8_t mask = readGroup(gx, gy, gz, lab, first, mixed);
+          if (mask != 0 && (mixed || touchesOtherLabel(gx, gy, gz, lab))) borderBlock[blockOf(gx, gy, gz)] = 1;
+        }
+  }
+  size_t nextIndex = 0;
   for (int gz = 0; gz < nextDims[2]; ++gz)
     for (int gy = 0; gy < nextDims[1]; ++gy)
       for (int gx = 0; gx < nextDims[0]; ++gx, ++nextIndex) {
-        const int bx = 2 * gx, by = 2 * gy, bz = dim == 3 ? 2 * gz : 0;  // first cell of the group
-        uint8_t mask = 0;
-        uint16_t first = 0;  // label of the group's first filled cell
-        bool mixed = false;  // two labels in the group
-        for (int c = 0; c < cells; ++c) {
-          lab[c] = g.at(bx + cellCoord(c, 0), by + cellCoord(c, 1), bz + cellCoord(c, 2));
-          if (lab[c] == 0) continue;
-          mask |= uint8_t(1u << c);
-          if (first == 0) first = lab[c];
-          mixed = mixed || lab[c] != first;
-        }
+        uint16_t first;
+        bool mixed;
+        const uint8_t mask = readGroup(gx, gy, gz, lab, first, mixed);
         if (mask == 0) continue;
-        const Int3 origin(bx * cs, by * cs, bz * cs);
+        const Int3 origin(2 * gx * cs, 2 * gy * cs, dim == 3 ? 2 * gz * cs : 0);
         if (kind == LayoutKind::Voxel) {
           for (int c = 0; c < cells; ++c)
             if (mask & (1u << c)) out.push_back({uint8_t(level), cs, origin, uint8_t(1u << c), lab[c]});
           continue;
         }
-        bool place = kind == LayoutKind::Uniform || mask != full || mixed;
-        // A full group of one label: inner face neighbours are of its label, so only the outward
-        // neighbour of each cell on each axis can make it a surface cell (empty or another label).
-        for (int c = 0; c < cells && !place; ++c) {
-          const int i = bx + cellCoord(c, 0), j = by + cellCoord(c, 1), k = bz + cellCoord(c, 2);
-          const int di = cellCoord(c, 0) ? 1 : -1, dj = cellCoord(c, 1) ? 1 : -1, dk = cellCoord(c, 2) ? 1 : -1;
-          place = g.at(i + di, j, k) != first || g.at(i, j + dj, k) != first ||
-                  (dim == 3 && g.at(i, j, k + dk) != first);
-        }
+        const bool place =
+            paperRule(gx, gy, gz, mask, first, mixed) || (!borderBlock.empty() && borderBlock[blockOf(gx, gy, gz)]);
         if (place) {
           if (!mixed) {
             out.push_back({uint8_t(level), cs, origin, mask, first});
@@ -141,15 +196,15 @@ std::vector<Placed> place(const VoxelVolume& volume, LayoutKind kind) {
   std::array<int, 3> nextDims{};
   std::vector<uint16_t> next =
       volume.hasLabels()
-          ? scanLevel(GridView<uint16_t>{dims, volume.labels().data()}, dim, 0, kind, out, nextDims)
-          : scanLevel(GridView<uint8_t>{dims, volume.data().data()}, dim, 0, kind, out, nextDims);
+          ? scanLevel(GridView<uint16_t>{dims, volume.labels().data()}, dim, 0, kind, true, out, nextDims)
+          : scanLevel(GridView<uint8_t>{dims, volume.data().data()}, dim, 0, kind, false, out, nextDims);
   if (kind != LayoutKind::Gradational) return out;
   // Gradational: halve and repeat until the working volume is empty (steps 3-5). Every level
   // places at least its outermost filled cells, so this terminates after ~log2(size) levels.
   for (int level = 1; std::any_of(next.begin(), next.end(), [](uint16_t v) { return v != 0; }); ++level) {
     const std::vector<uint16_t> cur = std::move(next);
     dims = nextDims;
-    next = scanLevel(GridView<uint16_t>{dims, cur.data()}, dim, level, kind, out, nextDims);
+    next = scanLevel(GridView<uint16_t>{dims, cur.data()}, dim, level, kind, volume.hasLabels(), out, nextDims);
   }
   return out;
 }
