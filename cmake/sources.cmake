@@ -21,6 +21,7 @@ set(GRADEL_CORE_SOURCES
   src/model.cpp
   src/output.cpp
   src/pins.cpp
+  src/factor_solve.cpp
   src/projective.cpp
   src/large_step.cpp
   src/rotation_fit.cpp
@@ -91,6 +92,7 @@ set(GRADEL_TEST_SOURCES
   tests/test_element_stiffness.cpp
   tests/test_element_stage.cpp
   tests/test_embedding.cpp
+  tests/test_factor_solve.cpp
   tests/test_frame_loop.cpp
   tests/test_golden.cpp
   tests/test_implicit.cpp

@@ -4,6 +4,7 @@
 #include <Eigen/SparseCholesky>
 #include <cmath>
 
+#include "factor_solve.h"
 #include "gradel/element.h"
 #include "gradel/integration.h"
 #include "gradel/rotation_fit.h"
@@ -35,34 +36,24 @@ struct ProjectiveSolver::Impl {
   std::vector<uint32_t> vertexOfRow;  ///< Per row of the reduced system: its vertex.
   std::vector<uint32_t> pinned;       ///< Pinned vertex ids (ascending).
   std::vector<Real> diagonal;         ///< Per vertex: the global matrix's diagonal entry (0 if pinned).
-  Eigen::SimplicialLDLT<SpMat, Eigen::Lower, FactorOrdering> ldlt;  ///< Factor of the reduced global matrix.
-  Rhs rhs, sol;                                                     ///< Scratch, numFree x 3.
+  SplitFactor factor;                 ///< The reduced global matrix's LDL^T factor (factor_solve.h).
+  ThreadTeam* team = nullptr;         ///< Its solves' threads (null: this thread).
+  Rhs rhs, sol;                       ///< Scratch, numFree x 3.
+  mutable std::vector<Vec3> rows;     ///< Scratch of factorSolve, numFree.
 
   // z = A^-1 b through the factor A = P^T L D L^T P, the three coordinates at once: each
   // triangular sweep reads L once for all three (Eigen's solve sweeps it once per column, and the
-  // sweeps are bound by reading L: 3x the time on the 64-voxel box, whose L has 4.3 M entries).
-  // Row i of b is get(i); put(i, z_i) receives the solution. Same operations, in the same order
-  // per coordinate, as SimplicialLDLT::solve.
+  // sweeps are bound by reading L: 3x the time on the 64-voxel box), split between two threads
+  // along the elimination tree (factor_solve.h). Row i of b is get(i); put(i, z_i) receives the
+  // solution.
   template <class Get, class Put>
   void factorSolve(Get&& get, Put&& put) const {
-    if (vertexOfRow.empty()) return;                     // every vertex pinned: nothing to solve
-    const SpMat& L = ldlt.matrixL().nestedExpression();  // strictly lower, unit diagonal implied
-    const auto& d = ldlt.vectorD();
-    const auto& perm = ldlt.permutationP().indices();
-    const Eigen::Index n = L.cols();
-    std::vector<Vec3> y(static_cast<size_t>(n));
-    for (Eigen::Index i = 0; i < n; ++i) y[size_t(perm(i))] = get(i);
-    for (Eigen::Index j = 0; j < n; ++j) {
-      const Vec3 yj = y[size_t(j)];
-      for (SpMat::InnerIterator it(L, j); it; ++it) y[size_t(it.index())] -= it.value() * yj;
-    }
-    for (Eigen::Index j = 0; j < n; ++j) y[size_t(j)] *= Real(1) / d(j);
-    for (Eigen::Index j = n - 1; j >= 0; --j) {
-      Vec3 s = y[size_t(j)];
-      for (SpMat::InnerIterator it(L, j); it; ++it) s -= it.value() * y[size_t(it.index())];
-      y[size_t(j)] = s;
-    }
-    for (Eigen::Index i = 0; i < n; ++i) put(i, y[size_t(perm(i))]);
+    const size_t n = vertexOfRow.size();
+    if (n == 0) return;  // every vertex pinned: nothing to solve
+    rows.resize(n);
+    for (size_t i = 0; i < n; ++i) rows[i] = get(Eigen::Index(i));
+    factor.solve(rows.data(), rows.data(), team);
+    for (size_t i = 0; i < n; ++i) put(Eigen::Index(i), rows[i]);
   }
   Rhs solve(const Rhs& b) const {
     Rhs z(b.rows(), 3);
@@ -347,10 +338,24 @@ ProjectiveSolver::ProjectiveSolver(const RestModel& model, Real dt, const std::v
   s.diagonal.assign(V, 0.0);
   for (size_t i = 0; i < V; ++i)
     if (s.freeIndex[i] >= 0) s.diagonal[i] = A.coeff(s.freeIndex[i], s.freeIndex[i]);
-  if (nFree > 0) s.ldlt.compute(A);  // (METIS cannot order an empty graph)
-  if (nFree > 0 && s.ldlt.info() != Eigen::Success)
-    throw InputError(
-        "implicit integrator: the global matrix could not be factored (a body without pins in a static solve?)");
+  if (nFree > 0) {  // (METIS cannot order an empty graph)
+    Eigen::SimplicialLDLT<SpMat, Eigen::Lower, FactorOrdering> ldlt(A);
+    if (ldlt.info() != Eigen::Success)
+      throw InputError(
+          "implicit integrator: the global matrix could not be factored (a body without pins in a static solve?)");
+    const SpMat& L = ldlt.matrixL().nestedExpression();  // strictly lower, unit diagonal implied
+    const size_t n = size_t(nFree);
+    std::vector<int32_t> colStart(n + 1, 0), rows, perm(n, 0);
+    std::vector<Real> values, d(n, 0.0);
+    rows.reserve(size_t(L.nonZeros())), values.reserve(size_t(L.nonZeros()));
+    for (Eigen::Index j = 0; j < L.cols(); ++j) {
+      for (SpMat::InnerIterator it(L, j); it; ++it) rows.push_back(int32_t(it.index())), values.push_back(it.value());
+      colStart[size_t(j) + 1] = int32_t(rows.size());
+      d[size_t(j)] = ldlt.vectorD()(j);
+      perm[size_t(j)] = int32_t(ldlt.permutationP().indices()(j));
+    }
+    s.factor = SplitFactor(std::move(colStart), std::move(rows), std::move(values), std::move(d), std::move(perm));
+  }
   s.rhs.resize(nFree, 3);
 }
 
@@ -409,6 +414,8 @@ void ProjectiveSolver::applyInverse(const std::vector<Vec3>& r, std::vector<Vec3
   s.factorSolve([&](Eigen::Index row) { return r[vertexOf[size_t(row)]]; },
                 [&](Eigen::Index row, const Vec3& v) { z[vertexOf[size_t(row)]] = v; });
 }
+
+void ProjectiveSolver::setTeam(ThreadTeam* team) { impl_->team = team; }
 
 Real ProjectiveSolver::diagonal(uint32_t vertex) const { return impl_->diagonal.at(vertex); }
 

@@ -592,6 +592,16 @@ void World::updateBodyContactInvMass() {
   for (uint32_t u : pinSet_.vertices) bodyContactInvMass_[u] = 0;
 }
 
+// The team of a frame-size step's solvers (null: one thread): the threads asked for, at most one
+// per kMinVerticesPerThread vertices.
+ThreadTeam* World::frameStepTeam() {
+  const int members =
+      int(std::max<size_t>(1, std::min<size_t>(size_t(sim_.threads), model_->numVertices() / kMinVerticesPerThread)));
+  if (members == 1) return nullptr;
+  prepareTeam(members);
+  return team_.get();
+}
+
 void World::stepExplicit() {
   const size_t V = model_->numVertices(), E = model_->numElements();
   const int members = int(std::max<size_t>(1, std::min<size_t>(size_t(sim_.threads), V / kMinVerticesPerThread)));
@@ -695,6 +705,7 @@ void World::finishFrameStep(Real tNext) {
 // are swept along their paths.
 void World::stepImplicit(bool largeStep) {
   if (!projective_) projective_ = std::make_unique<ProjectiveSolver>(*model_, dt_, pinSet_.vertices);
+  projective_->setTeam(frameStepTeam());  // the factor's solves (the same bits at any count, projective.h)
   beginContactImpulses();
   const Vec3 g = sim_.gravity;
   const bool contacts = !manipulators_.empty() || domain_.enabled;
@@ -776,12 +787,8 @@ void World::stepImplicit(bool largeStep) {
 void World::stepLargeStep() {
   const int substeps = sim_.largeStepSubsteps;
   if (!largeStep_) largeStep_ = std::make_unique<LargeStepSolver>(*model_, dt_ / substeps, pinSet_.vertices);
-  // The solve's element forces on the team (the same bits at any count, large_step.h).
-  const int members =
-      int(std::max<size_t>(1, std::min<size_t>(size_t(sim_.threads), model_->numVertices() / kMinVerticesPerThread)));
-  if (members > 1) prepareTeam(members);
-  largeStep_->setTeam(members > 1 ? team_.get() : nullptr);
-  const Vec3 g = sim_.gravity;  // projected into a 2D body's plane by the constructor
+  largeStep_->setTeam(frameStepTeam());  // element forces and factor solves (the same bits at any count)
+  const Vec3 g = sim_.gravity;           // projected into a 2D body's plane by the constructor
   const bool contacts = !manipulators_.empty() || domain_.enabled;
   const Real tNext = state_.time + dt_;
   beginContactImpulses();

@@ -82,7 +82,7 @@ class LargeStepSolver {
   /// Threads for the solve's element forces (null: this thread only). Any team gives the same
   /// result bit for bit: each element's forces go to its own slots, summed per vertex in element
   /// order, as on one thread.
-  void setTeam(ThreadTeam* team) { team_ = team; }
+  void setTeam(ThreadTeam* team) { team_ = team, half_.setTeam(team); }
 
  private:
   void forces(const std::vector<Vec3>& x, std::vector<Quat>& q, std::vector<Vec3>& f, int iterations) const;

@@ -45,6 +45,8 @@
 
 namespace gradel {
 
+class ThreadTeam;
+
 /// One contact between bodies in the solve (see above).
 struct PairConstraint {
   uint32_t vertex;               ///< The vertex p.
@@ -90,6 +92,11 @@ class ProjectiveSolver {
 
   /// z = A^-1 r on the free vertices (A the factored global matrix), pinned entries 0.
   void applyInverse(const std::vector<Vec3>& r, std::vector<Vec3>& z) const;
+
+  /// Threads for the factor's solves (null: this thread only). Any team gives the same result bit
+  /// for bit: the solve is split along the factor's elimination tree in the same way at any count
+  /// (src/factor_solve.h).
+  void setTeam(ThreadTeam* team);
 
   /// The global matrix's diagonal entry of a free vertex [N/m].
   Real diagonal(uint32_t vertex) const;
