@@ -193,8 +193,13 @@ struct ProjectiveSolver::Impl {
   // A is A + sum k J^T J, whose product with sol is Asol = appliedWithPairs() (else unused).
   Rhs appliedWithPairs() const { return activePairs.empty() ? Rhs() : apply(sol); }
   Vec3 heldReaction(int32_t r, const Rhs& Asol) const {
-    return (activePairs.empty() ? Vec3((A.row(r) * sol).transpose()) : Vec3(Asol.row(r).transpose())) -
-           rhs.row(r).transpose();
+    if (!activePairs.empty()) return Vec3(Asol.row(r).transpose()) - Vec3(rhs.row(r).transpose());
+    // Row r of A is column r (A is symmetric): its entries, not a search of every column (A.row(r)
+    // of a column-major matrix visits all of them: 78 % of box-realtime's contact steps, with
+    // ~4,000 held vertices).
+    Vec3 a = Vec3::Zero();
+    for (SpMat::InnerIterator it(A, r); it; ++it) a += it.value() * Vec3(sol.row(it.index()).transpose());
+    return a - Vec3(rhs.row(r).transpose());
   }
 
   // One-sided holds: lets go of the held rows whose reaction (A x - b on the row: the force the
