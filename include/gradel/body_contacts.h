@@ -132,7 +132,7 @@ std::vector<ContactBody> buildContactBodies(const RestModel& world, const std::v
 struct BodyContactState {
   Vec3* positions = nullptr;                 ///< [m] end of the step: corrected in place.
   Vec3* velocities = nullptr;                ///< [m/s] end of the step: corrected in place.
-  const Vec3* previousPositions = nullptr;   ///< [m] start of the step.
+  const Vec3* previousPositions = nullptr;   ///< [m] start of the step (every vertex of a body: the last resort).
   const Vec3* previousVelocities = nullptr;  ///< [m/s] start of the step (the bounce).
   const Real* invMass = nullptr;             ///< [1/kg] 0 = immovable (pinned).
 };
@@ -143,6 +143,8 @@ struct BodyContactStats {
   size_t contacts = 0;    ///< Vertex-face contacts resolved.
   Real maxDepth = 0;      ///< [m] deepest vertex found, before correction.
   int rounds = 0;         ///< Detection rounds run.
+  int takeBacks = 0;      ///< Times the last resort took bodies back towards the step's start (0: not needed).
+  Real takenBackTo = 1;   ///< [-] the fraction of the step's motion the taken-back bodies kept.
   double seconds = 0;     ///< Wall time of the call (measurements; no result depends on it).
 };
 
@@ -161,6 +163,8 @@ class BodyContacts {
 
   static constexpr int kRounds = 8;      ///< Detection rounds per step at most.
   static constexpr int kIterations = 4;  ///< Gauss-Seidel sweeps over the contacts per round.
+  /// The last resort halves the taken-back bodies' motion down to this fraction, then takes it all back.
+  static constexpr Real kTakeBackLeast = 1.0 / 16;
 
   struct Contact {
     uint32_t vertex;               ///< World id of the vertex.
@@ -211,6 +215,8 @@ class BodyContacts {
   };
   void detectPair(size_t a, size_t b, int round, const BodyContactState& s, BodyContactStats& stats);
   void detectSelf(size_t a, const BodyContactState& s, BodyContactStats& stats);
+  bool detectAll(const BodyContactState& s, BodyContactStats& stats);
+  void takeBack(const BodyContactState& s, BodyContactStats& stats);
   void buildGrid(const ContactBody& faces, const Box& region, const Vec3* x, const std::vector<uint32_t>* subset);
   template <class F>
   void forCandidateTriangles(const Vec3& lo, const Vec3& hi, F&& f);
