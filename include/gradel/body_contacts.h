@@ -26,9 +26,13 @@
 //                behind the nearest feature's angle-weighted pseudo-normal (the face normal in a
 //                face, the sum of its faces' normals on an edge, the angle-weighted sum at a
 //                corner: Baerentzen & Aanaes 2005), the sign test that is exact for a closed
-//                surface. A vertex that started the step outside (every step ends with none
-//                inside) cannot end it deeper than r, so its nearest triangle is always among the
-//                ones looked at: no deep case is missed, whatever the step (a frame step too).
+//                surface that does not pass through itself (a ball folded through itself in a
+//                fast off-centre collision at a frame step can leave a vertex that its winding
+//                number counts inside in front of its nearest face: docs/scenes.md). A vertex
+//                that started the step outside (every step ends with none inside) cannot end it
+//                deeper than r, so its nearest triangle is always among the ones looked at: no
+//                deep case is missed, whatever the step (a frame step too). Found is not undone:
+//                see the last resort below.
 //   response     the vertex and the point of the touched face (barycentric weights w) are pushed
 //                apart along the normal until the vertex is `skin` outside: the correction is
 //                split by inverse mass (generalised inverse mass W = 1/m_p + sum w_k^2 / m_k),
