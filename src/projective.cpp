@@ -122,9 +122,10 @@ struct ProjectiveSolver::Impl {
   static constexpr int kPairIterations = 8;  ///< PCG iterations per global solve with active pairs.
   // k = kPairStiffness x the pair's effective mass / dt^2 (projective.h). At 1 a contact vertex
   // held by a stiff body (whose inertia, not its own mass, resists the push) closed only a few
-  // per cent of its violation per pass: two balls closing at 1 m/s ended the step 8 mm inside
-  // (two-balls.json, dt = 1/60 s, 10 passes); at 10, 2.4 mm at 10 m/s; at 30 the 8 PCG
-  // iterations no longer converge and the 5 m/s balls ended a voxel inside (measured).
+  // per cent of its violation per pass: two balls closing at 1 m/s ended their first contact
+  // step 8 mm inside each other (two-balls.json, dt = 1/60 s, 10 passes); at 10, 1.5 mm (14 mm
+  // closing at 10 m/s, which the post-step stage clears); at 30 the 8 PCG iterations no longer
+  // converge and the balls closing at 10 m/s ended steps a voxel inside (measured).
   static constexpr Real kPairStiffness = 10;
 
   // n . (x_p - sum w_k x_k) over the free (or, pinnedOnly, the pinned) vertices of the pair.
