@@ -600,6 +600,60 @@ void BodyContacts::detectSelf(size_t a, const BodyContactState& s, BodyContactSt
   }
 }
 
+// Every contact of the positions now, from scratch (no candidate lists kept from round 0), into
+// round_: whether any vertex is inside another body (or, if on, crossed its own surface).
+bool BodyContacts::detectAll(const BodyContactState& s, BodyContactStats& stats) {
+  round_.clear();
+  for (PairCache& c : cache_) c.valid = false;
+  updateBounds(0, s);
+  const size_t B = bodies_.size();
+  for (size_t a = 0; a < B; ++a)
+    for (size_t b = 0; b < B; ++b) {
+      if (a == b && !settings_.selfContact) continue;
+      if (a == b)
+        detectSelf(a, s, stats);
+      else
+        detectPair(a, b, kRounds, s, stats);
+    }
+  return !round_.empty();
+}
+
+// The last resort (header): while a vertex is inside, the bodies of the contacts go back along
+// the straight line from where they ended towards where they started, all by one fraction.
+void BodyContacts::takeBack(const BodyContactState& s, BodyContactStats& stats) {
+  if (!detectAll(s, stats)) return;
+  Vec3* x = s.positions;
+  const Vec3* x0 = s.previousPositions;
+  const size_t B = bodies_.size();
+  auto bodyOf = [&](uint32_t u) {
+    for (size_t b = 0; b < B; ++b)
+      if (u >= bodies_[b].vertexBegin && u < bodies_[b].vertexEnd) return b;
+    return B;
+  };
+  std::vector<uint8_t> back(B, 0);
+  std::vector<std::vector<Vec3>> end(B);  // a body's positions when it joined
+  Real f = 1;
+  for (;;) {
+    bool grew = false;
+    for (const Contact& c : round_)
+      for (const size_t b : {bodyOf(c.vertex), bodyOf(c.face[0])})
+        if (b < B && !back[b]) {
+          back[b] = 1, grew = true;
+          end[b].assign(x + bodies_[b].vertexBegin, x + bodies_[b].vertexEnd);
+        }
+    if (f == 0 && !grew) break;  // nothing left to take back (pinned vertices stay)
+    f = f > kTakeBackLeast ? f / 2 : 0;
+    for (size_t b = 0; b < B; ++b) {
+      if (!back[b]) continue;
+      for (uint32_t u = bodies_[b].vertexBegin; u < bodies_[b].vertexEnd; ++u)
+        if (s.invMass[u] != 0) x[u] = x0[u] + f * (end[b][u - bodies_[b].vertexBegin] - x0[u]);
+    }
+    ++stats.takeBacks;
+    if (!detectAll(s, stats)) break;
+  }
+  stats.takenBackTo = f;
+}
+
 BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
   const auto t0 = std::chrono::steady_clock::now();
   BodyContactStats stats;
@@ -613,6 +667,7 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
   touched_.clear(), touchedStart_.clear(), dirtyBlocks_.clear();
   drift_ = 0;
   if (bodies_.size() >= 2) updatePatches(x);
+  bool fellBack = false;
   for (int round = 0; round < kRounds; ++round) {
     // Broad phase: each body's surface box now and how far its surface moved in the step.
     updateBounds(round, s);
@@ -646,6 +701,7 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
     stats.rounds = round + 1;
     if (round_.empty()) break;
     if (round + 1 == kRounds) {
+      fellBack = true;
       // Still inside after every round: contacts that contradict each other (two vertices each
       // inside the other body behind faces they are corners of, where coarse staircases cross).
       // Each such vertex and its face point go back to where they were relative to each other at
@@ -680,6 +736,7 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
         }
       }
   }
+  if (fellBack) takeBack(s, stats);
   // Velocities: equal and opposite impulses on the relative velocity at each contact.
   const Real e = settings_.restitution, mu = settings_.friction;
   for (const Contact& c : contacts_) {
@@ -746,7 +803,9 @@ void BodyContacts::proximity(const Vec3* x, Real margin, std::vector<Proximity>&
         Real best = margin * margin;
         uint32_t bestTri = ContactBody::kNone;
         ClosestPoint bestCp{};
+        const Real slack2 = 1e-24 * F.thickness * F.thickness;
         forCandidateTriangles(p - Vec3::Constant(margin), p + Vec3::Constant(margin), [&](uint32_t t) {
+          if (boxDistance2(triBox_[t].lo, triBox_[t].hi, p) > best * kPrune + slack2) return;  // cannot be nearer
           const auto& tri = F.triangles[t];
           const ClosestPoint cp = closestPointOnTriangle(p, x[tri[0]], x[tri[1]], x[tri[2]]);
           const Real d2 = (p - (cp.w[0] * x[tri[0]] + cp.w[1] * x[tri[1]] + cp.w[2] * x[tri[2]])).squaredNorm();

@@ -491,11 +491,12 @@ void World::step() {
   if (bodyContacts_) stageBodyContacts();
 }
 
-// Soft-soft contact (body_contacts.h): the bodies' boundary vertices at the start of the step,
-// what the stage reads as the step's start (their swept band and the bounce).
+// Soft-soft contact (body_contacts.h): the bodies' vertices at the start of the step, what the
+// stage reads as the step's start (the boundary's swept band and the bounce; every vertex of a
+// body for the last resort, which takes bodies back towards where they were).
 void World::saveBodyContactStart() {
   for (const ContactBody& b : bodyContacts_->bodies())
-    for (uint32_t u : b.vertices)
+    for (uint32_t u = b.vertexBegin; u < b.vertexEnd; ++u)
       bodyContactStartX_[u] = state_.positions[u], bodyContactStartV_[u] = state_.velocities[u];
 }
 
@@ -740,10 +741,24 @@ void World::stepImplicit(bool largeStep) {
     }
     std::vector<uint64_t> pairKeys;
     std::vector<PairConstraint> pairs;
-    // Found at the end of the first solve, within the voxel size. (Found at the start of the
-    // step instead, out to the voxel size plus twice the step's largest motion, the balls of
-    // two-balls.json at large step bounced back into each other: measured.)
-    if (bodyContacts_) pairs = bodyPairConstraints(state_.positions, bodyContactMargin(), pairKeys);
+    // Found at the start of the step, where no vertex is inside another body and each vertex's
+    // nearest face is the one it approaches, out to the voxel size plus the two largest distances
+    // a body's surface moved in the first solve: every vertex that could reach a face of another
+    // body within the step. (Found at the end of the first solve, within the voxel size, a vertex
+    // that moved deeper than that into the other body had no constraint: two balls closing at
+    // 1 m/s ended steps a voxel inside each other, and at 10 m/s passed through each other.)
+    if (bodyContacts_) {
+      Real first = 0, second = 0;
+      for (const ContactBody& b : bodyContacts_->bodies()) {
+        Real moved = 0;
+        for (uint32_t u : b.vertices) moved = std::max(moved, (freeEnd[u] - x0[u]).norm());
+        if (moved > first)
+          second = first, first = moved;
+        else
+          second = std::max(second, moved);
+      }
+      pairs = bodyPairConstraints(x0, bodyContactMargin() + first + second, pairKeys);
+    }
     if (!held.empty() || !pairs.empty()) {
       // Contact forces: the held solve's multipliers (the force holding each vertex, times dt)
       // are the impulse the contacts give the body, each on the surface that moved it; the last

@@ -65,7 +65,8 @@ struct Bodies {
       const RestModel& m = *b.model;
       const DisplaySurface s = buildDisplaySurface(b.layout, b.volume, SurfaceKind::Voxel);
       cb.push_back(buildContactBody(s, b.offset, b.offset + uint32_t(m.numVertices()), m.voxelSize,
-                                    m.restPositions.data(), m.onSurface.data(), {m.elemStart.data(), m.elemVerts.data(), 0, m.numElements(), b.offset}));
+                                    m.restPositions.data(), m.onSurface.data(),
+                                    {m.elemStart.data(), m.elemVerts.data(), 0, m.numElements(), b.offset}));
     }
     contacts = BodyContacts(std::move(cb), settings);
     x0 = x, v0 = v;
@@ -280,10 +281,10 @@ TEST(BodyContacts, FrictionStopsASlidingBlock) {
 }
 
 // Two small bodies thrown at each other at random offsets and speeds (explicit steps; each body
-// stepped by its own World, the contact stage on the arrays concatenated), any restitution and friction: after every step no
-// vertex of either lies inside the other, and the contact stage changes the total linear
-// momentum by no more than 1e-9 of its scale. The CI default is 10 cases from a fixed seed
-// (deterministic, a few seconds); explore with RC_PARAMS="seed=..." and GRADEL_PROPERTY_CASES.
+// stepped by its own World, the contact stage on the arrays concatenated), any restitution and friction: after every
+// step no vertex of either lies inside the other, and the contact stage changes the total linear momentum by no more
+// than 1e-9 of its scale. The CI default is 10 cases from a fixed seed (deterministic, a few seconds); explore with
+// RC_PARAMS="seed=..." and GRADEL_PROPERTY_CASES.
 int touchedCases = 0;  // cases in which the bodies met (the wrapper checks most do)
 
 void randomApproachEndsOutside() {
@@ -315,6 +316,29 @@ void randomApproachEndsOutside() {
     RC_ASSERT(w.verticesInside(1, 0) == 0u);
   }
   if (contacts > 0) ++touchedCases;
+}
+
+// Two balls (8 voxels across) that ended a step half a ball deep in each other (one moved 4.5 cm
+// in one step, from 5 mm apart), as a frame-size step whose solve left them so: the rounds' pushes
+// cannot undo an overlap that deep, and the last resort takes the ball back towards where it
+// started (header): no boundary vertex ends inside, linear momentum kept.
+TEST(BodyContacts, DeepOverlapIsTakenBack) {
+  Bodies w;
+  w.add(rasterize(presetShape("sphere", 8, 3)), LayoutKind::Gradational, Vec3::Zero(), Vec3::Zero(), explicitFree());
+  w.add(rasterize(presetShape("sphere", 8, 3)), LayoutKind::Gradational, Vec3(0.085, 0.003, -0.002), Vec3(-2.7, 0, 0),
+        explicitFree());
+  w.build({});
+  ASSERT_EQ(w.verticesInside(0, 1, true) + w.verticesInside(1, 0, true), 0u) << "x0: apart";
+  for (size_t i = w.bodies[1].offset; i < w.x.size(); ++i) w.x[i] += Vec3(-0.045, 0, 0);
+  ASSERT_GT(w.verticesInside(0, 1, true) + w.verticesInside(1, 0, true), 20u) << "x: deep in each other";
+  const Vec3 p0 = w.momentum();
+  const Real scale = w.momentumScale();
+  const BodyContactStats s = w.resolve();
+  EXPECT_EQ(w.verticesInside(0, 1, true), 0u);
+  EXPECT_EQ(w.verticesInside(1, 0, true), 0u);
+  EXPECT_GT(s.takeBacks, 0) << "the rounds alone did not get them out";
+  EXPECT_LT(s.takenBackTo, 1.0);
+  EXPECT_LE((w.momentum() - p0).norm(), 1e-9 * scale);
 }
 
 TEST(BodyContacts, RandomApproachesEndOutside) {
@@ -409,17 +433,20 @@ struct WorldOfBodies {
     std::vector<std::shared_ptr<const RestModel>> models;
     std::vector<const Layout*> layouts;
     std::vector<const VoxelVolume*> volumes;
-    for (const test::Body& b : parts) models.push_back(b.model), layouts.push_back(&b.layout), volumes.push_back(&b.volume);
+    for (const test::Body& b : parts)
+      models.push_back(b.model), layouts.push_back(&b.layout), volumes.push_back(&b.volume);
     auto m = std::make_shared<RestModel>(combineRestModels(models));
     world = std::make_unique<World>(m, sim, domain, std::vector<ManipulatorSettings>{});
     for (size_t i = 0; i < parts.size(); ++i)
-      for (uint32_t u = m->bodies[i].vertexBegin; u < m->bodies[i].vertexEnd; ++u) world->state().velocities[u] = velocities[i];
+      for (uint32_t u = m->bodies[i].vertexBegin; u < m->bodies[i].vertexEnd; ++u)
+        world->state().velocities[u] = velocities[i];
     world->setBodyContacts(buildContactBodies(*m, layouts, volumes), contact);
   }
   const BodyRange& range(size_t i) const { return world->model().bodies[i]; }
   Vec3 momentum() const {
     Vec3 p = Vec3::Zero();
-    for (size_t u = 0; u < world->model().numVertices(); ++u) p += world->model().mass[u] * world->state().velocities[u];
+    for (size_t u = 0; u < world->model().numVertices(); ++u)
+      p += world->model().mass[u] * world->state().velocities[u];
     return p;
   }
   Real momentumScale() const {
@@ -541,7 +568,8 @@ struct SceneRun {
   size_t inside() { return test::verticesInsideOtherBodies(world()); }
   Vec3 momentum() {
     Vec3 p = Vec3::Zero();
-    for (size_t u = 0; u < world().model().numVertices(); ++u) p += world().model().mass[u] * world().state().velocities[u];
+    for (size_t u = 0; u < world().model().numVertices(); ++u)
+      p += world().model().mass[u] * world().state().velocities[u];
     return p;
   }
 };
@@ -613,12 +641,14 @@ TEST(BodyContactScenes, DISABLED_TwoSpheresContactShare) {
   double stage = 0;
   size_t contacts = 0;
   const auto t0 = std::chrono::steady_clock::now();
-  for (int k = 0; k < steps; ++k) w.step(), stage += w.bodyContactStats().seconds, contacts += w.bodyContactStats().contacts;
+  for (int k = 0; k < steps; ++k)
+    w.step(), stage += w.bodyContactStats().seconds, contacts += w.bodyContactStats().contacts;
   const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("two %d^3 spheres, %zu vertices, %d threads: %d steps in contact, %.2f ms/step, contact stage %.2f ms/step "
-              "(%.1f %%), %.0f contacts/step, state hash %016llx\n",
-              n, w.model().numVertices(), scene.simulation.threads, steps, 1e3 * total / steps, 1e3 * stage / steps,
-              100 * stage / total, double(contacts) / steps, (unsigned long long)w.stateHash());
+  std::printf(
+      "two %d^3 spheres, %zu vertices, %d threads: %d steps in contact, %.2f ms/step, contact stage %.2f ms/step "
+      "(%.1f %%), %.0f contacts/step, state hash %016llx\n",
+      n, w.model().numVertices(), scene.simulation.threads, steps, 1e3 * total / steps, 1e3 * stage / steps,
+      100 * stage / total, double(contacts) / steps, (unsigned long long)w.stateHash());
 }
 
 }  // namespace gradel
