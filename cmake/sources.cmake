@@ -10,6 +10,7 @@ set(GRADEL_CORE_SOURCES
   src/contacts.cpp
   src/divergence.cpp
   src/element.cpp
+  src/coarse_space.cpp
   src/element_stiffness.cpp
   src/element_stage.cpp
   src/embedding.cpp

@@ -775,7 +775,7 @@ void World::stepImplicit(bool largeStep) {
 // manipulator moves more than half its radius within the step.
 void World::stepLargeStep() {
   const int substeps = sim_.largeStepSubsteps;
-  if (!largeStep_) largeStep_ = std::make_unique<LargeStepSolver>(*model_, dt_ / substeps, pinSet_.vertices);
+  if (!largeStep_) largeStep_ = std::make_unique<LargeStepSolver>(*model_, dt_ / substeps, pinSet_.vertices, sim_.largeStepCoarseNodes);
   // The solve's element forces on the team (the same bits at any count, large_step.h).
   const int members =
       int(std::max<size_t>(1, std::min<size_t>(size_t(sim_.threads), model_->numVertices() / kMinVerticesPerThread)));

@@ -52,6 +52,7 @@
 namespace gradel {
 
 class ThreadTeam;
+class CoarseSpace;
 
 struct LargeStepReport {
   int passes = 0;             ///< Conjugate-gradient iterations run.
@@ -62,7 +63,8 @@ struct LargeStepReport {
 class LargeStepSolver {
  public:
   /// Factors the midpoint system (h = dt / 2) with the vertices `pinned` eliminated.
-  LargeStepSolver(const RestModel& model, Real dt, const std::vector<uint32_t>& pinned);
+  LargeStepSolver(const RestModel& model, Real dt, const std::vector<uint32_t>& pinned, int coarseNodes = 0);
+  ~LargeStepSolver();
 
   /// One step of dt: x, v (per vertex), q (per element, warm start) in/out. pinStart / pinEnd:
   /// the pinned vertices' positions at the start and end of the step (order of `pinned`).
@@ -89,14 +91,17 @@ class LargeStepSolver {
   /// Newton-PCG on 1/(2 h^2) |x - y|_M^2 + E(x) over the vertices with free[i] != 0 (x in/out,
   /// the others kept), preconditioned by `pre` (factored at h); returns the CG iterations run.
   int minimise(const ProjectiveSolver& pre, Real h, const std::vector<Vec3>& y, const std::vector<char>& free,
-               Real scale, int passes, int fitIterations, std::vector<Vec3>& x, std::vector<Quat>& q) const;
+               Real scale, int passes, int fitIterations, bool reform, std::vector<Vec3>& x,
+               std::vector<Quat>& q) const;
 
   const RestModel* model_;
   ThreadTeam* team_ = nullptr;
   std::vector<uint32_t> vertexPairStart_, vertexPairs_;  ///< Per vertex: its element-vertex pairs, in element order.
   Real dt_;
   std::vector<uint32_t> pinned_;
-  ProjectiveSolver half_;           ///< Backward Euler at h = dt / 2.
+  ProjectiveSolver half_;  ///< Backward Euler at h = dt / 2.
+  std::unique_ptr<CoarseSpace> coarse_;
+  uint64_t substeps_ = 0;           ///< Substeps run (the coarse operator is re-formed every second).
   std::vector<Vec3> acceleration_;  ///< [m/s^2] last step's, the warm start.
   bool budgetValid_ = false;
   Real budget_ = 0;  ///< [J]
