@@ -96,6 +96,7 @@ set(GRADEL_TEST_SOURCES
   tests/test_golden.cpp
   tests/test_implicit.cpp
   tests/test_integration.cpp
+  tests/test_coarse_space.cpp
   tests/test_large_step.cpp
   tests/test_io_embedded.cpp
   tests/test_io_grey_readers.cpp

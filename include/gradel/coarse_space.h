@@ -53,7 +53,7 @@ class CoarseSpace {
   Eigen::VectorXd restrictTo(const std::vector<Vec3>& r) const;
   void prolongAdd(const Eigen::VectorXd& c, std::vector<Vec3>& z) const;
   /// The last update's E (for tests).
-  const Eigen::MatrixXd& matrix() const { return E_; }
+  Eigen::MatrixXd matrix() const { return E_.selfadjointView<Eigen::Lower>(); }
 
  private:
   struct Weight {
