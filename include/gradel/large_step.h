@@ -20,12 +20,17 @@
 // passes still left the clamped bar unstable (measured). Here each Newton system
 // (M / h^2 + K(x)) dx = -grad Phi(x) is solved by preconditioned conjugate gradients: K(x) p is
 // analytic (element_stiffness.h, clamped to >= 0 per element; a forward difference of the forces
-// blew up the 8-across bar), the preconditioner is the projective matrix M / h^2 + sum k_e G_e^T G_e,
-// one back-solve (3 coordinates per sweep of L; docs/speed.md) per CG iteration. `passes` bounds the
-// CG iterations of a step (bounded time); up to 4 Newton iterations share them. Warm start:
+// blew up the 8-across bar). The preconditioner has two levels: the projective matrix
+// M / h^2 + sum k_e G_e^T G_e (factored once; one back-solve, 3 coordinates per sweep of L,
+// docs/speed.md, per CG iteration), which penalises element rotations like stretch and so leaves
+// the smooth bending modes badly conditioned (alone it needed 50-60 iterations per substep on the
+// 8-across bar), plus the coarse correction of coarse_space.h (smooth affine motions on a grid of
+// at most `coarseNodes` nodes per body, its operator Z^T A Z of the true Newton matrix, re-formed
+// once every second substep), which also gives each Newton iteration its Galerkin start. Each
+// system is solved to 1e-2 in the preconditioned residual norm (inexact Newton). `passes` bounds
+// the CG iterations of a step (bounded time); up to 4 Newton iterations share them. Warm start:
 // x_m^0 = x_n + h v_n + h^2 a_{n-1} (the last step's acceleration: a body at rest starts at its
 // equilibrium); the rotations are warm-started from the last fit.
-//
 // Guards, after the extrapolation:
 //   momentum  with no pins, the angular momentum about the centre of mass is restored to its
 //           start-of-step value by a rigid rotation increment (uniform gravity exerts no torque
@@ -62,7 +67,8 @@ struct LargeStepReport {
 
 class LargeStepSolver {
  public:
-  /// Factors the midpoint system (h = dt / 2) with the vertices `pinned` eliminated.
+  /// Factors the midpoint system (h = dt / 2) with the vertices `pinned` eliminated; coarseNodes > 0:
+  /// the coarse correction with at most that many grid nodes per body (coarse_space.h).
   LargeStepSolver(const RestModel& model, Real dt, const std::vector<uint32_t>& pinned, int coarseNodes = 0);
   ~LargeStepSolver();
 
