@@ -74,8 +74,11 @@ TEST(CoarseSpace, OperatorIsZtAZAndSymmetricPositiveDefinite) {
     e(j) = 1;
     std::vector<Vec3> z(m.numVertices(), Vec3::Zero());
     coarse.prolongAdd(e, z);
-    for (size_t i = 0; i < m.numVertices(); ++i)
-      if (!s.free[i]) EXPECT_EQ(z[i], Vec3::Zero());  // pinned vertices have no coarse motion
+    for (size_t i = 0; i < m.numVertices(); ++i) {
+      if (!s.free[i]) {
+        EXPECT_EQ(z[i], Vec3::Zero());  // pinned vertices have no coarse motion
+      }
+    }
     ref.col(j) = coarse.restrictTo(s.apply(z));
   }
   const Real scale = ref.diagonal().maxCoeff();
