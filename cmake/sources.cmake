@@ -10,6 +10,7 @@ set(GRADEL_CORE_SOURCES
   src/contacts.cpp
   src/divergence.cpp
   src/element.cpp
+  src/coarse_space.cpp
   src/element_stiffness.cpp
   src/element_stage.cpp
   src/embedding.cpp
@@ -97,6 +98,7 @@ set(GRADEL_TEST_SOURCES
   tests/test_golden.cpp
   tests/test_implicit.cpp
   tests/test_integration.cpp
+  tests/test_coarse_space.cpp
   tests/test_large_step.cpp
   tests/test_io_embedded.cpp
   tests/test_io_grey_readers.cpp

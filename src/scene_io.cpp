@@ -765,6 +765,7 @@ void readSimulation(Fields f, Scene& scene) {
   s.implicitIterations = f.optInteger("implicit_iterations", 1, 1000).value_or(s.implicitIterations);
   s.largeStepPasses = f.optInteger("large_step_passes", 1, 1000).value_or(s.largeStepPasses);
   s.largeStepSubsteps = f.optInteger("large_step_substeps", 1, 64).value_or(s.largeStepSubsteps);
+  s.largeStepCoarseNodes = f.optInteger("large_step_coarse_nodes", 0, 512).value_or(s.largeStepCoarseNodes);
   coreCheck(f, [&] { validate(s); });
   f.finish();
 }

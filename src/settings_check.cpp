@@ -35,6 +35,8 @@ void validate(const SimulationSettings& s) {
   if (s.rotationIterations < 1) fail("rotation_iterations", "must be >= 1", s.rotationIterations);
   if (s.implicitIterations < 1) fail("implicit_iterations", "must be >= 1", s.implicitIterations);
   if (s.largeStepPasses < 1) fail("large_step_passes", "must be >= 1", s.largeStepPasses);
+  if (s.largeStepCoarseNodes < 0 || s.largeStepCoarseNodes > 512)
+    fail("large_step_coarse_nodes", "must be in [0, 512]", s.largeStepCoarseNodes);
   if (s.largeStepSubsteps < 1 || s.largeStepSubsteps > 64)
     fail("large_step_substeps", "must be in [1, 64]", s.largeStepSubsteps);
   // Forward Euler multiplies a vibration's energy by (1 + (omega dt)^2) / (1 + damping dt) every

@@ -801,7 +801,9 @@ void World::stepImplicit(bool largeStep) {
 // manipulator moves more than half its radius within the step.
 void World::stepLargeStep() {
   const int substeps = sim_.largeStepSubsteps;
-  if (!largeStep_) largeStep_ = std::make_unique<LargeStepSolver>(*model_, dt_ / substeps, pinSet_.vertices);
+  if (!largeStep_)
+    largeStep_ =
+        std::make_unique<LargeStepSolver>(*model_, dt_ / substeps, pinSet_.vertices, sim_.largeStepCoarseNodes);
   largeStep_->setTeam(frameStepTeam());  // element forces and factor solves (the same bits at any count)
   const Vec3 g = sim_.gravity;           // projected into a 2D body's plane by the constructor
   const bool contacts = !manipulators_.empty() || domain_.enabled;

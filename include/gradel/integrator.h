@@ -62,10 +62,11 @@ struct SimulationSettings {
   int threads = hardwareThreads();  ///< Worker threads (results are identical at any count).
   int rotationIterations = 4;       ///< Max warm-started rotation refinements per element per step.
   int implicitIterations = 10;      ///< Implicit only: local/global passes per step (projective.h).
-  int largeStepPasses =
-      20;  ///< LargeStep only: conjugate-gradient iterations per substep (large_step.h; 10 left the bar unconverged).
+  int largeStepPasses = 10;         ///< LargeStep only: conjugate-gradient iterations per substep (large_step.h).
   int largeStepSubsteps =
       2;  ///< LargeStep only: midpoint substeps per step (2: the bar's 13 Hz mode within 4 % at 1/60 s).
+  int largeStepCoarseNodes = 27;  ///< LargeStep only: most coarse-grid nodes per body of the two-level
+                                  ///< preconditioner (coarse_space.h; 0 = the projective factor alone).
 };
 
 }  // namespace gradel

@@ -20,12 +20,17 @@
 // passes still left the clamped bar unstable (measured). Here each Newton system
 // (M / h^2 + K(x)) dx = -grad Phi(x) is solved by preconditioned conjugate gradients: K(x) p is
 // analytic (element_stiffness.h, clamped to >= 0 per element; a forward difference of the forces
-// blew up the 8-across bar), the preconditioner is the projective matrix M / h^2 + sum k_e G_e^T G_e,
-// one back-solve (3 coordinates per sweep of L; docs/speed.md) per CG iteration. `passes` bounds the
-// CG iterations of a step (bounded time); up to 4 Newton iterations share them. Warm start:
+// blew up the 8-across bar). The preconditioner has two levels: the projective matrix
+// M / h^2 + sum k_e G_e^T G_e (factored once; one back-solve, 3 coordinates per sweep of L,
+// docs/speed.md, per CG iteration), which penalises element rotations like stretch and so leaves
+// the smooth bending modes badly conditioned (alone it needed 50-60 iterations per substep on the
+// 8-across bar), plus the coarse correction of coarse_space.h (smooth affine motions on a grid of
+// at most `coarseNodes` nodes per body, its operator Z^T A Z of the true Newton matrix, re-formed
+// once every second substep), which also gives each Newton iteration its Galerkin start. Each
+// system is solved to 1e-2 in the preconditioned residual norm (inexact Newton). `passes` bounds
+// the CG iterations of a step (bounded time); up to 4 Newton iterations share them. Warm start:
 // x_m^0 = x_n + h v_n + h^2 a_{n-1} (the last step's acceleration: a body at rest starts at its
 // equilibrium); the rotations are warm-started from the last fit.
-//
 // Guards, after the extrapolation:
 //   momentum  with no pins, the angular momentum about the centre of mass is restored to its
 //           start-of-step value by a rigid rotation increment (uniform gravity exerts no torque
@@ -52,6 +57,7 @@
 namespace gradel {
 
 class ThreadTeam;
+class CoarseSpace;
 
 struct LargeStepReport {
   int passes = 0;             ///< Conjugate-gradient iterations run.
@@ -61,8 +67,10 @@ struct LargeStepReport {
 
 class LargeStepSolver {
  public:
-  /// Factors the midpoint system (h = dt / 2) with the vertices `pinned` eliminated.
-  LargeStepSolver(const RestModel& model, Real dt, const std::vector<uint32_t>& pinned);
+  /// Factors the midpoint system (h = dt / 2) with the vertices `pinned` eliminated; coarseNodes > 0:
+  /// the coarse correction with at most that many grid nodes per body (coarse_space.h).
+  LargeStepSolver(const RestModel& model, Real dt, const std::vector<uint32_t>& pinned, int coarseNodes = 0);
+  ~LargeStepSolver();
 
   /// One step of dt: x, v (per vertex), q (per element, warm start) in/out. pinStart / pinEnd:
   /// the pinned vertices' positions at the start and end of the step (order of `pinned`).
@@ -89,14 +97,17 @@ class LargeStepSolver {
   /// Newton-PCG on 1/(2 h^2) |x - y|_M^2 + E(x) over the vertices with free[i] != 0 (x in/out,
   /// the others kept), preconditioned by `pre` (factored at h); returns the CG iterations run.
   int minimise(const ProjectiveSolver& pre, Real h, const std::vector<Vec3>& y, const std::vector<char>& free,
-               Real scale, int passes, int fitIterations, std::vector<Vec3>& x, std::vector<Quat>& q) const;
+               Real scale, int passes, int fitIterations, bool reform, std::vector<Vec3>& x,
+               std::vector<Quat>& q) const;
 
   const RestModel* model_;
   ThreadTeam* team_ = nullptr;
   std::vector<uint32_t> vertexPairStart_, vertexPairs_;  ///< Per vertex: its element-vertex pairs, in element order.
   Real dt_;
   std::vector<uint32_t> pinned_;
-  ProjectiveSolver half_;           ///< Backward Euler at h = dt / 2.
+  ProjectiveSolver half_;  ///< Backward Euler at h = dt / 2.
+  std::unique_ptr<CoarseSpace> coarse_;
+  uint64_t substeps_ = 0;           ///< Substeps run (the coarse operator is re-formed every second).
   std::vector<Vec3> acceleration_;  ///< [m/s^2] last step's, the warm start.
   bool budgetValid_ = false;
   Real budget_ = 0;  ///< [J]
