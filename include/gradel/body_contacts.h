@@ -122,6 +122,14 @@ struct ElementRows {
 ContactBody buildContactBody(const DisplaySurface& surface, uint32_t vertexBegin, uint32_t vertexEnd, Real thickness,
                              const Vec3* rest, const uint8_t* onSurface, const ElementRows& elements);
 
+/// Closest point on triangle (a, b, c) to p: barycentric weights (sum 1) and the feature it lies
+/// on: 0 = inside the face, 1..3 = on an edge (1: ab, 2: bc, 3: ca), 4..6 = at a corner (a, b, c).
+struct ClosestPoint {
+  std::array<Real, 3> w;
+  int feature;
+};
+ClosestPoint closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+
 /// The contact surfaces of a world's bodies: body i (RestModel::bodies[i] of `world`, bodies.h)
 /// from its own layout and volume (the voxel display surface), thickness its voxel size.
 /// std::invalid_argument if the counts differ from the model's bodies.
@@ -211,9 +219,16 @@ class BodyContacts {
   };
   void detectPair(size_t a, size_t b, int round, const BodyContactState& s, BodyContactStats& stats);
   void detectSelf(size_t a, const BodyContactState& s, BodyContactStats& stats);
-  void buildGrid(const ContactBody& faces, const Box& region, const Vec3* x, const std::vector<uint32_t>* subset);
+  void buildGrid(const ContactBody& faces, const Box& region, const Vec3* x, const std::vector<uint32_t>* subset,
+                 Real reach);
   template <class F>
   void forCandidateTriangles(const Vec3& lo, const Vec3& hi, F&& f);
+  struct Nearest {
+    Real d2;       ///< [m^2] squared distance to it (reach^2 when none).
+    uint32_t tri;  ///< Its id, or kNone.
+    ClosestPoint cp;
+  };
+  Nearest nearestTriangle(const ContactBody& faces, const Vec3& p, Real reach, const Vec3* x) const;
   void updateBounds(int round, const BodyContactState& s);
   void updatePatches(const Vec3* x);
   void markTouched(const Contact& c, const Vec3* x);
@@ -248,9 +263,26 @@ class BodyContacts {
   };
   std::vector<Patches> patches_;
   std::vector<Contact> contacts_, round_;
-  std::vector<std::pair<uint64_t, uint32_t>> grid_;  ///< (cell key, triangle), sorted.
-  Vec3 gridOrigin_{0, 0, 0};
-  Real gridCell_ = 1;
+  // The faces of the pair's face body near the overlap: a dense table of cubic cells over the box
+  // they fill (buildGrid), cell (i, j, k) at index (k dims[1] + j) dims[0] + i.
+  struct Grid {
+    Box box;  ///< The listed faces' boxes within the region: a query box missing it finds none.
+    Vec3 origin{0, 0, 0};
+    Real cell = 1, inv = 1;  ///< [m] edge of a cell, its inverse.
+    std::array<int64_t, 3> dims{0, 0, 0};
+    size_t count = 0;             ///< Cells (0: no face listed).
+    std::vector<uint32_t> start;  ///< Per cell: its faces at items[start[c] .. start[c + 1]).
+    std::vector<uint32_t> items;  ///< Triangle ids.
+    std::vector<Box> cellBox;     ///< Per cell: its faces' boxes clipped to it (see buildGrid).
+    std::array<std::vector<Real>, 3> cellLo,
+        cellHi;                  ///< Per axis and cell: its edges, grown by a rounding slack (outer cells: +-inf).
+    std::vector<uint32_t> fill;  ///< Scratch of the build.
+    int64_t cellOf(Real v, int a) const;  ///< Clamped into the table.
+    bool rangeOf(const Vec3& lo, const Vec3& hi, std::array<int64_t, 6>& c) const;
+  };
+  Grid grid_;
+  std::vector<uint32_t> listed_;                     ///< The faces in the grid, in listing order.
+  std::vector<std::array<int32_t, 6>> listedRange_;  ///< Their cell ranges (lo x y z, hi x y z).
   std::vector<uint32_t> candidates_;
   std::vector<uint32_t> seen_;  ///< Per triangle: the query that last listed it (dedupe).
   std::vector<Box> triBox_;     ///< Per triangle in the grid: its box (the narrow phase's cheap test).
@@ -263,13 +295,5 @@ class BodyContacts {
 /// (the sum of the faces' signed solid angles / 4 pi). Exact for any surface, O(faces): for tests
 /// and measurements, not the step.
 Real windingNumber(const Vec3& p, const std::vector<std::array<uint32_t, 3>>& triangles, const Vec3* x);
-
-/// Closest point on triangle (a, b, c) to p: barycentric weights (sum 1) and the feature it lies
-/// on: 0 = inside the face, 1..3 = on an edge (1: ab, 2: bc, 3: ca), 4..6 = at a corner (a, b, c).
-struct ClosestPoint {
-  std::array<Real, 3> w;
-  int feature;
-};
-ClosestPoint closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
 
 }  // namespace gradel
