@@ -12,6 +12,7 @@
 
 #include "gradel/bodies.h"
 #include "gradel/body_contacts.h"
+#include "gradel/shared/scene_presets.h"
 #include "gradel/surface.h"
 #include "test_support.h"
 
@@ -65,7 +66,8 @@ struct Bodies {
       const RestModel& m = *b.model;
       const DisplaySurface s = buildDisplaySurface(b.layout, b.volume, SurfaceKind::Voxel);
       cb.push_back(buildContactBody(s, b.offset, b.offset + uint32_t(m.numVertices()), m.voxelSize,
-                                    m.restPositions.data(), m.onSurface.data(), {m.elemStart.data(), m.elemVerts.data(), 0, m.numElements(), b.offset}));
+                                    m.restPositions.data(), m.onSurface.data(),
+                                    {m.elemStart.data(), m.elemVerts.data(), 0, m.numElements(), b.offset}));
     }
     contacts = BodyContacts(std::move(cb), settings);
     x0 = x, v0 = v;
@@ -280,10 +282,10 @@ TEST(BodyContacts, FrictionStopsASlidingBlock) {
 }
 
 // Two small bodies thrown at each other at random offsets and speeds (explicit steps; each body
-// stepped by its own World, the contact stage on the arrays concatenated), any restitution and friction: after every step no
-// vertex of either lies inside the other, and the contact stage changes the total linear
-// momentum by no more than 1e-9 of its scale. The CI default is 10 cases from a fixed seed
-// (deterministic, a few seconds); explore with RC_PARAMS="seed=..." and GRADEL_PROPERTY_CASES.
+// stepped by its own World, the contact stage on the arrays concatenated), any restitution and friction: after every
+// step no vertex of either lies inside the other, and the contact stage changes the total linear momentum by no more
+// than 1e-9 of its scale. The CI default is 10 cases from a fixed seed (deterministic, a few seconds); explore with
+// RC_PARAMS="seed=..." and GRADEL_PROPERTY_CASES.
 int touchedCases = 0;  // cases in which the bodies met (the wrapper checks most do)
 
 void randomApproachEndsOutside() {
@@ -409,17 +411,20 @@ struct WorldOfBodies {
     std::vector<std::shared_ptr<const RestModel>> models;
     std::vector<const Layout*> layouts;
     std::vector<const VoxelVolume*> volumes;
-    for (const test::Body& b : parts) models.push_back(b.model), layouts.push_back(&b.layout), volumes.push_back(&b.volume);
+    for (const test::Body& b : parts)
+      models.push_back(b.model), layouts.push_back(&b.layout), volumes.push_back(&b.volume);
     auto m = std::make_shared<RestModel>(combineRestModels(models));
     world = std::make_unique<World>(m, sim, domain, std::vector<ManipulatorSettings>{});
     for (size_t i = 0; i < parts.size(); ++i)
-      for (uint32_t u = m->bodies[i].vertexBegin; u < m->bodies[i].vertexEnd; ++u) world->state().velocities[u] = velocities[i];
+      for (uint32_t u = m->bodies[i].vertexBegin; u < m->bodies[i].vertexEnd; ++u)
+        world->state().velocities[u] = velocities[i];
     world->setBodyContacts(buildContactBodies(*m, layouts, volumes), contact);
   }
   const BodyRange& range(size_t i) const { return world->model().bodies[i]; }
   Vec3 momentum() const {
     Vec3 p = Vec3::Zero();
-    for (size_t u = 0; u < world->model().numVertices(); ++u) p += world->model().mass[u] * world->state().velocities[u];
+    for (size_t u = 0; u < world->model().numVertices(); ++u)
+      p += world->model().mass[u] * world->state().velocities[u];
     return p;
   }
   Real momentumScale() const {
@@ -541,7 +546,8 @@ struct SceneRun {
   size_t inside() { return test::verticesInsideOtherBodies(world()); }
   Vec3 momentum() {
     Vec3 p = Vec3::Zero();
-    for (size_t u = 0; u < world().model().numVertices(); ++u) p += world().model().mass[u] * world().state().velocities[u];
+    for (size_t u = 0; u < world().model().numVertices(); ++u)
+      p += world().model().mass[u] * world().state().velocities[u];
     return p;
   }
 };
@@ -600,25 +606,21 @@ namespace gradel {
 TEST(BodyContactScenes, DISABLED_TwoSpheresContactShare) {
   auto env = [](const char* k, int d) { return std::getenv(k) ? std::atoi(std::getenv(k)) : d; };
   const int n = env("GRADEL_CONTACT_SIZE", 64), steps = env("GRADEL_CONTACT_STEPS", 40);
-  Scene scene = loadScene(std::string(GRADEL_SOURCE_DIR) + "/scenes/two-balls.json");
-  for (size_t i = 0; i < 2; ++i) {
-    scene.bodyAt(i).shape = presetShape("sphere", n, 3);
-    scene.bodyAt(i).position = Vec3(i == 0 ? -n * 0.01 - 0.0005 : 0.0005, 0, 0);
-    scene.bodyAt(i).velocity = Vec3(i == 0 ? 0.5 : -0.5, 0, 0);
-  }
-  scene.simulation.threads = env("GRADEL_CONTACT_THREADS", 1);
+  Scene scene = contactBenchScene(n, env("GRADEL_CONTACT_THREADS", 1));
   BuiltScene b = buildScene(scene);
   World& w = *b.world;
   while (w.bodyContactStats().contacts == 0) w.step();  // until they touch
   double stage = 0;
   size_t contacts = 0;
   const auto t0 = std::chrono::steady_clock::now();
-  for (int k = 0; k < steps; ++k) w.step(), stage += w.bodyContactStats().seconds, contacts += w.bodyContactStats().contacts;
+  for (int k = 0; k < steps; ++k)
+    w.step(), stage += w.bodyContactStats().seconds, contacts += w.bodyContactStats().contacts;
   const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("two %d^3 spheres, %zu vertices, %d threads: %d steps in contact, %.2f ms/step, contact stage %.2f ms/step "
-              "(%.1f %%), %.0f contacts/step, state hash %016llx\n",
-              n, w.model().numVertices(), scene.simulation.threads, steps, 1e3 * total / steps, 1e3 * stage / steps,
-              100 * stage / total, double(contacts) / steps, (unsigned long long)w.stateHash());
+  std::printf(
+      "two %d^3 spheres, %zu vertices, %d threads: %d steps in contact, %.2f ms/step, contact stage %.2f ms/step "
+      "(%.1f %%), %.0f contacts/step, state hash %016llx\n",
+      n, w.model().numVertices(), scene.simulation.threads, steps, 1e3 * total / steps, 1e3 * stage / steps,
+      100 * stage / total, double(contacts) / steps, (unsigned long long)w.stateHash());
 }
 
 }  // namespace gradel
