@@ -75,6 +75,8 @@
 
 namespace gradel {
 
+class ThreadTeam;
+
 /// Scene key "body_contact" (docs/scenes.md).
 struct BodyContactSettings {
   Real restitution = 0.5;    ///< [-] of body-body contacts (as the walls' default); 0 = no bounce.
@@ -160,8 +162,14 @@ class BodyContacts {
   BodyContacts() = default;
   BodyContacts(std::vector<ContactBody> bodies, const BodyContactSettings& settings);
 
-  /// Resolves every body-body (and, if on, self) contact of the step, in place.
+  /// Resolves every body-body (and, if on, self) contact of the step, in place. With a team
+  /// (setTeam), the narrow phase of the pairs runs on its members, each vertex's finding into its
+  /// own slot, gathered in vertex order: the same result at any thread count.
   BodyContactStats resolve(const BodyContactState& state);
+  /// The world's thread team for the narrow phase (nullptr: serial), used for a pair with at least
+  /// `minParallel` vertices to look up (below it, waking the team costs more than the work). Not owned.
+  void setTeam(ThreadTeam* team, uint32_t minParallel = kMinParallel) { team_ = team, minParallel_ = minParallel; }
+  static constexpr uint32_t kMinParallel = 2048;
 
   const std::vector<ContactBody>& bodies() const { return bodies_; }
   const BodyContactSettings& settings() const { return settings_; }
@@ -221,8 +229,18 @@ class BodyContacts {
   void detectSelf(size_t a, const BodyContactState& s, BodyContactStats& stats);
   void buildGrid(const ContactBody& faces, const Box& region, const Vec3* x, const std::vector<uint32_t>* subset,
                  Real reach);
+  // Per member of the team: the faces a query listed and the dedupe stamps.
+  struct QueryScratch {
+    std::vector<uint32_t> candidates;
+    std::vector<uint32_t> seen;  ///< Per triangle: the query that last listed it.
+    uint32_t stamp = 0;
+  };
   template <class F>
-  void forCandidateTriangles(const Vec3& lo, const Vec3& hi, F&& f);
+  void forCandidateTriangles(const Vec3& lo, const Vec3& hi, QueryScratch& q, F&& f) const;
+  // One vertex of a pair's narrow phase (detectPair): 0 outside the query box, 1 looked up, 2
+  // in contact (into *out).
+  int detectVertex(const ContactBody& A, const ContactBody& B, uint32_t i, const Box& q, Real r, const Vec3* x,
+                   QueryScratch& qs, Contact* out) const;
   struct Nearest {
     Real d2;       ///< [m^2] squared distance to it (reach^2 when none).
     uint32_t tri;  ///< Its id, or kNone.
@@ -283,10 +301,12 @@ class BodyContacts {
   Grid grid_;
   std::vector<uint32_t> listed_;                     ///< The faces in the grid, in listing order.
   std::vector<std::array<int32_t, 6>> listedRange_;  ///< Their cell ranges (lo x y z, hi x y z).
-  std::vector<uint32_t> candidates_;
-  std::vector<uint32_t> seen_;  ///< Per triangle: the query that last listed it (dedupe).
-  std::vector<Box> triBox_;     ///< Per triangle in the grid: its box (the narrow phase's cheap test).
-  uint32_t stamp_ = 0;
+  std::vector<QueryScratch> scratch_;                ///< Per member (one when serial).
+  ThreadTeam* team_ = nullptr;
+  uint32_t minParallel_ = kMinParallel;
+  std::vector<Contact> slot_;         ///< Per vertex of a pair's query: its contact, if any.
+  std::vector<uint8_t> slotState_;    ///< Per vertex: detectVertex's answer.
+  std::vector<Box> triBox_;           ///< Per triangle in the grid: its box (the narrow phase's cheap test).
   std::vector<uint8_t> active_;       ///< Per (vertex body, face body): contacts in the last round.
   std::vector<uint8_t> movedBodies_;  ///< Per body: a correction of the last round moved its vertices.
 };
