@@ -9,9 +9,10 @@
 //   broad phase  per body, one pass over its surface vertices: the bounding box of their
 //                positions and the largest distance one of them moved in the step. Per pair of
 //                bodies whose boxes overlap (grown by the search radius r below), only the
-//                triangles that reach into the overlap go into a hashed grid (cells of two
-//                thicknesses, a sorted array of (cell, triangle)) and only the surface vertices in
-//                the overlap are looked up, so the narrow phase grows with the contact area.
+//                triangles that reach into the overlap go into a grid (a dense table of cells of
+//                twice r over the box they fill, each cell with its faces and their boxes clipped
+//                to it) and only the surface vertices in the overlap are looked up, so the narrow
+//                phase grows with the contact area.
 //                Round 0 of a step lists each pair's candidates for boxes grown by a margin (the
 //                larger thickness), visiting only the blocks of 256 surface vertices and the
 //                patches of 32 faces near each other (Morton order) whose boxes meet them; a later
@@ -20,9 +21,9 @@
 //                vertex: the rounds after the first cost the overlap, not the whole surface.
 //                (The lists are supersets: the exact tests run as before, same bits.)
 //   narrow phase the nearest triangle of the other body within r = thickness + the largest
-//                distances both bodies' surfaces moved in the step (a triangle whose box lies
-//                farther than the best so far is skipped; of equally near ones the lowest id
-//                wins, whatever the cells' order); inside when the vertex lies
+//                distances both bodies' surfaces moved in the step (the nearest cell first; a
+//                cell or a triangle whose box lies farther than the best so far is skipped; of
+//                equally near ones the lowest id wins, whatever the cells' order); inside when the vertex lies
 //                behind the nearest feature's angle-weighted pseudo-normal (the face normal in a
 //                face, the sum of its faces' normals on an edge, the angle-weighted sum at a
 //                corner: Baerentzen & Aanaes 2005), the sign test that is exact for a closed
@@ -56,8 +57,9 @@
 //                at the end, by less than r) and ends over the face. (The pseudo-normal test
 //                needs the nearest face, which for a vertex on its own surface is adjacent.)
 //
-// Everything runs serially in a fixed order (pairs of bodies in index order, vertices in id order,
-// ties between triangles broken by id): the result does not depend on the thread count.
+// Everything runs in a fixed order (pairs of bodies in index order, vertices in id order, ties
+// between triangles broken by id); a pair's narrow phase may run on a thread team (setTeam), each
+// vertex into its own slot, gathered in vertex order: the result does not depend on the thread count.
 // 3D only: a 2D body's display surface is a flat region, not a closed surface.
 // Frame-size steps (implicit, large_step): the step's solve carries the contacts itself, as
 // one-sided constraints of its PCG (proximity() lists the vertex-face pairs after the step's first,
