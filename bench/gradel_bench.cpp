@@ -5,9 +5,12 @@
 //    stress once per 1/60 s output frame, over --moduli (Young's modulus, Pa);
 //  - paper: the paper's Table 1 setting (sec. 3.4: k = 10000, one voxel's mass per vertex, no
 //    gravity, walls or output), the comparison with the paper;
-//  - scene: a scene file (--scene FILE), run as `gradel run` would, frames computed, not written.
+//  - scene: a scene file (--scene FILE), run as `gradel run` would, frames computed, not written;
+//  - contact: two spheres of n voxels meeting head on (contactBenchScene, soft-soft contact, issue
+//    12): the `contact_steps` steps after they touch, timed per repetition on a fresh world;
+//    contact_stage_share = the body-contact stage's wall time / the steps' (the other rows: 0).
 //
-//   gradel-bench [--sets real,paper] [--shapes sphere,box] [--sizes 16,32,64,128,256]
+//   gradel-bench [--sets real,paper,contact] [--shapes sphere,box] [--sizes 16,32,64,128,256]
 //                [--layouts gradational,uniform] [--moduli 1e4,1e5,1e6] [--threads 1,2]
 //                [--scene FILE] [--integrator NAME] [--load] [--reps 5] [--min-time 0.2]
 //                [--find-realtime]
@@ -17,7 +20,7 @@
 // wall second; bytes_per_vertex = every array of the model, state and scratch / unique
 // vertices; load = 1 when --load ran one busy process beside the benchmark; state_hash = hash
 // of positions and velocities after exactly 20 (paper, and large_step / implicit rows) or 200
-// (explicit real, scene) steps: identical at
+// (explicit real, scene) steps, or the contact rows' contact_steps steps in contact: identical at
 // any thread count; integrator = the one that ran (--integrator sets it for the real and scene
 // rows: symplectic by default on the real rows, the scene's own on scene rows; large_step runs
 // at dt = 1/60 s).
@@ -48,7 +51,7 @@ struct Row {
   double youngs = 0;  // [Pa], 0 for the paper setting (k instead)
   int n = 0, threads = 0, load = 0;
   size_t elements = 0, vertices = 0, pairs = 0;
-  double nsPerVertex = 0, nsPerPair = 0, stepsPerSecond = 0, dt = 0, rtf = 0, bytesPerVertex = 0;
+  double nsPerVertex = 0, nsPerPair = 0, stepsPerSecond = 0, dt = 0, rtf = 0, bytesPerVertex = 0, contactShare = 0;
   uint64_t hash = 0;
 };
 
@@ -154,17 +157,51 @@ Row measureScene(const Scene& scene, const std::string& set, int threads, int re
   return r;
 }
 
+// Two spheres in contact: per repetition a fresh world stepped until they touch, then `steps`
+// steps timed (wall clock of the steps and of the body-contact stage, BodyContactStats::seconds);
+// the medians of the repetitions. The hash after the timed steps (the same in every repetition).
+Row measureContact(int n, int threads, int steps, int reps) {
+  Row r;
+  r.set = "contact", r.shape = "two-spheres", r.n = n, r.threads = threads, r.layout = "gradational";
+  std::vector<double> perStep, share;
+  for (int k = 0; k < reps; ++k) {
+    BuiltScene b = buildScene(contactBenchScene(n, threads));
+    World& w = *b.world;
+    r.integrator = integratorKindName(w.settings().integrator);
+    for (int i = 0; i < 100000 && w.bodyContactStats().contacts == 0; ++i) w.step();  // until they touch
+    double stage = 0;
+    const auto t0 = Clock::now();
+    for (int i = 0; i < steps; ++i) w.step(), stage += w.bodyContactStats().seconds;
+    const double total = std::chrono::duration<double>(Clock::now() - t0).count();
+    perStep.push_back(total / steps), share.push_back(stage / total);
+    r.hash = w.stateHash();
+    r.elements = w.model().numElements(), r.vertices = w.model().numVertices(), r.pairs = w.model().numPairs();
+    r.dt = w.dt();
+    r.bytesPerVertex = double(w.memoryBytes()) / double(r.vertices);
+  }
+  std::sort(perStep.begin(), perStep.end());
+  std::sort(share.begin(), share.end());
+  const double t = perStep[perStep.size() / 2];
+  r.nsPerVertex = t * 1e9 / double(r.vertices);
+  r.nsPerPair = t * 1e9 / double(r.pairs);
+  r.stepsPerSecond = 1.0 / t;
+  r.rtf = r.dt * r.stepsPerSecond;
+  r.contactShare = share[share.size() / 2];
+  return r;
+}
+
 void printHeader() {
   std::printf(
       "set,shape,n,layout,youngs_modulus_pa,threads,load,elements,unique_vertices,pairs,ns_per_vertex_step,"
-      "ns_per_pair_step,steps_per_second,dt_s,real_time_factor,bytes_per_vertex,state_hash,integrator\n");
+      "ns_per_pair_step,steps_per_second,dt_s,real_time_factor,bytes_per_vertex,state_hash,integrator,"
+      "contact_stage_share\n");
 }
 
 void printRow(const Row& r) {
-  std::printf("%s,%s,%d,%s,%.3g,%d,%d,%zu,%zu,%zu,%.3f,%.3f,%.1f,%.6g,%.4g,%.1f,%016llx,%s\n", r.set.c_str(),
+  std::printf("%s,%s,%d,%s,%.3g,%d,%d,%zu,%zu,%zu,%.3f,%.3f,%.1f,%.6g,%.4g,%.1f,%016llx,%s,%.3f\n", r.set.c_str(),
               r.shape.c_str(), r.n, r.layout.c_str(), r.youngs, r.threads, r.load, r.elements, r.vertices, r.pairs,
               r.nsPerVertex, r.nsPerPair, r.stepsPerSecond, r.dt, r.rtf, r.bytesPerVertex,
-              static_cast<unsigned long long>(r.hash), r.integrator.c_str());
+              static_cast<unsigned long long>(r.hash), r.integrator.c_str(), r.contactShare);
   std::fflush(stdout);
 }
 
@@ -235,11 +272,14 @@ int main(int argc, char** argv) {
   CLI::App app{"gradel-bench: speed of real scenes and of the paper's Table 1 setting, CSV on stdout"};
   std::string sets = "real,paper", shapes = "sphere,box", sizes = "16,32,64,128,256", layouts = "gradational,uniform",
               moduli = "1e4,1e5,1e6", threads = "1,2", sceneFile, integratorName;
-  int reps = 5;
+  int reps = 5, contactSteps = 40;
   double minTime = 0.2, maxPairs = 4.0e7;
   bool findRt = false, load = false;
   app.add_option("--sets", sets,
-                 "Comma-separated: real (SI scenes with gravity, walls, contact, pins, metrics), paper");
+                 "Comma-separated: real (SI scenes with gravity, walls, contact, pins, metrics), paper, contact "
+                 "(two spheres in soft-soft contact)");
+  app.add_option("--contact-steps", contactSteps, "contact set: steps timed after the spheres touch")
+      ->check(CLI::Range(1, 100000));
   app.add_option("--shapes", shapes, "paper set: comma-separated shapes (sphere, box); the real set is a sphere");
   app.add_option("--sizes", sizes, "Comma-separated grid sizes n (voxels)");
   app.add_option("--layouts", layouts, "Comma-separated: gradational, uniform, voxel");
@@ -266,7 +306,8 @@ int main(int argc, char** argv) {
     const auto moduliList = splitList<double>(moduli, [](const std::string& s) { return std::stod(s); });
     const auto threadList = splitList<int>(threads, [](const std::string& s) { return std::stoi(s); });
     for (const std::string& set : setList)
-      if (set != "real" && set != "paper") throw std::runtime_error("--sets: unknown set '" + set + "' (real, paper)");
+      if (set != "real" && set != "paper" && set != "contact")
+        throw std::runtime_error("--sets: unknown set '" + set + "' (real, paper, contact)");
     std::optional<IntegratorKind> integrator;
     if (!integratorName.empty()) integrator = parseIntegratorKind(integratorName);
     std::optional<Scene> scene;
@@ -293,7 +334,14 @@ int main(int argc, char** argv) {
         emit(measureScene(*scene, "scene", t, reps, minTime));
       }
     for (const std::string& set : setList)
-      for (int n : sizeList)
+      for (int n : sizeList) {
+        if (set == "contact") {
+          for (int t : threadList) {
+            std::fprintf(stderr, "contact two spheres %d threads %d\n", n, t);
+            emit(measureContact(n, t, contactSteps, reps));
+          }
+          continue;
+        }
         for (LayoutKind layout : layoutList) {
           if (set == "real") {
             if (tooBig("sphere", n, layout)) continue;
@@ -314,6 +362,7 @@ int main(int argc, char** argv) {
             }
           }
         }
+      }
     const int maxThreads = *std::max_element(threadList.begin(), threadList.end());
     if (findRt && std::find(setList.begin(), setList.end(), "real") != setList.end())
       for (double E : moduliList) findRealtimeReal(E, integrator, maxThreads, reps, minTime);

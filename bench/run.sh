@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
-# Runs the benchmark and writes bench/results/<date>-<host>-{real,paper,threads}.csv with the
+# Runs the benchmark and writes bench/results/<date>-<host>-{real,paper,contact,threads}.csv with the
 # machine description. Usage: bench/run.sh [build-dir]   (default build/, from scripts/setup)
 #  real:    SI scenes (gravity, walls, a pressing manipulator, a pin, metrics per 1/60 s frame),
 #           n = 16..256, E = 1e4, 1e5, 1e6 Pa, 1 and 2 threads, gradational and uniform
 #           (uniform at n = 256 too: where gradational should pass 5x, README "Speed");
 #  paper:   the paper's Table 1 setting, for the comparison with the paper and with `real`;
+#  contact: two spheres in soft-soft contact (n = 32, 64): the body-contact stage's share of a step;
 #  threads: the threading mechanisms compared (docs/speed.md, "Threads"), quiet and with one busy process.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -27,6 +28,11 @@ bench() { "$build/gradel-bench" --reps 5 --min-time 0.3 "$@"; }
   bench --sets paper --shapes sphere --sizes 16,32,64,128,256 --layouts gradational --threads 1,2
   bench --sets paper --shapes sphere --sizes 64,128,256 --layouts uniform --threads 1,2 | grep -v '^set,'
 } > "$stem-paper.csv.tmp" && mv "$stem-paper.csv.tmp" "$stem-paper.csv"
+# contact: two spheres in soft-soft contact, the body-contact stage's share of the step (issue 12).
+{
+  describe
+  "$build/gradel-bench" --reps 5 --sets contact --sizes 32,64 --threads 1,2
+} > "$stem-contact.csv.tmp" && mv "$stem-contact.csv.tmp" "$stem-contact.csv"
 # The threading mechanisms: the team (default), OpenMP with libgomp's default (spinning) wait and
 # with OMP_WAIT_POLICY=passive; each on a quiet machine and beside one busy process (--load).
 # The OpenMP path exists only in a build configured with -DGRADEL_OPENMP_COMPARISON=ON.
@@ -51,4 +57,4 @@ fi
     done
   done
 } > "$stem-threads.csv.tmp" && mv "$stem-threads.csv.tmp" "$stem-threads.csv"
-echo "wrote $stem-{real,paper,threads}.csv" >&2
+echo "wrote $stem-{real,paper,contact,threads}.csv" >&2

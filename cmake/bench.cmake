@@ -6,6 +6,9 @@ if(GRADEL_BUILD_TESTS)
   enable_testing()
   add_test(NAME bench.real_smoke COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/tests/scripts/bench_smoke.sh $<TARGET_FILE:gradel-bench>)
   set_tests_properties(bench.real_smoke PROPERTIES TIMEOUT 300)
+  add_test(NAME bench.contact_smoke
+           COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/tests/scripts/bench_contact_smoke.sh $<TARGET_FILE:gradel-bench>)
+  set_tests_properties(bench.contact_smoke PROPERTIES TIMEOUT 300)
 endif()
 
 # examples/haptic_loop.cpp: a 1 kHz haptic loop (virtual coupling, contact force fed back) that

@@ -500,12 +500,14 @@ void World::saveBodyContactStart() {
       bodyContactStartX_[u] = state_.positions[u], bodyContactStartV_[u] = state_.velocities[u];
 }
 
-// After the step (and its pins, which the stage leaves in place: inverse mass 0), serially: the
-// result does not depend on the thread count. Walls go last for every vertex the stage moved, so
-// no vertex leaves the box (contacts.h; inelastic, as a vertex pinched between two surfaces).
+// After the step (and its pins, which the stage leaves in place: inverse mass 0); the narrow phase
+// on the step's thread team, the rest serially: the result does not depend on the thread count. Walls go last for every
+// vertex the stage moved, so no vertex leaves the box (contacts.h; inelastic, as a vertex pinched between two
+// surfaces).
 void World::stageBodyContacts() {
   Vec3* x = state_.positions.data();
   Vec3* v = state_.velocities.data();
+  bodyContacts_->setTeam(team_ && teamMembers_ > 1 ? team_.get() : nullptr);
   bodyContactStats_ =
       bodyContacts_->resolve({x, v, bodyContactStartX_.data(), bodyContactStartV_.data(), bodyContactInvMass_.data()});
   scratch_->maxContactDepth = std::max(scratch_->maxContactDepth, bodyContactStats_.maxDepth);

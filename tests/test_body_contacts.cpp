@@ -12,8 +12,10 @@
 
 #include "gradel/bodies.h"
 #include "gradel/body_contacts.h"
+#include "gradel/shared/scene_presets.h"
 #include "gradel/surface.h"
 #include "test_support.h"
+#include "thread_team.h"
 
 namespace gradel {
 namespace {
@@ -249,6 +251,29 @@ TEST_F(PushedVertex, FrictionStopsTheSliding) {
     ASSERT_EQ(w.contacts.contacts().size(), 1u);
     EXPECT_NEAR(relativeVelocity().y(), std::max(0.0, 0.3 - mu * 1.0), 1e-12) << "mu = " << mu;
   }
+}
+
+// The narrow phase on a thread team (every pair, however few vertices) finds the same contacts
+// and leaves the same bits as serially: each vertex into its own slot, gathered in vertex order.
+TEST(BodyContacts, TeamGivesTheSameBitsAsSerial) {
+  auto run = [](ThreadTeam* team) {
+    Bodies w;
+    const SimulationSettings sim = explicitFree();
+    w.add(boxVolume(10, 10, 4), LayoutKind::Voxel, Vec3::Zero(), Vec3(0, 0, 0.3), sim);
+    w.add(boxVolume(8, 8, 4), LayoutKind::Voxel, Vec3(0.013, 0.017, 0.037), Vec3(0, 0, -0.3), sim);  // 3 mm deep
+    w.build({0.5, 0.2, false});
+    w.contacts.setTeam(team, 1);
+    w.x0 = w.x;
+    for (size_t i = w.bodies[1].offset; i < w.x.size(); ++i) w.x0[i].z() += 0.005;  // from outside
+    const BodyContactStats s = w.resolve();
+    return std::make_tuple(s.contacts, w.x, w.v);
+  };
+  ThreadTeam team(2);
+  const auto serial = run(nullptr), threaded = run(&team);
+  EXPECT_GE(std::get<0>(serial), 30u);
+  EXPECT_EQ(std::get<0>(serial), std::get<0>(threaded));
+  EXPECT_TRUE(std::get<1>(serial) == std::get<1>(threaded)) << "positions differ";
+  EXPECT_TRUE(std::get<2>(serial) == std::get<2>(threaded)) << "velocities differ";
 }
 
 // A block sliding at 0.15 m/s on a fixed block under gravity: friction 0.6 stops it within
@@ -628,13 +653,7 @@ namespace gradel {
 TEST(BodyContactScenes, DISABLED_TwoSpheresContactShare) {
   auto env = [](const char* k, int d) { return std::getenv(k) ? std::atoi(std::getenv(k)) : d; };
   const int n = env("GRADEL_CONTACT_SIZE", 64), steps = env("GRADEL_CONTACT_STEPS", 40);
-  Scene scene = loadScene(std::string(GRADEL_SOURCE_DIR) + "/scenes/two-balls.json");
-  for (size_t i = 0; i < 2; ++i) {
-    scene.bodyAt(i).shape = presetShape("sphere", n, 3);
-    scene.bodyAt(i).position = Vec3(i == 0 ? -n * 0.01 - 0.0005 : 0.0005, 0, 0);
-    scene.bodyAt(i).velocity = Vec3(i == 0 ? 0.5 : -0.5, 0, 0);
-  }
-  scene.simulation.threads = env("GRADEL_CONTACT_THREADS", 1);
+  Scene scene = contactBenchScene(n, env("GRADEL_CONTACT_THREADS", 1));
   BuiltScene b = buildScene(scene);
   World& w = *b.world;
   while (w.bodyContactStats().contacts == 0) w.step();  // until they touch

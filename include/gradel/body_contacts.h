@@ -9,9 +9,10 @@
 //   broad phase  per body, one pass over its surface vertices: the bounding box of their
 //                positions and the largest distance one of them moved in the step. Per pair of
 //                bodies whose boxes overlap (grown by the search radius r below), only the
-//                triangles that reach into the overlap go into a hashed grid (cells of two
-//                thicknesses, a sorted array of (cell, triangle)) and only the surface vertices in
-//                the overlap are looked up, so the narrow phase grows with the contact area.
+//                triangles that reach into the overlap go into a grid (a dense table of cells of
+//                twice r over the box they fill, each cell with its faces and their boxes clipped
+//                to it) and only the surface vertices in the overlap are looked up, so the narrow
+//                phase grows with the contact area.
 //                Round 0 of a step lists each pair's candidates for boxes grown by a margin (the
 //                larger thickness), visiting only the blocks of 256 surface vertices and the
 //                patches of 32 faces near each other (Morton order) whose boxes meet them; a later
@@ -20,9 +21,9 @@
 //                vertex: the rounds after the first cost the overlap, not the whole surface.
 //                (The lists are supersets: the exact tests run as before, same bits.)
 //   narrow phase the nearest triangle of the other body within r = thickness + the largest
-//                distances both bodies' surfaces moved in the step (a triangle whose box lies
-//                farther than the best so far is skipped; of equally near ones the lowest id
-//                wins, whatever the cells' order); inside when the vertex lies
+//                distances both bodies' surfaces moved in the step (the nearest cell first; a
+//                cell or a triangle whose box lies farther than the best so far is skipped; of
+//                equally near ones the lowest id wins, whatever the cells' order); inside when the vertex lies
 //                behind the nearest feature's angle-weighted pseudo-normal (the face normal in a
 //                face, the sum of its faces' normals on an edge, the angle-weighted sum at a
 //                corner: Baerentzen & Aanaes 2005), the sign test that is exact for a closed
@@ -72,8 +73,9 @@
 //                at the end, by less than r) and ends over the face. (The pseudo-normal test
 //                needs the nearest face, which for a vertex on its own surface is adjacent.)
 //
-// Everything runs serially in a fixed order (pairs of bodies in index order, vertices in id order,
-// ties between triangles broken by id): the result does not depend on the thread count.
+// Everything runs in a fixed order (pairs of bodies in index order, vertices in id order, ties
+// between triangles broken by id); a pair's narrow phase may run on a thread team (setTeam), each
+// vertex into its own slot, gathered in vertex order: the result does not depend on the thread count.
 // 3D only: a 2D body's display surface is a flat region, not a closed surface.
 // Frame-size steps (implicit, large_step): the step's solve carries the contacts itself, as
 // one-sided constraints of its PCG (projective.h PairConstraint; World::stepImplicit): proximity()
@@ -97,6 +99,8 @@
 #include "gradel/types.h"
 
 namespace gradel {
+
+class ThreadTeam;
 
 /// Scene key "body_contact" (docs/scenes.md).
 struct BodyContactSettings {
@@ -145,6 +149,14 @@ struct ElementRows {
 ContactBody buildContactBody(const DisplaySurface& surface, uint32_t vertexBegin, uint32_t vertexEnd, Real thickness,
                              const Vec3* rest, const uint8_t* onSurface, const ElementRows& elements);
 
+/// Closest point on triangle (a, b, c) to p: barycentric weights (sum 1) and the feature it lies
+/// on: 0 = inside the face, 1..3 = on an edge (1: ab, 2: bc, 3: ca), 4..6 = at a corner (a, b, c).
+struct ClosestPoint {
+  std::array<Real, 3> w;
+  int feature;
+};
+ClosestPoint closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+
 /// The contact surfaces of a world's bodies: body i (RestModel::bodies[i] of `world`, bodies.h)
 /// from its own layout and volume (the voxel display surface), thickness its voxel size.
 /// std::invalid_argument if the counts differ from the model's bodies.
@@ -177,8 +189,14 @@ class BodyContacts {
   BodyContacts() = default;
   BodyContacts(std::vector<ContactBody> bodies, const BodyContactSettings& settings);
 
-  /// Resolves every body-body (and, if on, self) contact of the step, in place.
+  /// Resolves every body-body (and, if on, self) contact of the step, in place. With a team
+  /// (setTeam), the narrow phase of the pairs runs on its members, each vertex's finding into its
+  /// own slot, gathered in vertex order: the same result at any thread count.
   BodyContactStats resolve(const BodyContactState& state);
+  /// The world's thread team for the narrow phase (nullptr: serial), used for a pair with at least
+  /// `minParallel` vertices to look up (below it, waking the team costs more than the work). Not owned.
+  void setTeam(ThreadTeam* team, uint32_t minParallel = kMinParallel) { team_ = team, minParallel_ = minParallel; }
+  static constexpr uint32_t kMinParallel = 2048;
 
   const std::vector<ContactBody>& bodies() const { return bodies_; }
   const BodyContactSettings& settings() const { return settings_; }
@@ -240,9 +258,26 @@ class BodyContacts {
   void detectSelf(size_t a, const BodyContactState& s, BodyContactStats& stats);
   bool detectAll(const BodyContactState& s, BodyContactStats& stats);
   void takeBack(const BodyContactState& s, BodyContactStats& stats);
-  void buildGrid(const ContactBody& faces, const Box& region, const Vec3* x, const std::vector<uint32_t>* subset);
+  void buildGrid(const ContactBody& faces, const Box& region, const Vec3* x, const std::vector<uint32_t>* subset,
+                 Real reach);
+  // Per member of the team: the faces a query listed and the dedupe stamps.
+  struct QueryScratch {
+    std::vector<uint32_t> candidates;
+    std::vector<uint32_t> seen;  ///< Per triangle: the query that last listed it.
+    uint32_t stamp = 0;
+  };
   template <class F>
-  void forCandidateTriangles(const Vec3& lo, const Vec3& hi, F&& f);
+  void forCandidateTriangles(const Vec3& lo, const Vec3& hi, QueryScratch& q, F&& f) const;
+  // One vertex of a pair's narrow phase (detectPair): 0 outside the query box, 1 looked up, 2
+  // in contact (into *out).
+  int detectVertex(const ContactBody& A, const ContactBody& B, uint32_t i, const Box& q, Real r, const Vec3* x,
+                   QueryScratch& qs, Contact* out) const;
+  struct Nearest {
+    Real d2;       ///< [m^2] squared distance to it (reach^2 when none).
+    uint32_t tri;  ///< Its id, or kNone.
+    ClosestPoint cp;
+  };
+  Nearest nearestTriangle(const ContactBody& faces, const Vec3& p, Real reach, const Vec3* x) const;
   void updateBounds(int round, const BodyContactState& s);
   void updatePatches(const Vec3* x);
   void markTouched(const Contact& c, const Vec3* x);
@@ -277,13 +312,32 @@ class BodyContacts {
   };
   std::vector<Patches> patches_;
   std::vector<Contact> contacts_, round_;
-  std::vector<std::pair<uint64_t, uint32_t>> grid_;  ///< (cell key, triangle), sorted.
-  Vec3 gridOrigin_{0, 0, 0};
-  Real gridCell_ = 1;
-  std::vector<uint32_t> candidates_;
-  std::vector<uint32_t> seen_;  ///< Per triangle: the query that last listed it (dedupe).
-  std::vector<Box> triBox_;     ///< Per triangle in the grid: its box (the narrow phase's cheap test).
-  uint32_t stamp_ = 0;
+  // The faces of the pair's face body near the overlap: a dense table of cubic cells over the box
+  // they fill (buildGrid), cell (i, j, k) at index (k dims[1] + j) dims[0] + i.
+  struct Grid {
+    Box box;  ///< The listed faces' boxes within the region: a query box missing it finds none.
+    Vec3 origin{0, 0, 0};
+    Real cell = 1, inv = 1;  ///< [m] edge of a cell, its inverse.
+    std::array<int64_t, 3> dims{0, 0, 0};
+    size_t count = 0;             ///< Cells (0: no face listed).
+    std::vector<uint32_t> start;  ///< Per cell: its faces at items[start[c] .. start[c + 1]).
+    std::vector<uint32_t> items;  ///< Triangle ids.
+    std::vector<Box> cellBox;     ///< Per cell: its faces' boxes clipped to it (see buildGrid).
+    std::array<std::vector<Real>, 3> cellLo,
+        cellHi;                  ///< Per axis and cell: its edges, grown by a rounding slack (outer cells: +-inf).
+    std::vector<uint32_t> fill;  ///< Scratch of the build.
+    int64_t cellOf(Real v, int a) const;  ///< Clamped into the table.
+    bool rangeOf(const Vec3& lo, const Vec3& hi, std::array<int64_t, 6>& c) const;
+  };
+  Grid grid_;
+  std::vector<uint32_t> listed_;                     ///< The faces in the grid, in listing order.
+  std::vector<std::array<int32_t, 6>> listedRange_;  ///< Their cell ranges (lo x y z, hi x y z).
+  std::vector<QueryScratch> scratch_;                ///< Per member (one when serial).
+  ThreadTeam* team_ = nullptr;
+  uint32_t minParallel_ = kMinParallel;
+  std::vector<Contact> slot_;         ///< Per vertex of a pair's query: its contact, if any.
+  std::vector<uint8_t> slotState_;    ///< Per vertex: detectVertex's answer.
+  std::vector<Box> triBox_;           ///< Per triangle in the grid: its box (the narrow phase's cheap test).
   std::vector<uint8_t> active_;       ///< Per (vertex body, face body): contacts in the last round.
   std::vector<uint8_t> movedBodies_;  ///< Per body: a correction of the last round moved its vertices.
 };
@@ -292,13 +346,5 @@ class BodyContacts {
 /// (the sum of the faces' signed solid angles / 4 pi). Exact for any surface, O(faces): for tests
 /// and measurements, not the step.
 Real windingNumber(const Vec3& p, const std::vector<std::array<uint32_t, 3>>& triangles, const Vec3* x);
-
-/// Closest point on triangle (a, b, c) to p: barycentric weights (sum 1) and the feature it lies
-/// on: 0 = inside the face, 1..3 = on an edge (1: ab, 2: bc, 3: ca), 4..6 = at a corner (a, b, c).
-struct ClosestPoint {
-  std::array<Real, 3> w;
-  int feature;
-};
-ClosestPoint closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
 
 }  // namespace gradel

@@ -66,4 +66,23 @@ Scene realBenchScene(int size, Real youngsModulus, LayoutKind layout, int thread
   return s;
 }
 
+Scene contactBenchScene(int size, int threads) {
+  Scene s;
+  s.name = "two-spheres" + std::to_string(size);
+  s.dim = 3;
+  s.moreBodies.resize(1);
+  for (size_t i = 0; i < 2; ++i) {
+    BodySettings& b = s.bodyAt(i);
+    b.name = i == 0 ? "left" : "right";
+    b.shape = presetShape("sphere", size, 3, 0.01);
+    b.position = Vec3(i == 0 ? -size * 0.01 - 0.0005 : 0.0005, 0, 0);  // 1 mm apart
+    b.velocity = Vec3(i == 0 ? 0.5 : -0.5, 0, 0);
+  }
+  s.simulation.damping = 0;
+  s.simulation.gravity = Vec3::Zero();
+  s.simulation.threads = threads;
+  s.bodyContact.restitution = 0.5, s.bodyContact.friction = 0.2;
+  return s;
+}
+
 }  // namespace gradel

@@ -25,4 +25,9 @@ void preparePaperBench(World& world);
 /// The benchmark adds metrics and stress once per output frame (frameInterval, 1/60 s).
 Scene realBenchScene(int size, Real youngsModulus, LayoutKind layout, int threads = 1);
 
+/// Soft-soft contact (issue 12): two spheres of `size` voxels (0.01 m) meeting head on at 0.5 m/s
+/// each, the scenes/two-balls.json setting (restitution 0.5, friction 0.2, no gravity, dt auto,
+/// explicit): the measurement of the body-contact stage's share of a step.
+Scene contactBenchScene(int size, int threads = 1);
+
 }  // namespace gradel
