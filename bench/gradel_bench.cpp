@@ -82,6 +82,16 @@ struct BusyProcess {
 // Times `reps` repetitions of steps on a built world, frame work (metrics + stress, as
 // `gradel run` does per written frame) every frameInterval simulated seconds (0: none), after
 // `hashSteps` steps that fix the state hash.
+// The row's time figures from the median of the repetitions' seconds per step.
+void setStepTime(Row& r, std::vector<double>& perStep) {
+  std::sort(perStep.begin(), perStep.end());
+  const double t = perStep[perStep.size() / 2];
+  r.nsPerVertex = t * 1e9 / double(r.vertices);
+  r.nsPerPair = t * 1e9 / double(r.pairs);
+  r.stepsPerSecond = 1.0 / t;
+  r.rtf = r.dt * r.stepsPerSecond;
+}
+
 void timeSteps(World& w, Row& r, int hashSteps, double frameInterval, int reps, double minTime) {
   for (int i = 0; i < hashSteps; ++i) w.step();
   r.hash = w.stateHash();
@@ -119,12 +129,7 @@ void timeSteps(World& w, Row& r, int hashSteps, double frameInterval, int reps, 
     perStep.push_back(std::chrono::duration<double>(Clock::now() - t0).count() / steps);
   }
   if (!std::isfinite(sink)) std::fprintf(stderr, "warning: non-finite energy in %s\n", r.shape.c_str());
-  std::sort(perStep.begin(), perStep.end());
-  const double t = perStep[perStep.size() / 2];
-  r.nsPerVertex = t * 1e9 / double(r.vertices);
-  r.nsPerPair = t * 1e9 / double(r.pairs);
-  r.stepsPerSecond = 1.0 / t;
-  r.rtf = r.dt * r.stepsPerSecond;
+  setStepTime(r, perStep);
 }
 
 Row measure(const std::string& shape, int n, LayoutKind layout, int threads, int reps, double minTime) {
@@ -179,13 +184,8 @@ Row measureContact(int n, int threads, int steps, int reps) {
     r.dt = w.dt();
     r.bytesPerVertex = double(w.memoryBytes()) / double(r.vertices);
   }
-  std::sort(perStep.begin(), perStep.end());
+  setStepTime(r, perStep);
   std::sort(share.begin(), share.end());
-  const double t = perStep[perStep.size() / 2];
-  r.nsPerVertex = t * 1e9 / double(r.vertices);
-  r.nsPerPair = t * 1e9 / double(r.pairs);
-  r.stepsPerSecond = 1.0 / t;
-  r.rtf = r.dt * r.stepsPerSecond;
   r.contactShare = share[share.size() / 2];
   return r;
 }
