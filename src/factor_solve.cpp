@@ -1,7 +1,6 @@
 #include "factor_solve.h"
 
 #include <algorithm>
-#include <numeric>
 
 #include "thread_team.h"
 
@@ -9,9 +8,8 @@ namespace gradel {
 
 SplitFactor::SplitFactor(std::vector<int32_t> colStart, std::vector<int32_t> rows, std::vector<Real> values,
                          std::vector<Real> d, std::vector<int32_t> perm)
-    : colStart_(std::move(colStart)), rows_(std::move(rows)), values_(std::move(values)), d_(std::move(d)),
-      perm_(std::move(perm)) {
-  const int32_t n = int32_t(d_.size());
+    : colStart_(std::move(colStart)), rows_(std::move(rows)), values_(std::move(values)), perm_(std::move(perm)) {
+  const int32_t n = int32_t(d.size());
   // Each column's entries by ascending row (the split below relies on it).
   std::vector<std::pair<int32_t, Real>> column;
   for (int32_t j = 0; j < n; ++j) {
@@ -23,13 +21,12 @@ SplitFactor::SplitFactor(std::vector<int32_t> colStart, std::vector<int32_t> row
       rows_[size_t(k)] = column[size_t(k - b)].first, values_[size_t(k)] = column[size_t(k - b)].second;
   }
   invD_.resize(size_t(n));
-  for (int32_t j = 0; j < n; ++j) invD_[size_t(j)] = Real(1) / d_[size_t(j)];
+  for (int32_t j = 0; j < n; ++j) invD_[size_t(j)] = Real(1) / d[size_t(j)];
   // Elimination tree: parent(j) = the first row below the diagonal in column j (-1: a root).
   std::vector<int32_t> parent(size_t(n), -1);
   std::vector<size_t> entries(size_t(n), 0);  // in the subtree of j
   for (int32_t j = 0; j < n; ++j) {
-    for (int32_t k = colStart_[size_t(j)]; k < colStart_[size_t(j) + 1]; ++k)
-      parent[size_t(j)] = parent[size_t(j)] < 0 ? rows_[size_t(k)] : std::min(parent[size_t(j)], rows_[size_t(k)]);
+    if (colStart_[size_t(j)] < colStart_[size_t(j) + 1]) parent[size_t(j)] = rows_[size_t(colStart_[size_t(j)])];
     entries[size_t(j)] += size_t(colStart_[size_t(j) + 1] - colStart_[size_t(j)]) + 1;
     if (parent[size_t(j)] >= 0) entries[size_t(parent[size_t(j)])] += entries[size_t(j)];
   }
@@ -142,7 +139,7 @@ void SplitFactor::backwardSet(int set, std::vector<Vec3>& y) const {
 }
 
 void SplitFactor::solve(const Vec3* b, Vec3* x, ThreadTeam* team) const {
-  const size_t n = d_.size();
+  const size_t n = invD_.size();
   std::vector<Vec3>& y = y_;
   for (size_t i = 0; i < n; ++i) y[size_t(perm_[i])] = b[i];
   // Both sets, on two members or one after the other (the same operations either way).

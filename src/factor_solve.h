@@ -18,6 +18,7 @@
 
 #include <array>
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 #include "gradel/types.h"
@@ -38,7 +39,11 @@ class SplitFactor {
   /// (null or one member: this thread). x may alias b.
   void solve(const Vec3* b, Vec3* x, ThreadTeam* team) const;
 
-  size_t size() const { return d_.size(); }
+  /// From an Eigen SimplicialLDLT (matrixL(), vectorD(), permutationP()) that succeeded.
+  template <class Ldlt>
+  static SplitFactor fromLdlt(const Ldlt& ldlt);
+
+  size_t size() const { return invD_.size(); }
   size_t nonZeros() const { return rows_.size(); }
   /// Entries of L in each set (set 0, set 1) and in the chain: how evenly the two threads share.
   std::array<size_t, 3> entriesPerPart() const;
@@ -49,7 +54,6 @@ class SplitFactor {
 
   std::vector<int32_t> colStart_, rows_;
   std::vector<Real> values_, invD_;
-  std::vector<Real> d_;
   std::vector<int32_t> perm_;
   std::vector<int32_t> set_[2];       ///< Columns of each set, ascending.
   std::vector<int32_t> chain_;        ///< Columns of the chain, ascending.
@@ -58,5 +62,23 @@ class SplitFactor {
   mutable std::vector<Vec3> y_;       ///< Scratch (n).
   mutable std::vector<Vec3> acc_[2];  ///< Scratch: per set, its updates of the chain's rows.
 };
+
+template <class Ldlt>
+SplitFactor SplitFactor::fromLdlt(const Ldlt& ldlt) {
+  const auto& L = ldlt.matrixL().nestedExpression();  // strictly lower, unit diagonal implied
+  using Matrix = std::decay_t<decltype(L)>;
+  const size_t n = size_t(L.cols());
+  std::vector<int32_t> colStart(n + 1, 0), rows, perm(n, 0);
+  std::vector<Real> values, d(n, 0.0);
+  rows.reserve(size_t(L.nonZeros())), values.reserve(size_t(L.nonZeros()));
+  for (size_t j = 0; j < n; ++j) {
+    for (typename Matrix::InnerIterator it(L, Eigen::Index(j)); it; ++it)
+      rows.push_back(int32_t(it.index())), values.push_back(it.value());
+    colStart[j + 1] = int32_t(rows.size());
+    d[j] = ldlt.vectorD()(Eigen::Index(j));
+    perm[j] = int32_t(ldlt.permutationP().indices()(Eigen::Index(j)));
+  }
+  return SplitFactor(std::move(colStart), std::move(rows), std::move(values), std::move(d), std::move(perm));
+}
 
 }  // namespace gradel

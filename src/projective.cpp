@@ -355,18 +355,7 @@ ProjectiveSolver::ProjectiveSolver(const RestModel& model, Real dt, const std::v
     if (ldlt.info() != Eigen::Success)
       throw InputError(
           "implicit integrator: the global matrix could not be factored (a body without pins in a static solve?)");
-    const SpMat& L = ldlt.matrixL().nestedExpression();  // strictly lower, unit diagonal implied
-    const size_t n = size_t(nFree);
-    std::vector<int32_t> colStart(n + 1, 0), rows, perm(n, 0);
-    std::vector<Real> values, d(n, 0.0);
-    rows.reserve(size_t(L.nonZeros())), values.reserve(size_t(L.nonZeros()));
-    for (Eigen::Index j = 0; j < L.cols(); ++j) {
-      for (SpMat::InnerIterator it(L, j); it; ++it) rows.push_back(int32_t(it.index())), values.push_back(it.value());
-      colStart[size_t(j) + 1] = int32_t(rows.size());
-      d[size_t(j)] = ldlt.vectorD()(j);
-      perm[size_t(j)] = int32_t(ldlt.permutationP().indices()(j));
-    }
-    s.factor = SplitFactor(std::move(colStart), std::move(rows), std::move(values), std::move(d), std::move(perm));
+    s.factor = SplitFactor::fromLdlt(ldlt);
   }
   s.rhs.resize(nFree, 3);
 }

@@ -595,11 +595,15 @@ void World::updateBodyContactInvMass() {
   for (uint32_t u : pinSet_.vertices) bodyContactInvMass_[u] = 0;
 }
 
-// The team of a frame-size step's solvers (null: one thread): the threads asked for, at most one
-// per kMinVerticesPerThread vertices.
+// The members a step runs on: the threads asked for, at most one per kMinVerticesPerThread vertices.
+int World::stepMembers() const {
+  return int(
+      std::max<size_t>(1, std::min<size_t>(size_t(sim_.threads), model_->numVertices() / kMinVerticesPerThread)));
+}
+
+// The team of a frame-size step's solvers (null: one thread).
 ThreadTeam* World::frameStepTeam() {
-  const int members =
-      int(std::max<size_t>(1, std::min<size_t>(size_t(sim_.threads), model_->numVertices() / kMinVerticesPerThread)));
+  const int members = stepMembers();
   if (members == 1) return nullptr;
   prepareTeam(members);
   return team_.get();
@@ -607,7 +611,7 @@ ThreadTeam* World::frameStepTeam() {
 
 void World::stepExplicit() {
   const size_t V = model_->numVertices(), E = model_->numElements();
-  const int members = int(std::max<size_t>(1, std::min<size_t>(size_t(sim_.threads), V / kMinVerticesPerThread)));
+  const int members = stepMembers();
   moveManipulators(state_.time + dt_);  // the elements do not see them; the contacts see t + dt
   const bool contacts = !manipulators_.empty() || domain_.enabled;
   ContactBounds bounds;

@@ -38,24 +38,10 @@ SpMat gridMatrix(int n, int pieces) {
   return A;
 }
 
-SplitFactor splitOf(const Eigen::SimplicialLDLT<SpMat>& ldlt) {
-  const SpMat& L = ldlt.matrixL().nestedExpression();
-  const size_t n = size_t(L.cols());
-  std::vector<int32_t> colStart(n + 1, 0), rows, perm(n, 0);
-  std::vector<Real> values, d(n, 0.0);
-  for (Eigen::Index j = 0; j < L.cols(); ++j) {
-    for (SpMat::InnerIterator it(L, j); it; ++it) rows.push_back(int32_t(it.index())), values.push_back(it.value());
-    colStart[size_t(j) + 1] = int32_t(rows.size());
-    d[size_t(j)] = ldlt.vectorD()(j);
-    perm[size_t(j)] = int32_t(ldlt.permutationP().indices()(j));
-  }
-  return SplitFactor(std::move(colStart), std::move(rows), std::move(values), std::move(d), std::move(perm));
-}
-
 void expectSolves(const SpMat& A, bool expectTwoSets) {
   Eigen::SimplicialLDLT<SpMat> ldlt(A);
   ASSERT_EQ(ldlt.info(), Eigen::Success);
-  const SplitFactor f = splitOf(ldlt);
+  const SplitFactor f = SplitFactor::fromLdlt(ldlt);
   const auto parts = f.entriesPerPart();
   EXPECT_EQ(parts[0] + parts[1] + parts[2], f.nonZeros());
   if (expectTwoSets) {

@@ -159,6 +159,7 @@ class World {
   ContactBounds contactBounds() const;
   Metrics metricsOf(const BodyRange& body, std::vector<Real>* elementStress) const;
   void prepareTeam(int members);
+  int stepMembers() const;
   ThreadTeam* frameStepTeam();
   void stageContacts(size_t begin, size_t end);
   Real resolveVertexContacts(const Vec3& previous, const Vec3& previousVelocity, Vec3& x, Vec3& v, Real mass,
