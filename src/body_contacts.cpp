@@ -20,11 +20,6 @@ void validate(const BodyContactSettings& s) {
     throw InputError("body_contact.friction: expected a finite number >= 0, got " + std::to_string(s.friction));
 }
 
-uint32_t ContactBody::surfaceIndex(uint32_t vertex) const {
-  auto it = std::lower_bound(vertices.begin(), vertices.end(), vertex);
-  return it != vertices.end() && *it == vertex ? uint32_t(it - vertices.begin()) : kNone;
-}
-
 namespace {
 
 // Compressed rows from per-row lists (each sorted and without repeats).
@@ -60,6 +55,8 @@ ContactBody buildContactBody(const DisplaySurface& surface, uint32_t vertexBegin
   // inside its merged polygons (the middle of a coarse element's face), which move too.
   for (uint32_t i = 0; i < corner.size(); ++i)
     if (corner[i] || onSurface[i]) b.vertices.push_back(vertexBegin + i);
+  b.indexOf.assign(vertexEnd - vertexBegin, ContactBody::kNone);
+  for (uint32_t s = 0; s < b.vertices.size(); ++s) b.indexOf[b.vertices[s] - vertexBegin] = s;
 
   const size_t S = b.vertices.size();
   std::vector<std::vector<uint32_t>> tris(S), near(S);
@@ -242,6 +239,15 @@ constexpr Real kSkin = 1e-6;  // [thickness] a corrected vertex ends this far ou
 // tiny absolute slack) cannot be nearer than the best, nor as near: the slack covers rounding.
 constexpr Real kPrune = 1 + 1e-9;
 
+// The tracks (header, "across steps"): a surface may move this far (times the larger voxel size
+// of the bodies) from where it was at the rebuild, and a step's search radius may grow this much
+// (same unit) over the radius at the rebuild, before every track is rebuilt. Measured on two 64^3
+// spheres in contact (gradel-bench --sets contact): see docs/speed.md.
+constexpr Real kLoose = 0.5, kRadiusSlack = 0.25;
+// A track's grid: cells of twice this (same unit); the queries start from their last answer, so
+// their boxes are small and fine cells hold few faces.
+constexpr Real kTrackCell = 0.5;
+
 // Squared distance from p to a box (0 inside): a lower bound of the distance to what it holds.
 Real boxDistance2(const Vec3& lo, const Vec3& hi, const Vec3& p) {
   return (lo - p).cwiseMax(p - hi).cwiseMax(Vec3::Zero()).squaredNorm();
@@ -252,65 +258,192 @@ Real boxDistance2(const Vec3& lo, const Vec3& hi, const Vec3& p) {
 BodyContacts::BodyContacts(std::vector<ContactBody> bodies, const BodyContactSettings& settings)
     : bodies_(std::move(bodies)), settings_(settings) {
   validate(settings_);
-  Real thinnest = std::numeric_limits<Real>::infinity();
-  for (const ContactBody& b : bodies_) thinnest = std::min(thinnest, b.thickness);
+  Real thinnest = std::numeric_limits<Real>::infinity(), thickest = 0;
+  for (const ContactBody& b : bodies_) thinnest = std::min(thinnest, b.thickness), thickest = std::max(thickest, b.thickness);
   skin_ = kSkin * thinnest;
-  bounds_.resize(bodies_.size());
-  active_.assign(bodies_.size() * bodies_.size(), 0);
-  cache_.resize(bodies_.size() * bodies_.size());
-  moved_.resize(bodies_.size());
+  loose_ = kLoose * thickest;
+  const size_t B = bodies_.size();
+  bounds_.resize(B);
+  active_.assign(B * B, 0);
+  tracks_.resize(B * B);
+  moved_.assign(B, 0), movedStart_.assign(B, 0), sinceRebuild_.assign(B, 0), sinceRebuildStart_.assign(B, 0);
+  ref_.resize(B);
   uint32_t vertexEnd = 0;
   blockStart_.assign(1, 0);
-  for (const ContactBody& b : bodies_) {
-    vertexEnd = std::max(vertexEnd, b.vertexEnd);
-    blockStart_.push_back(blockStart_.back() + uint32_t((b.vertices.size() + kBoundsBlock - 1) / kBoundsBlock));
+  for (size_t b = 0; b < B; ++b) {
+    vertexEnd = std::max(vertexEnd, bodies_[b].vertexEnd);
+    blockStart_.push_back(blockStart_.back() +
+                          uint32_t((bodies_[b].vertices.size() + kBoundsBlock - 1) / kBoundsBlock));
+    ref_[b].resize(bodies_[b].vertices.size());
   }
-  blockOf_.assign(vertexEnd, ContactBody::kNone);
-  for (size_t b = 0; b < bodies_.size(); ++b)
-    for (uint32_t i = 0; i < bodies_[b].vertices.size(); ++i)
-      blockOf_[bodies_[b].vertices[i]] = blockStart_[b] + i / kBoundsBlock;
   blockBox_.resize(blockStart_.back());
-  blockMoved2_.resize(blockStart_.back());
-  blockDirty_.assign(blockStart_.back(), 0);
   isTouched_.assign(vertexEnd, 0);
+  bodyOf_.assign(vertexEnd, uint32_t(B));
+  for (size_t b = 0; b < B; ++b)
+    for (uint32_t u : bodies_[b].vertices) bodyOf_[u] = uint32_t(b);
 }
 
-// Each body's surface box now and how far its surface moved in the step, from boxes per block of
-// surface vertices: round 0 all of them, a later round only the blocks holding a vertex that a
-// correction moved (min and max: the same result as one pass over every vertex).
-void BodyContacts::updateBounds(int round, const BodyContactState& s) {
-  const Vec3* x = s.positions;
-  const Vec3* x0 = s.previousPositions;
-  auto blockBounds = [&](size_t b, uint32_t k) {
-    const ContactBody& body = bodies_[b];
-    const uint32_t i0 = (k - blockStart_[b]) * kBoundsBlock;
-    const uint32_t i1 = std::min<uint32_t>(i0 + kBoundsBlock, uint32_t(body.vertices.size()));
-    Box box;
-    Real moved2 = 0;
-    for (uint32_t i = i0; i < i1; ++i) {
-      const uint32_t u = body.vertices[i];
-      box.add(x[u]);
-      moved2 = std::max(moved2, (x[u] - x0[u]).squaredNorm());
+// The search radius of a pair: about a voxel plus how far both surfaces moved in the step (a
+// vertex that started the step outside cannot end it deeper than that).
+Real BodyContacts::searchRadius(size_t a, size_t b) const {
+  return std::max(bodies_[a].thickness, bodies_[b].thickness) + moved_[a] + moved_[b];
+}
+
+// Per body, one pass over its surface vertices: the farthest one moved in the step (moved_) and
+// the farthest one is from where it was at the last rebuild (sinceRebuild_; with valid tracks).
+void BodyContacts::measure(const BodyContactState& s) {
+  const Vec3 *x = s.positions, *x0 = s.previousPositions;
+  // In chunks of kMeasureChunk vertices (on the team's members when there are many), each chunk's
+  // maxima into its own slot: max is exact, so the result is the same at any thread count.
+  constexpr uint32_t kMeasureChunk = 4096;
+  const size_t B = bodies_.size();
+  chunkStart_.assign(1, 0);
+  for (size_t b = 0; b < B; ++b)
+    chunkStart_.push_back(chunkStart_.back() +
+                          uint32_t((bodies_[b].vertices.size() + kMeasureChunk - 1) / kMeasureChunk));
+  const uint32_t chunks = chunkStart_.back();
+  chunkMax_.assign(2 * size_t(chunks), 0);
+  auto one = [&](uint32_t c) {
+    const size_t b = size_t(std::upper_bound(chunkStart_.begin(), chunkStart_.end(), c) - chunkStart_.begin()) - 1;
+    const std::vector<uint32_t>& vs = bodies_[b].vertices;
+    const Vec3* ref = ref_[b].data();
+    const size_t i0 = size_t(c - chunkStart_[b]) * kMeasureChunk, i1 = std::min(vs.size(), i0 + kMeasureChunk);
+    Real moved2 = 0, since2 = 0;
+    if (tracksValid_) {
+      for (size_t i = i0; i < i1; ++i) {
+        const Vec3& p = x[vs[i]];
+        moved2 = std::max(moved2, (p - x0[vs[i]]).squaredNorm());
+        since2 = std::max(since2, (p - ref[i]).squaredNorm());
+      }
+    } else {
+      for (size_t i = i0; i < i1; ++i) moved2 = std::max(moved2, (x[vs[i]] - x0[vs[i]]).squaredNorm());
     }
-    blockBox_[k] = box, blockMoved2_[k] = moved2;
+    chunkMax_[2 * size_t(c)] = moved2, chunkMax_[2 * size_t(c) + 1] = since2;
   };
-  if (round == 0) {
-    for (size_t b = 0; b < bodies_.size(); ++b)
-      for (uint32_t k = blockStart_[b]; k < blockStart_[b + 1]; ++k) blockBounds(b, k);
+  if (team_ && team_->members() > 1 && chunks >= 4) {
+    std::atomic<uint32_t> next{0};
+    team_->run([&](int) {
+      for (uint32_t c; (c = next.fetch_add(1, std::memory_order_relaxed)) < chunks;) one(c);
+    });
   } else {
-    for (uint32_t k : dirtyBlocks_) {
-      const size_t b = size_t(std::upper_bound(blockStart_.begin(), blockStart_.end(), k) - blockStart_.begin()) - 1;
-      blockBounds(b, k);
-    }
+    for (uint32_t c = 0; c < chunks; ++c) one(c);
   }
-  for (size_t b = 0; b < bodies_.size(); ++b) {
-    Box box;
-    Real moved2 = 0;
+  for (size_t b = 0; b < B; ++b) {
+    Real moved2 = 0, since2 = 0;
+    for (uint32_t c = chunkStart_[b]; c < chunkStart_[b + 1]; ++c)
+      moved2 = std::max(moved2, chunkMax_[2 * size_t(c)]), since2 = std::max(since2, chunkMax_[2 * size_t(c) + 1]);
+    moved_[b] = std::sqrt(moved2), sinceRebuild_[b] = std::sqrt(since2);
+  }
+}
+
+// Whether every track still holds: no surface farther than loose_ from the rebuild, no pair's
+// search radius over rCap_.
+bool BodyContacts::tracksHold() const {
+  if (!tracksValid_) return false;
+  const size_t B = bodies_.size();
+  for (size_t a = 0; a < B; ++a) {
+    if (!(sinceRebuild_[a] <= loose_)) return false;
+    for (size_t b = 0; b < B; ++b)
+      if (a != b && !(searchRadius(a, b) <= rCap_)) return false;
+  }
+  return true;
+}
+
+// Every track from the positions x: each body's surface as it is now (the reference its motion
+// is measured from), the boxes of its blocks of vertices and of its patches of faces, then per
+// ordered pair its faces and candidate vertices.
+void BodyContacts::rebuildTracks(const Vec3* x) {
+  const size_t B = bodies_.size();
+  Real r = 0, thickest = 0;
+  for (size_t a = 0; a < B; ++a) {
+    thickest = std::max(thickest, bodies_[a].thickness);
+    for (size_t b = 0; b < B; ++b)
+      if (a != b) r = std::max(r, searchRadius(a, b));
+  }
+  rCap_ = r + kRadiusSlack * thickest;
+  for (size_t b = 0; b < B; ++b) {
+    const ContactBody& body = bodies_[b];
+    Box all;
     for (uint32_t k = blockStart_[b]; k < blockStart_[b + 1]; ++k) {
-      box.add(blockBox_[k]);
-      moved2 = std::max(moved2, blockMoved2_[k]);
+      const uint32_t i0 = (k - blockStart_[b]) * kBoundsBlock;
+      const uint32_t i1 = std::min<uint32_t>(i0 + kBoundsBlock, uint32_t(body.vertices.size()));
+      Box box;
+      for (uint32_t i = i0; i < i1; ++i) {
+        const Vec3& p = x[body.vertices[i]];
+        ref_[b][i] = p;
+        box.add(p);
+      }
+      blockBox_[k] = box;
+      all.add(box);
     }
-    bounds_[b] = box, moved_[b] = std::sqrt(moved2);
+    bounds_[b] = all;
+    sinceRebuild_[b] = sinceRebuildStart_[b] = 0;
+  }
+  updatePatches(x);
+  for (size_t a = 0; a < B; ++a)
+    for (size_t b = 0; b < B; ++b)
+      if (a != b) buildTrack(a, b, x);
+  tracksValid_ = true;
+}
+
+namespace {
+bool meets(const Vec3& lo0, const Vec3& hi0, const Vec3& lo1, const Vec3& hi1) {
+  return !((hi0.array() < lo1.array()).any() || (lo0.array() > hi1.array()).any());
+}
+}  // namespace
+
+// The track of a's vertices against b's faces: the faces whose box, grown by how far they may
+// move (loose_), reaches within rCap_ + loose_ of a's surface, in a grid; the vertices of a whose
+// point, grown by that, meets one of their boxes (any other vertex stays farther than rCap_ from
+// every face of b until the next rebuild: it moves at most loose_, the faces stay in their boxes).
+void BodyContacts::buildTrack(size_t a, size_t b, const Vec3* x) {
+  Track& T = tracks_[a * bodies_.size() + b];
+  T.vertices.clear(), T.clearance.clear(), T.checkedAt.clear(), T.faceDrift.clear();
+  T.faceCorrected.clear(), T.checkedStage.clear();
+  T.grid.count = 0, T.grid.tri.clear(), T.grid.triBox.clear();
+  const ContactBody& A = bodies_[a];
+  const ContactBody& F = bodies_[b];
+  const Real reach = loose_ + rCap_;
+  const Vec3 qlo = bounds_[a].lo - Vec3::Constant(reach), qhi = bounds_[a].hi + Vec3::Constant(reach);
+  const Vec3 flo = bounds_[b].lo - Vec3::Constant(loose_), fhi = bounds_[b].hi + Vec3::Constant(loose_);
+  if (!meets(qlo, qhi, flo, fhi)) return;
+  const Box region{qlo.cwiseMax(flo), qhi.cwiseMin(fhi)};
+  std::vector<uint32_t> subset;  // the faces of the patches near the region
+  const Patches& P = patches_[b];
+  for (size_t k = 0; k < P.box.size(); ++k) {
+    if (!meets(P.box[k].lo - Vec3::Constant(loose_), P.box[k].hi + Vec3::Constant(loose_), region.lo, region.hi))
+      continue;
+    for (size_t j = k * kPatch; j < std::min(P.tris.size(), (k + 1) * kPatch); ++j) subset.push_back(P.tris[j]);
+  }
+  std::sort(subset.begin(), subset.end());  // listing order: by id
+  buildGrid(T.grid, F, region, x, &subset, kTrackCell * std::max(A.thickness, F.thickness), loose_);
+  const Grid& g = T.grid;
+  if (g.count == 0) return;
+  const Vec3 nlo = g.box.lo - Vec3::Constant(reach), nhi = g.box.hi + Vec3::Constant(reach);
+  for (uint32_t k = blockStart_[a]; k < blockStart_[a + 1]; ++k) {
+    if (!meets(blockBox_[k].lo, blockBox_[k].hi, nlo, nhi)) continue;
+    const uint32_t i0 = (k - blockStart_[a]) * kBoundsBlock;
+    const uint32_t i1 = std::min<uint32_t>(i0 + kBoundsBlock, uint32_t(A.vertices.size()));
+    for (uint32_t i = i0; i < i1; ++i) {
+      const Vec3& p = x[A.vertices[i]];
+      const Vec3 lo = p - Vec3::Constant(reach), hi = p + Vec3::Constant(reach);
+      std::array<int64_t, 6> c;
+      if (!g.rangeOf(lo, hi, c)) continue;
+      bool hit = false;
+      for (int64_t kz = c[2]; kz <= c[5] && !hit; ++kz)
+        for (int64_t j = c[1]; j <= c[4] && !hit; ++j) {
+          const size_t row = size_t((kz * g.dims[1] + j) * g.dims[0]);
+          for (uint32_t e = g.start[row + size_t(c[0])]; e < g.start[row + size_t(c[3]) + 1] && !hit; ++e)
+            hit = meets(g.triBox[g.items[e]].lo, g.triBox[g.items[e]].hi, lo, hi);
+        }
+      if (!hit) continue;
+      T.vertices.push_back(i);
+      T.clearance.push_back(-1);  // look it up at its first check
+      T.checkedAt.push_back(p);
+      T.faceDrift.push_back(0);
+      T.faceCorrected.push_back(0);
+      T.checkedStage.push_back(stage_ - 1);
+    }
   }
 }
 
@@ -362,16 +495,14 @@ void BodyContacts::updatePatches(const Vec3* x) {
     }
 }
 
-// A contact's vertices may move from now on: remember where they were when the stage began (no
-// correction has moved them yet) and mark their bounds blocks.
+// A contact's vertices may move from now on (the only ones a correction moves): remember where
+// they were when the stage began (no correction has moved them yet).
 void BodyContacts::markTouched(const Contact& c, const Vec3* x) {
   auto mark = [&](uint32_t u) {
     if (isTouched_[u]) return;
     isTouched_[u] = 1;
     touched_.push_back(u);
     touchedStart_.push_back(x[u]);
-    const uint32_t k = blockOf_[u];
-    if (k != ContactBody::kNone && !blockDirty_[k]) blockDirty_[k] = 1, dirtyBlocks_.push_back(k);
   };
   mark(c.vertex);
   for (uint32_t u : c.face) mark(u);
@@ -381,44 +512,37 @@ inline int64_t BodyContacts::Grid::cellOf(Real v, int a) const {
   return int64_t(std::clamp(std::floor((v - origin[a]) * inv), Real(0), Real(dims[size_t(a)] - 1)));
 }
 
-// The grid of a body's faces for the queries of a pair (or of proximity, or self-contact): the
-// faces whose box meets `region` (all of them, or those of `subset`), in a dense table of cells
-// over the box they fill within the region (cell -> its faces, in listing order): a query
-// reads its cells' ranges directly. Which cells a face is in never changes a
-// result: a face within reach of a point is in the cells of the point's query box, whatever
-// their size.
-void BodyContacts::buildGrid(const ContactBody& faces, const Box& region, const Vec3* x,
-                             const std::vector<uint32_t>* subset, Real reach) {
-  listed_.clear();
-  const size_t members = team_ ? size_t(team_->members()) : 1;
-  if (scratch_.size() < members) scratch_.resize(members);
-  for (QueryScratch& q : scratch_)
-    if (q.seen.size() < faces.triangles.size()) q.seen.assign(faces.triangles.size(), q.stamp);
-  if (triBox_.size() < faces.triangles.size()) triBox_.resize(faces.triangles.size());
+// A grid of a body's faces: the faces whose box, grown by `grow`, meets `region` (all of them,
+// or those of `subset`, in its order), in a dense table of cells over the box they fill within
+// the region (cell -> its faces, in listing order): a query reads its cells' ranges directly.
+// Which cells a face is in never changes a result: a face within reach of a point is in the
+// cells of the point's query box, whatever their size.
+void BodyContacts::buildGrid(Grid& g, const ContactBody& faces, const Box& region, const Vec3* x,
+                             const std::vector<uint32_t>* subset, Real reach, Real grow) {
+  g.tri.clear(), g.triBox.clear();
   Box filled;
   auto add = [&](uint32_t t) {
     const auto& tri = faces.triangles[t];
-    const Vec3 lo = x[tri[0]].cwiseMin(x[tri[1]]).cwiseMin(x[tri[2]]);
-    const Vec3 hi = x[tri[0]].cwiseMax(x[tri[1]]).cwiseMax(x[tri[2]]);
+    const Vec3 lo = x[tri[0]].cwiseMin(x[tri[1]]).cwiseMin(x[tri[2]]) - Vec3::Constant(grow);
+    const Vec3 hi = x[tri[0]].cwiseMax(x[tri[1]]).cwiseMax(x[tri[2]]) + Vec3::Constant(grow);
     if ((hi.array() < region.lo.array()).any() || (lo.array() > region.hi.array()).any()) return;
     if (!lo.allFinite() || !hi.allFinite()) return;
-    triBox_[t] = {lo, hi};
-    listed_.push_back(t);
+    g.tri.push_back(t);
+    g.triBox.push_back({lo, hi});
     filled.add(Box{lo.cwiseMax(region.lo), hi.cwiseMin(region.hi)});
   };
   if (subset)
     for (uint32_t t : *subset) add(t);
   else
     for (uint32_t t = 0; t < faces.triangles.size(); ++t) add(t);
-  grid_.count = 0;
-  if (listed_.empty()) return;
-  Grid& g = grid_;
+  g.count = 0;
+  if (g.tri.empty()) return;
   g.box = filled, g.origin = filled.lo;
   // Cells of twice the reach (a query's box then spans at most 2 cells per axis; measured: finer
   // cells cost more to fill than they save the queries), coarser if there would be more than
   // ~8 cells per listed face.
   const Vec3 extent = filled.hi - filled.lo;
-  const double cellsMax = std::max(4096.0, 8.0 * double(listed_.size()));
+  const double cellsMax = std::max(4096.0, 8.0 * double(g.tri.size()));
   g.cell = std::max(2 * reach, extent.maxCoeff() * Real(1e-6));
   for (;;) {
     double cells = 1;
@@ -430,10 +554,10 @@ void BodyContacts::buildGrid(const ContactBody& faces, const Box& region, const 
   for (int a = 0; a < 3; ++a) g.dims[size_t(a)] = int64_t(std::floor(extent[a] * g.inv)) + 1;
   g.count = size_t(g.dims[0] * g.dims[1] * g.dims[2]);
   g.start.assign(g.count + 1, 0);
-  listedRange_.resize(listed_.size());
-  for (size_t e = 0; e < listed_.size(); ++e) {  // counts per cell, then offsets, then the faces in listing order
-    const Box& tb = triBox_[listed_[e]];
-    std::array<int32_t, 6>& c = listedRange_[e];
+  g.range.resize(g.tri.size());
+  for (size_t e = 0; e < g.tri.size(); ++e) {  // counts per cell, then offsets, then the faces in listing order
+    const Box& tb = g.triBox[e];
+    std::array<int32_t, 6>& c = g.range[e];
     for (int a = 0; a < 3; ++a)
       c[size_t(a)] = int32_t(g.cellOf(tb.lo[a], a)), c[size_t(a + 3)] = int32_t(g.cellOf(tb.hi[a], a));
     for (int64_t k = c[2]; k <= c[5]; ++k)
@@ -456,17 +580,16 @@ void BodyContacts::buildGrid(const ContactBody& faces, const Box& region, const 
       hi[size_t(i)] = i + 1 == n ? std::numeric_limits<Real>::infinity() : g.origin[a] + Real(i + 1) * g.cell + slack;
     }
   }
-  for (size_t e = 0; e < listed_.size(); ++e) {
-    const uint32_t t = listed_[e];
-    const std::array<int32_t, 6>& c = listedRange_[e];
-    const Box& tb = triBox_[t];
+  for (size_t e = 0; e < g.tri.size(); ++e) {
+    const std::array<int32_t, 6>& c = g.range[e];
+    const Box& tb = g.triBox[e];
     for (int64_t k = c[2]; k <= c[5]; ++k) {
       const Real zlo = std::max(tb.lo.z(), g.cellLo[2][size_t(k)]), zhi = std::min(tb.hi.z(), g.cellHi[2][size_t(k)]);
       for (int64_t j = c[1]; j <= c[4]; ++j) {
         const Real ylo = std::max(tb.lo.y(), g.cellLo[1][size_t(j)]), yhi = std::min(tb.hi.y(), g.cellHi[1][size_t(j)]);
         for (int64_t i = c[0]; i <= c[3]; ++i) {
           const size_t cell = size_t((k * g.dims[1] + j) * g.dims[0] + i);
-          g.items[g.fill[cell]++] = t;
+          g.items[g.fill[cell]++] = uint32_t(e);
           const Vec3 lo(std::max(tb.lo.x(), g.cellLo[0][size_t(i)]), ylo, zlo);
           const Vec3 hi(std::min(tb.hi.x(), g.cellHi[0][size_t(i)]), yhi, zhi);
           g.cellBox[cell].add(Box{lo, hi});
@@ -483,28 +606,36 @@ bool BodyContacts::Grid::rangeOf(const Vec3& lo, const Vec3& hi, std::array<int6
   return true;
 }
 
+// The dedupe stamps of every member, sized for grid g's faces.
+void BodyContacts::prepareScratch(const Grid& g) {
+  const size_t members = team_ ? size_t(team_->members()) : 1;
+  if (scratch_.size() < members) scratch_.resize(members);
+  for (QueryScratch& q : scratch_)
+    if (q.seen.size() < g.tri.size()) q.seen.assign(g.tri.size(), q.stamp);
+}
+
 // Every listed face whose box meets the query box [lo, hi] (whatever the cells' size), once each,
-// into q.candidates, then f(t) for each.
+// into q.candidates (indices into g.tri), then f(e) for each.
 template <class F>
-void BodyContacts::forCandidateTriangles(const Vec3& lo, const Vec3& hi, QueryScratch& q, F&& f) const {
+void BodyContacts::forCandidateTriangles(const Grid& g, const Vec3& lo, const Vec3& hi, QueryScratch& q, F&& f) const {
   q.candidates.clear();
   std::array<int64_t, 6> c;
-  if (!grid_.rangeOf(lo, hi, c)) return;
+  if (!g.rangeOf(lo, hi, c)) return;
   ++q.stamp;
   for (int64_t k = c[2]; k <= c[5]; ++k)
     for (int64_t j = c[1]; j <= c[4]; ++j) {
       // The cells of a row are adjacent in the table: one range of faces per row.
-      const size_t row = size_t((k * grid_.dims[1] + j) * grid_.dims[0]);
-      for (uint32_t e = grid_.start[row + size_t(c[0])]; e < grid_.start[row + size_t(c[3]) + 1]; ++e) {
-        const uint32_t t = grid_.items[e];
-        if (q.seen[t] == q.stamp) continue;
-        q.seen[t] = q.stamp;
-        const Box& tb = triBox_[t];
-        if (!((tb.hi.array() < lo.array()).any() || (tb.lo.array() > hi.array()).any())) q.candidates.push_back(t);
+      const size_t row = size_t((k * g.dims[1] + j) * g.dims[0]);
+      for (uint32_t i = g.start[row + size_t(c[0])]; i < g.start[row + size_t(c[3]) + 1]; ++i) {
+        const uint32_t e = g.items[i];
+        if (q.seen[e] == q.stamp) continue;
+        q.seen[e] = q.stamp;
+        const Box& tb = g.triBox[e];
+        if (!((tb.hi.array() < lo.array()).any() || (tb.lo.array() > hi.array()).any())) q.candidates.push_back(e);
       }
     }
   // In the cells' order: the callers break ties between equally near triangles by the lowest id.
-  for (uint32_t t : q.candidates) f(t);
+  for (uint32_t e : q.candidates) f(e);
 }
 
 // The nearest listed face of `faces` to p closer than `reach` (ties: the lowest id), or kNone. The
@@ -512,27 +643,42 @@ void BodyContacts::forCandidateTriangles(const Vec3& lo, const Vec3& hi, QuerySc
 // cells) that lies farther than the best so far, and a face whose box does: the face a point is
 // nearest to is listed in the cell holding that nearest point, which is no farther than it. A
 // face may be tested twice (it spans several cells): the same distance, no tie with itself.
-BodyContacts::Nearest BodyContacts::nearestTriangle(const ContactBody& faces, const Vec3& p, Real reach,
-                                                    const Vec3* x) const {
+BodyContacts::Nearest BodyContacts::nearestTriangle(const Grid& g, const ContactBody& faces, const Vec3& p, Real reach,
+                                                    const Vec3* x, uint32_t hint) const {
   Nearest n{reach * reach, ContactBody::kNone, {}};
-  std::array<int64_t, 6> c;
-  const Grid& g = grid_;
-  if (!g.rangeOf(p - Vec3::Constant(reach), p + Vec3::Constant(reach), c)) return n;
   const Real slack2 = 1e-24 * faces.thickness * faces.thickness;  // rounding of a box beside a point on a face
+  auto test = [&](uint32_t t) {
+    const auto& tri = faces.triangles[t];
+    const ClosestPoint cp = closestPointOnTriangle(p, x[tri[0]], x[tri[1]], x[tri[2]]);
+    const Real d2 = (p - (cp.w[0] * x[tri[0]] + cp.w[1] * x[tri[1]] + cp.w[2] * x[tri[2]])).squaredNorm();
+    if (d2 < n.d2 || (d2 == n.d2 && n.tri != ContactBody::kNone && t < n.tri)) n.d2 = d2, n.tri = t, n.cp = cp;
+  };
+  // A face known to be near (the last answer) bounds the search: the same answer, sooner.
+  if (hint != ContactBody::kNone) test(hint);
+  const Real qr = std::sqrt(n.d2 * kPrune + slack2);  // a face nearer than the best meets p +- qr
+  std::array<int64_t, 6> c;
+  if (!g.rangeOf(p - Vec3::Constant(qr), p + Vec3::Constant(qr), c)) return n;
+  const Box* boxes = g.now.empty() ? g.triBox.data() : g.now.data();  // the faces' boxes now, if kept
   auto visit = [&](size_t cell) {
-    for (uint32_t e = g.start[cell]; e < g.start[cell + 1]; ++e) {
-      const uint32_t t = g.items[e];
-      if (boxDistance2(triBox_[t].lo, triBox_[t].hi, p) > n.d2 * kPrune + slack2)
-        continue;  // cannot be nearer (nor tie)
-      const auto& tri = faces.triangles[t];
-      const ClosestPoint cp = closestPointOnTriangle(p, x[tri[0]], x[tri[1]], x[tri[2]]);
-      const Real d2 = (p - (cp.w[0] * x[tri[0]] + cp.w[1] * x[tri[1]] + cp.w[2] * x[tri[2]])).squaredNorm();
-      if (d2 < n.d2 || (d2 == n.d2 && n.tri != ContactBody::kNone && t < n.tri)) n.d2 = d2, n.tri = t, n.cp = cp;
+    for (uint32_t i = g.start[cell]; i < g.start[cell + 1]; ++i) {
+      const uint32_t e = g.items[i];
+      if (boxDistance2(boxes[e].lo, boxes[e].hi, p) > n.d2 * kPrune + slack2) continue;  // cannot be nearer (nor tie)
+      test(g.tri[e]);
     }
   };
+  const int64_t cells = (c[3] - c[0] + 1) * (c[4] - c[1] + 1) * (c[5] - c[2] + 1);
+  constexpr int64_t kCells = 27;
+  if (cells > kCells) {  // many cells (a grid finer than the reach): each unless farther than the best so far
+    for (int64_t k = c[2]; k <= c[5]; ++k)
+      for (int64_t j = c[1]; j <= c[4]; ++j)
+        for (int64_t i = c[0]; i <= c[3]; ++i) {
+          const size_t cell = size_t((k * g.dims[1] + j) * g.dims[0] + i);
+          if (boxDistance2(g.cellBox[cell].lo, g.cellBox[cell].hi, p) <= n.d2 * kPrune + slack2) visit(cell);
+        }
+    return n;
+  }
   // The cells of the query box by the distance of their boxes, the nearest one first.
-  constexpr size_t kCells = 27;  // a cell is twice the reach (buildGrid): 2 (3 with rounding) per axis
-  Real orderD2[kCells];          // (uninitialised: only the first m are read)
+  Real orderD2[kCells];  // (uninitialised: only the first m are read)
   uint32_t orderCell[kCells];
   size_t m = 0, first = 0;
   for (int64_t k = c[2]; k <= c[5]; ++k)
@@ -551,130 +697,117 @@ BodyContacts::Nearest BodyContacts::nearestTriangle(const ContactBody& faces, co
   return n;
 }
 
-// Surface vertices of body a against the faces of body b (the pseudo-normal test, see the header).
-void BodyContacts::detectPair(size_t a, size_t b, int round, const BodyContactState& s, BodyContactStats& stats) {
+// Surface vertices of body a against the faces of body b (the pseudo-normal test, see the header),
+// from the pair's track: only its candidates, and of those only the ones that may have reached b's
+// surface since their last check (they were at least `clearance` from it then; since, the vertex
+// moved what it moved and b's faces at most sinceRebuild_[b] plus what they had moved then).
+void BodyContacts::detectPair(size_t a, size_t b, const BodyContactState& s, BodyContactStats& stats) {
+  Track& T = tracks_[a * bodies_.size() + b];
+  if (T.grid.count == 0 || T.vertices.empty()) return;
   const ContactBody& A = bodies_[a];
   const ContactBody& B = bodies_[b];
-  const Real r = std::max(A.thickness, B.thickness) + moved_[a] + moved_[b];
-  // The vertices of a within r of b's box; the faces of b that reach within r of those.
-  Box q{bounds_[a].lo.cwiseMax(bounds_[b].lo - Vec3::Constant(r)),
-        bounds_[a].hi.cwiseMin(bounds_[b].hi + Vec3::Constant(r))};
-  PairCache& cache = cache_[a * bodies_.size() + b];
-  if ((q.lo.array() > q.hi.array()).any()) {
-    cache.valid = false;
-    return;
-  }
-  const Box region{q.lo - Vec3::Constant(r), q.hi + Vec3::Constant(r)};
+  const Real r = searchRadius(a, b);
+  const Real faceMoved = sinceRebuild_[b];
   const Vec3* x = s.positions;
-  auto inBox = [](const Vec3& p, const Box& box) {
-    return !((p.array() < box.lo.array()).any() || (p.array() > box.hi.array()).any());  // NaN: inside (as before)
-  };
-  auto meets = [](const Box& u, const Box& w) {
-    return !((u.hi.array() < w.lo.array()).any() || (u.lo.array() > w.hi.array()).any());
-  };
-  // Round 0 lists the candidates of boxes grown by a margin; a later round reuses them when its
-  // boxes, grown by the farthest any vertex moved since (drift_), lie inside those: a vertex in q
-  // now was in the grown q then, a face meeting region now met the grown region then.
-  bool reuse = false;
-  if (round == 0) {
-    const Real margin = std::max(A.thickness, B.thickness);
-    cache.valid = true;
-    cache.q = {q.lo - Vec3::Constant(margin), q.hi + Vec3::Constant(margin)};
-    cache.region = {region.lo - Vec3::Constant(margin), region.hi + Vec3::Constant(margin)};
-    cache.vertices.clear(), cache.triangles.clear();
-    // Only the bounds blocks (vertices) and patches (faces) whose boxes meet the grown boxes.
-    for (uint32_t k = blockStart_[a]; k < blockStart_[a + 1]; ++k) {
-      if (!meets(blockBox_[k], cache.q)) continue;
-      const uint32_t i0 = (k - blockStart_[a]) * kBoundsBlock;
-      const uint32_t i1 = std::min<uint32_t>(i0 + kBoundsBlock, uint32_t(A.vertices.size()));
-      for (uint32_t i = i0; i < i1; ++i)
-        if (inBox(x[A.vertices[i]], cache.q)) cache.vertices.push_back(i);
-    }
-    const Patches& P = patches_[b];
-    for (size_t k = 0; k < P.box.size(); ++k) {
-      if (!meets(P.box[k], cache.region)) continue;
-      const size_t t1 = std::min(P.tris.size(), (k + 1) * kPatch);
-      for (size_t j = k * kPatch; j < t1; ++j) {
-        const auto& tri = B.triangles[P.tris[j]];
-        const Box tb{x[tri[0]].cwiseMin(x[tri[1]]).cwiseMin(x[tri[2]]),
-                     x[tri[0]].cwiseMax(x[tri[1]]).cwiseMax(x[tri[2]])};
-        if (meets(tb, cache.region)) cache.triangles.push_back(P.tris[j]);
-      }
-    }
-    reuse = true;
-  } else if (cache.valid) {
-    const Real d = drift_ * (1 + 1e-9) + 1e-9 * std::max(A.thickness, B.thickness);  // rounding slack
-    auto within = [d](const Box& inner, const Box& outer) {
-      return ((inner.lo.array() - d) >= outer.lo.array()).all() && ((inner.hi.array() + d) <= outer.hi.array()).all();
-    };
-    reuse = within(q, cache.q) && within(region, cache.region);
-    cache.valid = reuse;  // once it fails, the step's later rounds scan everything
+  looked_.clear();
+  const Real faceCorrected = corrected_[b];
+  for (uint32_t k = 0; k < T.vertices.size(); ++k) {
+    // How far b's faces moved since the check: from the rebuild, or (checked in this stage) from
+    // where the stage began: only the corrections of its rounds moved them since.
+    Real faces = faceMoved + T.faceDrift[k];
+    if (T.checkedStage[k] == stage_) faces = std::min(faces, faceCorrected + T.faceCorrected[k]);
+    const Real m = T.clearance[k] - faces;
+    if (m > 0 && (x[A.vertices[T.vertices[k]]] - T.checkedAt[k]).squaredNorm() < m * m) continue;  // still outside
+    looked_.push_back(k);
   }
-  buildGrid(B, region, s.positions, reuse ? &cache.triangles : nullptr, r);
-  if (grid_.count == 0) return;
-  const uint32_t count = reuse ? uint32_t(cache.vertices.size()) : uint32_t(A.vertices.size());
-  auto vertexAt = [&](uint32_t k) { return reuse ? cache.vertices[k] : k; };
+  const uint32_t count = uint32_t(looked_.size());
+  if (count == 0) return;
+  prepareScratch(T.grid);
+  Grid& g = T.grid;  // the listed faces' boxes now: the queries prune by them
+  g.now.resize(g.tri.size());
+  for (size_t e = 0; e < g.tri.size(); ++e) {
+    const auto& u = B.triangles[g.tri[e]];
+    g.now[e] = {x[u[0]].cwiseMin(x[u[1]]).cwiseMin(x[u[2]]), x[u[0]].cwiseMax(x[u[1]]).cwiseMax(x[u[2]])};
+  }
+  if (T.nearest.size() != A.vertices.size()) T.nearest.assign(A.vertices.size(), ContactBody::kNone);
   slot_.resize(count), slotState_.resize(count);
-  // Each vertex into its own slot, then gathered in vertex order: the same contacts at any thread
-  // count. On the team's members only for many vertices (minParallel_): measured on 2 cores with
-  // other work on them (load 4.6), the ~350 of two 64^3 spheres took the stage 1.35-1.43 ms per
-  // step on 2 threads against 0.97-1.02 serially (waking the team costs more than the work).
+  // Each vertex into its own slot (and its own entries of the track), then gathered in vertex
+  // order: the same contacts at any thread count. On the team's members only for many vertices
+  // (minParallel_): measured on 2 cores with other work on them (load 4.6), the ~350 of two 64^3
+  // spheres took the stage 1.35-1.43 ms per step on 2 threads against 0.97-1.02 serially (waking
+  // the team costs more than the work).
+  auto one = [&](uint32_t j, QueryScratch& qs) {
+    const uint32_t k = looked_[j];
+    slotState_[j] =
+        uint8_t(detectVertex(A, B, T.grid, T.vertices[k], r, x, qs, &slot_[j], &T.clearance[k], &T.nearest[T.vertices[k]]));
+    T.checkedAt[k] = x[A.vertices[T.vertices[k]]], T.faceDrift[k] = faceMoved;
+    T.faceCorrected[k] = faceCorrected, T.checkedStage[k] = stage_;
+  };
   constexpr uint32_t kChunk = 32;
   if (team_ && team_->members() > 1 && count >= minParallel_) {
     std::atomic<uint32_t> next{0};
     team_->run([&](int t) {
-      for (uint32_t k0; (k0 = next.fetch_add(kChunk, std::memory_order_relaxed)) < count;)
-        for (uint32_t k = k0; k < std::min(count, k0 + kChunk); ++k)
-          slotState_[k] = uint8_t(detectVertex(A, B, vertexAt(k), q, r, x, scratch_[size_t(t)], &slot_[k]));
+      for (uint32_t j0; (j0 = next.fetch_add(kChunk, std::memory_order_relaxed)) < count;)
+        for (uint32_t j = j0; j < std::min(count, j0 + kChunk); ++j) one(j, scratch_[size_t(t)]);
     });
   } else {
-    for (uint32_t k = 0; k < count; ++k)
-      slotState_[k] = uint8_t(detectVertex(A, B, vertexAt(k), q, r, x, scratch_[0], &slot_[k]));
+    for (uint32_t j = 0; j < count; ++j) one(j, scratch_[0]);
   }
-  for (uint32_t k = 0; k < count; ++k) {
-    if (slotState_[k] == 0) continue;
-    ++stats.candidates;
-    if (slotState_[k] != 2) continue;
-    round_.push_back(slot_[k]);
-    stats.maxDepth = std::max(stats.maxDepth, slot_[k].depth);
+  stats.candidates += count;
+  for (uint32_t j = 0; j < count; ++j) {
+    if (slotState_[j] != 2) continue;
+    round_.push_back(slot_[j]);
+    stats.maxDepth = std::max(stats.maxDepth, slot_[j].depth);
   }
 }
 
-// Surface vertex i (index into A.vertices) against the faces of B in the grid (the pseudo-normal
+// Surface vertex i (index into A.vertices) against the faces of B in grid g (the pseudo-normal
 // test, see the header). Reads the grid and positions only: any member may run any vertex.
-int BodyContacts::detectVertex(const ContactBody& A, const ContactBody& B, uint32_t i, const Box& q, Real r,
-                               const Vec3* x, QueryScratch& qs, Contact* out) const {
+int BodyContacts::detectVertex(const ContactBody& A, const ContactBody& B, const Grid& g, uint32_t i, Real r,
+                               const Vec3* x, QueryScratch& qs, Contact* out, Real* clearance, uint32_t* hint) const {
   const Real slack2 = 1e-24 * B.thickness * B.thickness;  // rounding of a box beside a point on a face
   const uint32_t v = A.vertices[i];
   const Vec3& p = x[v];
-  if ((p.array() < q.lo.array()).any() || (p.array() > q.hi.array()).any()) return 0;  // NaN: inside (as before)
-  const Nearest near = nearestTriangle(B, p, r, x);
-  if (near.tri == ContactBody::kNone) return 1;
+  const Nearest near = nearestTriangle(g, B, p, r, x, *hint);
+  *hint = near.tri;
+  if (near.tri == ContactBody::kNone) {
+    *clearance = r;  // no face of b within r (the track holds every face that can be)
+    return 1;
+  }
   const Real best = near.d2;
   const uint32_t bestTri = near.tri;
   const ClosestPoint bestCp = near.cp;
   const auto& tri = B.triangles[bestTri];
   const Vec3 c = bestCp.w[0] * x[tri[0]] + bestCp.w[1] * x[tri[1]] + bestCp.w[2] * x[tri[2]];
   const Vec3 pn = pseudoNormal(B, bestTri, bestCp.feature, x);
-  if (!((p - c).dot(pn) < 0)) return 1;  // in front of the nearest feature: outside
+  const Real dist = std::sqrt(best);
+  if (!((p - c).dot(pn) < 0)) {  // in front of the nearest feature: outside, dist from b's surface
+    *clearance = dist;
+    return 1;
+  }
+  *clearance = -1;
   // The push: out of the nearest face that faces the vertex (its normal against the vertex's
   // own normal). Where two staircases interlock, the nearest face can be the riser of a step
   // that the vertex's body lies against on the same side (both normals along +x, say): pushing
   // each vertex out through such faces moves the two bodies into each other and never ends.
   const Vec3 nv = vertexPseudoNormal(A, i, x);
-  const Real dist = std::sqrt(best);
   Vec3 n = dist > 0 ? Vec3((c - p) / dist) : unit(pn);
   if (n.squaredNorm() == 0) return 1;
   if (faceNormal(tri, x).dot(nv) >= 0) {
-    // Only a face about as near: a far one would move the vertex far (and its face with it).
+    // Only a face about as near (and within the search box): a far one would move the vertex
+    // far (and its face with it).
     const Real reach = dist + 0.5 * B.thickness;
+    const Vec3 qlo = p - Vec3::Constant(r), qhi = p + Vec3::Constant(r);
     Real bestFacing = reach * reach;
     uint32_t facing = ContactBody::kNone;
     ClosestPoint facingCp{};
-    forCandidateTriangles(p - Vec3::Constant(r), p + Vec3::Constant(r), qs, [](uint32_t) {});
-    for (uint32_t t : qs.candidates) {
-      if (boxDistance2(triBox_[t].lo, triBox_[t].hi, p) > bestFacing * kPrune + slack2) continue;
+    forCandidateTriangles(g, qlo, qhi, qs, [](uint32_t) {});
+    for (uint32_t e : qs.candidates) {
+      if (boxDistance2(g.triBox[e].lo, g.triBox[e].hi, p) > bestFacing * kPrune + slack2) continue;
+      const uint32_t t = g.tri[e];
       const auto& u = B.triangles[t];
+      if (!meets(x[u[0]].cwiseMin(x[u[1]]).cwiseMin(x[u[2]]), x[u[0]].cwiseMax(x[u[1]]).cwiseMax(x[u[2]]), qlo, qhi))
+        continue;  // (a track's boxes are grown: the face itself must meet the search box)
       const Vec3 fn = unit(faceNormal(u, x));
       if (!(fn.dot(nv) < 0)) continue;
       const ClosestPoint cp = closestPointOnTriangle(p, x[u[0]], x[u[1]], x[u[2]]);
@@ -701,8 +834,11 @@ int BodyContacts::detectVertex(const ContactBody& A, const ContactBody& B, uint3
 void BodyContacts::detectSelf(size_t a, const BodyContactState& s, BodyContactStats& stats) {
   const ContactBody& A = bodies_[a];
   const Real r = A.thickness + 2 * moved_[a];
-  const Box region{bounds_[a].lo - Vec3::Constant(r), bounds_[a].hi + Vec3::Constant(r)};
-  buildGrid(A, region, s.positions, nullptr, r);
+  Box box;
+  for (uint32_t u : A.vertices) box.add(s.positions[u]);
+  const Box region{box.lo - Vec3::Constant(r), box.hi + Vec3::Constant(r)};
+  buildGrid(grid_, A, region, s.positions, nullptr, r, 0);
+  prepareScratch(grid_);
   const Vec3 *x = s.positions, *x0 = s.previousPositions;
   for (uint32_t i = 0; i < A.vertices.size(); ++i) {
     const uint32_t v = A.vertices[i];
@@ -715,7 +851,8 @@ void BodyContacts::detectSelf(size_t a, const BodyContactState& s, BodyContactSt
     uint32_t bestTri = ContactBody::kNone;
     std::array<Real, 3> bestW{};
     Vec3 bestN;
-    forCandidateTriangles(p - Vec3::Constant(r), p + Vec3::Constant(r), scratch_[0], [&](uint32_t t) {
+    forCandidateTriangles(grid_, p - Vec3::Constant(r), p + Vec3::Constant(r), scratch_[0], [&](uint32_t e) {
+      const uint32_t t = grid_.tri[e];
       const auto& tri = A.triangles[t];
       const Vec3 f1 = faceNormal(tri, x);
       if (!(f1.dot(p - x[tri[0]]) < 0)) return;  // in front of the face's plane (most candidates)
@@ -738,20 +875,22 @@ void BodyContacts::detectSelf(size_t a, const BodyContactState& s, BodyContactSt
   }
 }
 
-// Every contact of the positions now, from scratch (no candidate lists kept from round 0), into
-// round_: whether any vertex is inside another body (or, if on, crossed its own surface).
+// Every contact of the positions now, from scratch (the tracks rebuilt here, every candidate
+// looked up), into round_: whether any vertex is inside another body (or, if on, crossed its own
+// surface).
 bool BodyContacts::detectAll(const BodyContactState& s, BodyContactStats& stats) {
   round_.clear();
-  for (PairCache& c : cache_) c.valid = false;
-  updateBounds(0, s);
+  tracksValid_ = false;
+  measure(s);
   const size_t B = bodies_.size();
+  if (B >= 2) rebuildTracks(s.positions), ++stats.rebuilds;
   for (size_t a = 0; a < B; ++a)
     for (size_t b = 0; b < B; ++b) {
       if (a == b && !settings_.selfContact) continue;
       if (a == b)
         detectSelf(a, s, stats);
       else
-        detectPair(a, b, kRounds, s, stats);
+        detectPair(a, b, s, stats);
     }
   return !round_.empty();
 }
@@ -801,23 +940,34 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
   Vec3* v = s.velocities;
   const Real* im = s.invMass;
   for (uint32_t u : touched_) isTouched_[u] = 0;
-  for (uint32_t k : dirtyBlocks_) blockDirty_[k] = 0;
-  touched_.clear(), touchedStart_.clear(), dirtyBlocks_.clear();
-  drift_ = 0;
-  if (bodies_.size() >= 2) updatePatches(x);
+  touched_.clear(), touchedStart_.clear();
+  ++stage_;
   bool fellBack = false;
+  const size_t B = bodies_.size();
   for (int round = 0; round < kRounds; ++round) {
-    // Broad phase: each body's surface box now and how far its surface moved in the step.
-    updateBounds(round, s);
-    for (size_t k = 0; k < touched_.size(); ++k) {
-      const Real d = (x[touched_[k]] - touchedStart_[k]).norm();
-      drift_ = std::isnan(d) ? std::numeric_limits<Real>::infinity() : std::max(drift_, d);
+    // Broad phase: how far each body's surface moved in the step and since the tracks' rebuild
+    // (round 0: one pass over the surfaces; a later round adds what the corrections moved since).
+    if (round == 0) {
+      measure(s);
+      movedStart_ = moved_, sinceRebuildStart_ = sinceRebuild_;
+      corrected_.assign(B, 0);
+    } else {  // only the vertices of the contacts moved since
+      moved_ = movedStart_, sinceRebuild_ = sinceRebuildStart_;
+      auto grow = [](Real& to, Real d) { to = std::isnan(d) ? std::numeric_limits<Real>::infinity() : std::max(to, d); };
+      for (size_t k = 0; k < touched_.size(); ++k) {
+        const uint32_t u = touched_[k], b = bodyOf_[u], i = bodies_[b].surfaceIndex(u);
+        grow(moved_[b], (x[u] - s.previousPositions[u]).norm());
+        grow(sinceRebuild_[b], (x[u] - ref_[b][i]).norm());
+        grow(corrected_[b], (x[u] - touchedStart_[k]).norm());
+      }
+    }
+    if (B >= 2 && !tracksHold()) {
+      rebuildTracks(x), ++stats.rebuilds;  // (sinceRebuild_ 0: a later round adds the corrections to come)
     }
     // After the first round only the pairs with a body that a correction of the round before
     // moved: a contact of a's vertices against b's faces moves vertices of both, so it can push
     // a vertex of b into a face of a (pair (b, a)) or into a third body's faces as well.
     round_.clear();
-    const size_t B = bodies_.size();
     movedBodies_.assign(B, 0);
     for (size_t a = 0; a < B; ++a)
       for (size_t b = 0; b < B; ++b)
@@ -833,7 +983,7 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
         if (a == b)
           detectSelf(a, s, stats);
         else
-          detectPair(a, b, round, s, stats);
+          detectPair(a, b, s, stats);
         active_[a * B + b] = round_.size() > before;
       }
     stats.rounds = round + 1;
@@ -932,12 +1082,12 @@ void BodyContacts::proximity(const Vec3* x, Real margin, std::vector<Proximity>&
       const Box q{box[a].lo.cwiseMax(box[b].lo - Vec3::Constant(margin)),
                   box[a].hi.cwiseMin(box[b].hi + Vec3::Constant(margin))};
       if ((q.lo.array() > q.hi.array()).any()) continue;
-      buildGrid(F, {q.lo - Vec3::Constant(margin), q.hi + Vec3::Constant(margin)}, x, nullptr, margin);
+      buildGrid(grid_, F, {q.lo - Vec3::Constant(margin), q.hi + Vec3::Constant(margin)}, x, nullptr, margin, 0);
       if (grid_.count == 0) continue;
       for (uint32_t v : A.vertices) {
         const Vec3& p = x[v];
         if ((p.array() < q.lo.array()).any() || (p.array() > q.hi.array()).any()) continue;
-        const Nearest near = nearestTriangle(F, p, margin, x);
+        const Nearest near = nearestTriangle(grid_, F, p, margin, x);
         if (near.tri == ContactBody::kNone) continue;
         const Real best = near.d2;
         const uint32_t bestTri = near.tri;

@@ -247,6 +247,10 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
   Vec3* positions = state_.positions.data();
   Vec3* velocities = state_.velocities.data();
   const Real* invMass = m.invMass.data();
+  // Soft-soft contact reads where every vertex started the step (saveBodyContactStart): kept here,
+  // from the values this pass loads anyway, instead of a pass of its own.
+  Vec3* startX = bodyContacts_ ? bodyContactStartX_.data() : nullptr;
+  Vec3* startV = bodyContacts_ ? bodyContactStartV_.data() : nullptr;
   Real depth = 0;
   // One loop per integrator and per "contacts possible": neither test is made per vertex, and
   // without contacts nothing is kept for them.
@@ -258,6 +262,7 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
       gatherVertexForces(m, *stageRest_, scratch_->frames.data(), positions, b, be, [&](size_t i, d4 force) {
         const d4 a = force * invMass[i] + g;
         const d4 x0 = loadVec3(positions[i]), v0 = loadVec3(velocities[i]);
+        if (startX) storeVec3(startX[i], x0), storeVec3(startV[i], v0);
         d4 x = x0, v = v0;
         Real vd = damp;
         if constexpr (perVertexDamping()) vd = vertexDamp[i];
@@ -481,7 +486,9 @@ void World::prepareTeam(int members) {
 }
 
 void World::step() {
-  if (bodyContacts_) saveBodyContactStart();
+  // (The explicit integrators keep the start in their vertex pass, stageVertices.)
+  const bool frameStep = sim_.integrator == IntegratorKind::Implicit || sim_.integrator == IntegratorKind::LargeStep;
+  if (bodyContacts_ && frameStep) saveBodyContactStart();
   if (sim_.integrator == IntegratorKind::Implicit)
     stepImplicit(false);
   else if (sim_.integrator == IntegratorKind::LargeStep)
@@ -507,7 +514,9 @@ void World::saveBodyContactStart() {
 void World::stageBodyContacts() {
   Vec3* x = state_.positions.data();
   Vec3* v = state_.velocities.data();
-  bodyContacts_->setTeam(team_ && teamMembers_ > 1 ? team_.get() : nullptr);
+  // On the team when the step's own stages run on it (the governor: one thread is not faster now).
+  const bool team = team_ && teamMembers_ > 1 && !(governor_ && governor_->usingOne());
+  bodyContacts_->setTeam(team ? team_.get() : nullptr);
   bodyContactStats_ =
       bodyContacts_->resolve({x, v, bodyContactStartX_.data(), bodyContactStartV_.data(), bodyContactInvMass_.data()});
   scratch_->maxContactDepth = std::max(scratch_->maxContactDepth, bodyContactStats_.maxDepth);

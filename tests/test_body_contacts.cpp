@@ -658,16 +658,20 @@ TEST(BodyContactScenes, DISABLED_TwoSpheresContactShare) {
   World& w = *b.world;
   while (w.bodyContactStats().contacts == 0) w.step();  // until they touch
   double stage = 0;
-  size_t contacts = 0;
+  size_t contacts = 0, looked = 0, rebuilds = 0;
   const auto t0 = std::chrono::steady_clock::now();
-  for (int k = 0; k < steps; ++k)
-    w.step(), stage += w.bodyContactStats().seconds, contacts += w.bodyContactStats().contacts;
+  for (int k = 0; k < steps; ++k) {
+    w.step();
+    const BodyContactStats& st = w.bodyContactStats();
+    stage += st.seconds, contacts += st.contacts, looked += st.candidates, rebuilds += size_t(st.rebuilds);
+  }
   const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf(
       "two %d^3 spheres, %zu vertices, %d threads: %d steps in contact, %.2f ms/step, contact stage %.2f ms/step "
-      "(%.1f %%), %.0f contacts/step, state hash %016llx\n",
+      "(%.1f %%), %.0f contacts/step, %.0f lookups/step, %zu rebuilds, state hash %016llx\n",
       n, w.model().numVertices(), scene.simulation.threads, steps, 1e3 * total / steps, 1e3 * stage / steps,
-      100 * stage / total, double(contacts) / steps, (unsigned long long)w.stateHash());
+      100 * stage / total, double(contacts) / steps, double(looked) / steps, rebuilds,
+      (unsigned long long)w.stateHash());
 }
 
 }  // namespace gradel

@@ -126,9 +126,13 @@ struct ContactBody {
   // Self-contact only: per surface vertex, the world ids of the vertices near it (of its elements
   // and its ring of surface faces), ascending (CSR); a face with a corner among them is adjacent.
   std::vector<uint32_t> nearStart, near;
+  /// Per vertex of the body (world id - vertexBegin): its index in `vertices`, or kNone.
+  std::vector<uint32_t> indexOf;
 
   /// Index of a world vertex id in `vertices`, or kNone.
-  uint32_t surfaceIndex(uint32_t vertex) const;
+  uint32_t surfaceIndex(uint32_t vertex) const {
+    return vertex >= vertexBegin && vertex < vertexEnd ? indexOf[vertex - vertexBegin] : kNone;
+  }
   static constexpr uint32_t kNone = 0xffffffffu;
 };
 
@@ -178,6 +182,7 @@ struct BodyContactStats {
   size_t contacts = 0;    ///< Vertex-face contacts resolved.
   Real maxDepth = 0;      ///< [m] deepest vertex found, before correction.
   int rounds = 0;         ///< Detection rounds run.
+  int rebuilds = 0;       ///< Times the candidate lists kept across steps were rebuilt (see the header).
   int takeBacks = 0;      ///< Times the last resort took bodies back towards the step's start (0: not needed).
   Real takenBackTo = 1;   ///< [-] the fraction of the step's motion the taken-back bodies kept.
   double seconds = 0;     ///< Wall time of the call (measurements; no result depends on it).
@@ -245,99 +250,120 @@ class BodyContacts {
     void add(const Vec3& p) { lo = lo.cwiseMin(p), hi = hi.cwiseMax(p); }
     void add(const Box& b) { lo = lo.cwiseMin(b.lo), hi = hi.cwiseMax(b.hi); }
   };
-  // Round 0 of a step keeps, per ordered pair of bodies, the candidates of a band `margin` wider
-  // than its boxes; a later round reuses them while every vertex a correction moved stayed
-  // within the margin (resolve): the rounds after the first cost the overlap, not the surface.
-  struct PairCache {
-    bool valid = false;
-    Box q, region;                    ///< Round 0's vertex box and face box, grown by the margin.
-    std::vector<uint32_t> vertices;   ///< Indices into the vertex body's `vertices` inside q then.
-    std::vector<uint32_t> triangles;  ///< Triangles of the face body meeting `region` then.
-  };
-  void detectPair(size_t a, size_t b, int round, const BodyContactState& s, BodyContactStats& stats);
-  void detectSelf(size_t a, const BodyContactState& s, BodyContactStats& stats);
-  bool detectAll(const BodyContactState& s, BodyContactStats& stats);
-  void takeBack(const BodyContactState& s, BodyContactStats& stats);
-  void buildGrid(const ContactBody& faces, const Box& region, const Vec3* x, const std::vector<uint32_t>* subset,
-                 Real reach);
-  // Per member of the team: the faces a query listed and the dedupe stamps.
-  struct QueryScratch {
-    std::vector<uint32_t> candidates;
-    std::vector<uint32_t> seen;  ///< Per triangle: the query that last listed it.
-    uint32_t stamp = 0;
-  };
-  template <class F>
-  void forCandidateTriangles(const Vec3& lo, const Vec3& hi, QueryScratch& q, F&& f) const;
-  // One vertex of a pair's narrow phase (detectPair): 0 outside the query box, 1 looked up, 2
-  // in contact (into *out).
-  int detectVertex(const ContactBody& A, const ContactBody& B, uint32_t i, const Box& q, Real r, const Vec3* x,
-                   QueryScratch& qs, Contact* out) const;
-  struct Nearest {
-    Real d2;       ///< [m^2] squared distance to it (reach^2 when none).
-    uint32_t tri;  ///< Its id, or kNone.
-    ClosestPoint cp;
-  };
-  Nearest nearestTriangle(const ContactBody& faces, const Vec3& p, Real reach, const Vec3* x) const;
-  void updateBounds(int round, const BodyContactState& s);
-  void updatePatches(const Vec3* x);
-  void markTouched(const Contact& c, const Vec3* x);
-
-  std::vector<ContactBody> bodies_;
-  BodyContactSettings settings_;
-  Real skin_ = 0;  ///< [m] a corrected vertex ends this far outside.
-  // scratch
-  std::vector<Box> bounds_;
-  std::vector<Real> moved_;  ///< Per body: the largest distance a surface vertex moved in the step [m].
-  // The bounds per block of kBoundsBlock surface vertices (body b's blocks from blockStart_[b]):
-  // a later round recomputes only the blocks holding a vertex that a correction moved.
-  static constexpr uint32_t kBoundsBlock = 256;
-  std::vector<uint32_t> blockStart_;
-  std::vector<Box> blockBox_;
-  std::vector<Real> blockMoved2_;
-  std::vector<uint8_t> blockDirty_;
-  std::vector<uint32_t> dirtyBlocks_;
-  std::vector<uint32_t> blockOf_;   ///< Per world vertex: its bounds block (kNone: not on a contact surface).
-  std::vector<uint32_t> touched_;   ///< World ids of the vertices of the step's contacts (first-seen order).
-  std::vector<Vec3> touchedStart_;  ///< Their positions when the stage began.
-  std::vector<uint8_t> isTouched_;  ///< Per world vertex.
-  Real drift_ = 0;                  ///< [m] the farthest a touched vertex moved since the stage began.
-  std::vector<PairCache> cache_;    ///< Per ordered pair (a * bodies + b).
-  // Per body: its triangles in patches of kPatch near each other, so that round 0 visits only the
-  // faces of the patches whose box meets a pair's region (updatePatches).
-  static constexpr size_t kPatch = 32;
-  struct Patches {
-    std::vector<uint32_t> tris;              ///< Triangle ids, patch k at [k kPatch, (k + 1) kPatch).
-    std::vector<uint32_t> vertStart, verts;  ///< Per patch its distinct corners (CSR).
-    std::vector<Box> box;                    ///< Per patch: the box of its corners this step.
-  };
-  std::vector<Patches> patches_;
-  std::vector<Contact> contacts_, round_;
-  // The faces of the pair's face body near the overlap: a dense table of cubic cells over the box
-  // they fill (buildGrid), cell (i, j, k) at index (k dims[1] + j) dims[0] + i.
+  // Some faces of one body in a dense table of cubic cells over the box they fill (buildGrid),
+  // cell (i, j, k) at index (k dims[1] + j) dims[0] + i. Each listed face has a box that holds
+  // it: its box at the build, grown by how far its corners may move before the grid is rebuilt
+  // (a pair's track), or by nothing (a grid for one query pass).
   struct Grid {
     Box box;  ///< The listed faces' boxes within the region: a query box missing it finds none.
     Vec3 origin{0, 0, 0};
     Real cell = 1, inv = 1;  ///< [m] edge of a cell, its inverse.
     std::array<int64_t, 3> dims{0, 0, 0};
-    size_t count = 0;             ///< Cells (0: no face listed).
-    std::vector<uint32_t> start;  ///< Per cell: its faces at items[start[c] .. start[c + 1]).
-    std::vector<uint32_t> items;  ///< Triangle ids.
-    std::vector<Box> cellBox;     ///< Per cell: its faces' boxes clipped to it (see buildGrid).
+    size_t count = 0;              ///< Cells (0: no face listed).
+    std::vector<uint32_t> tri;     ///< The listed faces' triangle ids, in listing order.
+    std::vector<Box> triBox;       ///< Their boxes (see above).
+    std::vector<Box> now;          ///< A track's: their boxes at the positions of the round (the queries' pruning).
+    std::vector<uint32_t> start;   ///< Per cell: its faces at items[start[c] .. start[c + 1]).
+    std::vector<uint32_t> items;   ///< Indices into tri.
+    std::vector<Box> cellBox;      ///< Per cell: its faces' boxes clipped to it (see buildGrid).
     std::array<std::vector<Real>, 3> cellLo,
-        cellHi;                  ///< Per axis and cell: its edges, grown by a rounding slack (outer cells: +-inf).
-    std::vector<uint32_t> fill;  ///< Scratch of the build.
+        cellHi;                    ///< Per axis and cell: its edges, grown by a rounding slack (outer cells: +-inf).
+    std::vector<uint32_t> fill;    ///< Scratch of the build.
+    std::vector<std::array<int32_t, 6>> range;  ///< Scratch of the build: each face's cell range.
     int64_t cellOf(Real v, int a) const;  ///< Clamped into the table.
     bool rangeOf(const Vec3& lo, const Vec3& hi, std::array<int64_t, 6>& c) const;
   };
-  Grid grid_;
-  std::vector<uint32_t> listed_;                     ///< The faces in the grid, in listing order.
-  std::vector<std::array<int32_t, 6>> listedRange_;  ///< Their cell ranges (lo x y z, hi x y z).
-  std::vector<QueryScratch> scratch_;                ///< Per member (one when serial).
+  // A pair of bodies across steps (ordered: a's vertices against b's faces), valid until either
+  // body's surface moved farther than loose_ from where it was at the rebuild (sinceRebuild_) or a
+  // step's search radius exceeds rCap_ (then every track is rebuilt).
+  struct Track {
+    Grid grid;                       ///< b's faces that can come within rCap_ of a vertex of a before then.
+    std::vector<uint32_t> vertices;  ///< a's vertices that can come within rCap_ of one of them (indices into `vertices`).
+    std::vector<Real> clearance;     ///< Per candidate: its distance to b's surface at its last check was at least this (< 0: look).
+    std::vector<Vec3> checkedAt;     ///< Per candidate: where it was then.
+    std::vector<Real> faceDrift;     ///< Per candidate: how far b's surface had moved from the rebuild then.
+    std::vector<Real> faceCorrected;    ///< Per candidate: how far the stage's corrections had moved b's surface then.
+    std::vector<uint32_t> checkedStage;  ///< Per candidate: the stage (resolve call) of its last check.
+    std::vector<uint32_t> nearest;   ///< Per vertex of a (index into `vertices`): its nearest face of b when last looked up (kNone: none).
+  };
+  void rebuildTracks(const Vec3* x);
+  void buildTrack(size_t a, size_t b, const Vec3* x);
+  void measure(const BodyContactState& s);
+  bool tracksHold() const;
+  Real searchRadius(size_t a, size_t b) const;
+  void detectPair(size_t a, size_t b, const BodyContactState& s, BodyContactStats& stats);
+  void detectSelf(size_t a, const BodyContactState& s, BodyContactStats& stats);
+  bool detectAll(const BodyContactState& s, BodyContactStats& stats);
+  void takeBack(const BodyContactState& s, BodyContactStats& stats);
+  void buildGrid(Grid& g, const ContactBody& faces, const Box& region, const Vec3* x,
+                 const std::vector<uint32_t>* subset, Real reach, Real grow);
+  // Per member of the team: the faces a query listed and the dedupe stamps.
+  struct QueryScratch {
+    std::vector<uint32_t> candidates;  ///< Indices into the grid's tri.
+    std::vector<uint32_t> seen;        ///< Per listed face: the query that last listed it.
+    uint32_t stamp = 0;
+  };
+  void prepareScratch(const Grid& g);
+  template <class F>
+  void forCandidateTriangles(const Grid& g, const Vec3& lo, const Vec3& hi, QueryScratch& q, F&& f) const;
+  // One vertex of a pair's narrow phase (detectPair): 1 looked up, 2 in contact (into *out);
+  // *clearance: a lower bound of its distance to b's surface (< 0: inside, or unknown).
+  int detectVertex(const ContactBody& A, const ContactBody& B, const Grid& g, uint32_t i, Real r, const Vec3* x,
+                   QueryScratch& qs, Contact* out, Real* clearance, uint32_t* hint) const;
+  struct Nearest {
+    Real d2;       ///< [m^2] squared distance to it (reach^2 when none).
+    uint32_t tri;  ///< Its id, or kNone.
+    ClosestPoint cp;
+  };
+  Nearest nearestTriangle(const Grid& g, const ContactBody& faces, const Vec3& p, Real reach, const Vec3* x,
+                          uint32_t hint = ContactBody::kNone) const;
+  void updatePatches(const Vec3* x);
+  void markTouched(const Contact& c, const Vec3* x);
+
+  std::vector<ContactBody> bodies_;
+  BodyContactSettings settings_;
+  Real skin_ = 0;   ///< [m] a corrected vertex ends this far outside.
+  Real loose_ = 0;  ///< [m] how far a surface may move from the rebuild before the tracks are rebuilt.
+  Real rCap_ = 0;   ///< [m] the largest search radius the tracks hold (set at the rebuild).
+  // scratch
+  std::vector<Box> bounds_;       ///< Per body: its surface's box at the last rebuild.
+  std::vector<Real> moved_;       ///< Per body: the largest distance a surface vertex moved in the step [m].
+  std::vector<Real> movedStart_;  ///< moved_ at round 0 (a later round adds the contacts' vertices).
+  std::vector<Real> sinceRebuild_;       ///< Per body: the farthest a surface vertex is from where it was at the rebuild [m].
+  std::vector<Real> sinceRebuildStart_;  ///< sinceRebuild_ at round 0 (a later round adds the contacts' vertices).
+  std::vector<std::vector<Vec3>> ref_;   ///< Per body and surface vertex: its position at the rebuild.
+  std::vector<uint32_t> chunkStart_;     ///< measure(): body b's chunks of vertices from chunkStart_[b].
+  std::vector<Real> chunkMax_;           ///< measure(): per chunk, its squared moved_ and sinceRebuild_.
+  bool tracksValid_ = false;
+  // The boxes per block of kBoundsBlock surface vertices at the rebuild (body b's blocks from
+  // blockStart_[b]): a track visits only the blocks near the other body.
+  static constexpr uint32_t kBoundsBlock = 256;
+  std::vector<uint32_t> blockStart_;
+  std::vector<Box> blockBox_;
+  std::vector<uint32_t> touched_;   ///< World ids of the vertices of the step's contacts (first-seen order).
+  std::vector<uint8_t> isTouched_;  ///< Per world vertex.
+  std::vector<Vec3> touchedStart_;  ///< Their positions when the stage began.
+  std::vector<Real> corrected_;     ///< Per body: the farthest the stage's corrections moved a vertex of its surface [m].
+  uint32_t stage_ = 0;              ///< resolve() calls so far.
+  std::vector<uint32_t> bodyOf_;    ///< Per world vertex: the body whose surface holds it (bodies().size(): none).
+  std::vector<Track> tracks_;       ///< Per ordered pair (a * bodies + b).
+  // Per body: its triangles in patches of kPatch near each other, so that a rebuild visits only
+  // the faces of the patches whose box meets a pair's region (updatePatches).
+  static constexpr size_t kPatch = 32;
+  struct Patches {
+    std::vector<uint32_t> tris;              ///< Triangle ids, patch k at [k kPatch, (k + 1) kPatch).
+    std::vector<uint32_t> vertStart, verts;  ///< Per patch its distinct corners (CSR).
+    std::vector<Box> box;                    ///< Per patch: the box of its corners at the rebuild.
+  };
+  std::vector<Patches> patches_;
+  std::vector<Contact> contacts_, round_;
+  Grid grid_;                          ///< For one pass (self-contact, proximity).
+  std::vector<QueryScratch> scratch_;  ///< Per member (one when serial).
   ThreadTeam* team_ = nullptr;
   uint32_t minParallel_ = kMinParallel;
   std::vector<Contact> slot_;         ///< Per vertex of a pair's query: its contact, if any.
-  std::vector<uint8_t> slotState_;    ///< Per vertex: detectVertex's answer.
-  std::vector<Box> triBox_;           ///< Per triangle in the grid: its box (the narrow phase's cheap test).
+  std::vector<uint8_t> slotState_;    ///< Per vertex: detectVertex's answer (0: skipped).
+  std::vector<uint32_t> looked_;      ///< A pair's candidates to look up this round (indices into its track).
   std::vector<uint8_t> active_;       ///< Per (vertex body, face body): contacts in the last round.
   std::vector<uint8_t> movedBodies_;  ///< Per body: a correction of the last round moved its vertices.
 };
