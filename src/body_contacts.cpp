@@ -216,6 +216,32 @@ Vec3 pseudoNormal(const ContactBody& body, uint32_t t, int feature, const Vec3* 
   return vertexPseudoNormal(body, body.surfaceIndex(tri[size_t(feature - 4)]), x);
 }
 
+// Which side of the faces around a closest point's feature (closestPointOnTriangle's) the offset
+// d = p - c lies on: 1 in front of every one (strictly), -1 behind every one, 0 mixed or on one.
+int sideOfFaces(const ContactBody& body, uint32_t t, int feature, const Vec3& d, const Vec3* x) {
+  int front = 0, behind = 0, faces = 0;
+  auto add = [&](const std::array<uint32_t, 3>& u) {
+    const Real s = faceNormal(u, x).dot(d);
+    ++faces, front += s > 0, behind += s < 0;
+  };
+  const auto& tri = body.triangles[t];
+  if (feature == 0) {
+    add(tri);
+  } else {
+    const uint32_t a = tri[size_t(feature <= 3 ? feature - 1 : feature - 4)];
+    const uint32_t s = body.surfaceIndex(a);
+    for (uint32_t k = body.vertexTriStart[s]; k < body.vertexTriStart[s + 1]; ++k) {
+      const auto& u = body.triangles[body.vertexTris[k]];
+      if (feature <= 3) {  // an edge: the faces holding both of its ends
+        const uint32_t b = tri[size_t(feature % 3)];
+        if (u[0] != b && u[1] != b && u[2] != b) continue;
+      }
+      add(u);
+    }
+  }
+  return faces > 0 && front == faces ? 1 : (faces > 0 && behind == faces ? -1 : 0);
+}
+
 // Generalised inverse mass of a contact: vertex plus the face's point with weights w.
 Real contactInvMass(const BodyContacts::Contact& c, const Real* im) {
   return im[c.vertex] + c.w[0] * c.w[0] * im[c.face[0]] + c.w[1] * c.w[1] * im[c.face[1]] +
@@ -630,7 +656,7 @@ void BodyContacts::forCandidateTriangles(const Grid& g, const Vec3& lo, const Ve
         const uint32_t e = g.items[i];
         if (q.seen[e] == q.stamp) continue;
         q.seen[e] = q.stamp;
-        const Box& tb = g.triBox[e];
+        const Box& tb = g.now.empty() ? g.triBox[e] : g.now[e];  // the face's box now, if kept
         if (!((tb.hi.array() < lo.array()).any() || (tb.lo.array() > hi.array()).any())) q.candidates.push_back(e);
       }
     }
@@ -717,7 +743,8 @@ void BodyContacts::detectPair(size_t a, size_t b, const BodyContactState& s, Bod
     Real faces = faceMoved + T.faceDrift[k];
     if (T.checkedStage[k] == stage_) faces = std::min(faces, faceCorrected + T.faceCorrected[k]);
     const Real m = T.clearance[k] - faces;
-    if (m > 0 && (x[A.vertices[T.vertices[k]]] - T.checkedAt[k]).squaredNorm() < m * m) continue;  // still outside
+    if (keepTracks_ && m > 0 && (x[A.vertices[T.vertices[k]]] - T.checkedAt[k]).squaredNorm() < m * m)
+      continue;  // still outside
     looked_.push_back(k);
   }
   const uint32_t count = uint32_t(looked_.size());
@@ -732,14 +759,14 @@ void BodyContacts::detectPair(size_t a, size_t b, const BodyContactState& s, Bod
   if (T.nearest.size() != A.vertices.size()) T.nearest.assign(A.vertices.size(), ContactBody::kNone);
   slot_.resize(count), slotState_.resize(count);
   // Each vertex into its own slot (and its own entries of the track), then gathered in vertex
-  // order: the same contacts at any thread count. On the team's members only for many vertices
-  // (minParallel_): measured on 2 cores with other work on them (load 4.6), the ~350 of two 64^3
-  // spheres took the stage 1.35-1.43 ms per step on 2 threads against 0.97-1.02 serially (waking
-  // the team costs more than the work).
+  // order: the same contacts at any thread count. On the team's members for more than a few
+  // lookups (minParallel_; the world hands the stage its team only while the step's governor
+  // finds all members faster than one: on a busy machine waking the team costs more than this).
   auto one = [&](uint32_t j, QueryScratch& qs) {
     const uint32_t k = looked_[j];
     slotState_[j] =
         uint8_t(detectVertex(A, B, T.grid, T.vertices[k], r, x, qs, &slot_[j], &T.clearance[k], &T.nearest[T.vertices[k]]));
+    if (!keepTracks_) T.nearest[T.vertices[k]] = ContactBody::kNone;  // (the reference: no hint either)
     T.checkedAt[k] = x[A.vertices[T.vertices[k]]], T.faceDrift[k] = faceMoved;
     T.faceCorrected[k] = faceCorrected, T.checkedStage[k] = stage_;
   };
@@ -779,12 +806,18 @@ int BodyContacts::detectVertex(const ContactBody& A, const ContactBody& B, const
   const ClosestPoint bestCp = near.cp;
   const auto& tri = B.triangles[bestTri];
   const Vec3 c = bestCp.w[0] * x[tri[0]] + bestCp.w[1] * x[tri[1]] + bestCp.w[2] * x[tri[2]];
-  const Vec3 pn = pseudoNormal(B, bestTri, bestCp.feature, x);
   const Real dist = std::sqrt(best);
-  if (!((p - c).dot(pn) < 0)) {  // in front of the nearest feature: outside, dist from b's surface
+  // The sign test. In front of (behind) every face around the nearest feature is in front of
+  // (behind) their angle-weighted pseudo-normal: its weights are positive. Only a vertex in front
+  // of some and behind others needs the weights (atan2 per corner).
+  const int side = sideOfFaces(B, bestTri, bestCp.feature, p - c, x);
+  Vec3 pn = Vec3::Zero();
+  if (side == 0) pn = pseudoNormal(B, bestTri, bestCp.feature, x);
+  if (side > 0 || (side == 0 && !((p - c).dot(pn) < 0))) {  // in front: outside, dist from b's surface
     *clearance = dist;
     return 1;
   }
+  if (dist == 0 && side != 0) pn = pseudoNormal(B, bestTri, bestCp.feature, x);
   *clearance = -1;
   // The push: out of the nearest face that faces the vertex (its normal against the vertex's
   // own normal). Where two staircases interlock, the nearest face can be the riser of a step
@@ -801,9 +834,12 @@ int BodyContacts::detectVertex(const ContactBody& A, const ContactBody& B, const
     Real bestFacing = reach * reach;
     uint32_t facing = ContactBody::kNone;
     ClosestPoint facingCp{};
-    forCandidateTriangles(g, qlo, qhi, qs, [](uint32_t) {});
+    // (A face within reach meets p +- reach: the listing needs no wider box.)
+    const Real listed = std::min(r, std::sqrt(bestFacing * kPrune + slack2));
+    forCandidateTriangles(g, p - Vec3::Constant(listed), p + Vec3::Constant(listed), qs, [](uint32_t) {});
+    const Box* boxes = g.now.empty() ? g.triBox.data() : g.now.data();
     for (uint32_t e : qs.candidates) {
-      if (boxDistance2(g.triBox[e].lo, g.triBox[e].hi, p) > bestFacing * kPrune + slack2) continue;
+      if (boxDistance2(boxes[e].lo, boxes[e].hi, p) > bestFacing * kPrune + slack2) continue;
       const uint32_t t = g.tri[e];
       const auto& u = B.triangles[t];
       if (!meets(x[u[0]].cwiseMin(x[u[1]]).cwiseMin(x[u[2]]), x[u[0]].cwiseMax(x[u[1]]).cwiseMax(x[u[2]]), qlo, qhi))
@@ -961,7 +997,7 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
         grow(corrected_[b], (x[u] - touchedStart_[k]).norm());
       }
     }
-    if (B >= 2 && !tracksHold()) {
+    if (B >= 2 && (!keepTracks_ || !tracksHold())) {
       rebuildTracks(x), ++stats.rebuilds;  // (sinceRebuild_ 0: a later round adds the corrections to come)
     }
     // After the first round only the pairs with a body that a correction of the round before

@@ -6,24 +6,32 @@
 // shifted to the world's vertex numbering (several bodies are one combined state; a body owns the
 // vertices [vertexBegin, vertexEnd)). The stage runs after the positions of a step are known:
 //
-//   broad phase  per body, one pass over its surface vertices: the bounding box of their
-//                positions and the largest distance one of them moved in the step. Per pair of
-//                bodies whose boxes overlap (grown by the search radius r below), only the
-//                triangles that reach into the overlap go into a grid (a dense table of cells of
-//                twice r over the box they fill, each cell with its faces and their boxes clipped
-//                to it) and only the surface vertices in the overlap are looked up, so the narrow
-//                phase grows with the contact area.
-//                Round 0 of a step lists each pair's candidates for boxes grown by a margin (the
-//                larger thickness), visiting only the blocks of 256 surface vertices and the
-//                patches of 32 faces near each other (Morton order) whose boxes meet them; a later
-//                round reuses the lists while every vertex a correction moved (the only ones that
-//                moved) stayed within the margin, and recomputes only the blocks holding such a
-//                vertex: the rounds after the first cost the overlap, not the whole surface.
-//                (The lists are supersets: the exact tests run as before, same bits.)
+//   broad phase  kept across steps, per ordered pair of bodies (a's vertices against b's
+//                faces), a track: b's faces that can come within rCap of a's surface before
+//                the next rebuild, in a grid (a dense table of cells of about a voxel, each with
+//                its faces' boxes grown by loose = half a voxel: the most a face may move before
+//                the rebuild), and a's candidate vertices, those within loose + rCap of such a
+//                box (any other one stays farther than rCap from every face of b until then). Per
+//                step one pass over each body's surface vertices measures how far it moved in the
+//                step and since the rebuild (on the team's members for many vertices; maxima,
+//                the same at any thread count); every track is rebuilt when a surface moved more
+//                than loose since the rebuild or a pair's search radius r passed rCap (set to the
+//                r of the rebuild plus a quarter voxel). A candidate is looked up only when it
+//                may have reached b's surface since its last check: it was at least its
+//                clearance (the distance to its nearest face, in front) from it then; since, it
+//                moved what it moved and b's faces at most what b's surface moved since the
+//                rebuild (or, checked in this stage, what the stage's corrections moved it) plus
+//                as much then. For a closed surface that does not pass through itself the
+//                skipped vertices are outside (the same bits as looking them all up: test
+//                KeptTracksGiveTheBitsOfDetectingFromScratch; where a crushed body's surface folds
+//                through itself the sign test below is no consistent inside/outside and the two
+//                can differ). The rounds after the first measure only the vertices the
+//                corrections moved (the only ones that moved): the rounds cost the contact area.
 //   narrow phase the nearest triangle of the other body within r = thickness + the largest
-//                distances both bodies' surfaces moved in the step (the nearest cell first; a
-//                cell or a triangle whose box lies farther than the best so far is skipped; of
-//                equally near ones the lowest id wins, whatever the cells' order); inside when the vertex lies
+//                distances both bodies' surfaces moved in the step (from the vertex's last answer,
+//                which bounds the search; the nearest cell first; a cell or a triangle whose box
+//                (now) lies farther than the best so far is skipped; of equally near ones the
+//                lowest id wins, whatever the cells' order); inside when the vertex lies
 //                behind the nearest feature's angle-weighted pseudo-normal (the face normal in a
 //                face, the sum of its faces' normals on an edge, the angle-weighted sum at a
 //                corner: Baerentzen & Aanaes 2005), the sign test that is exact for a closed
@@ -201,7 +209,11 @@ class BodyContacts {
   /// The world's thread team for the narrow phase (nullptr: serial), used for a pair with at least
   /// `minParallel` vertices to look up (below it, waking the team costs more than the work). Not owned.
   void setTeam(ThreadTeam* team, uint32_t minParallel = kMinParallel) { team_ = team, minParallel_ = minParallel; }
-  static constexpr uint32_t kMinParallel = 2048;
+  static constexpr uint32_t kMinParallel = 128;
+  /// Whether the stage keeps its tracks across steps and rounds (the default). Off: every round
+  /// rebuilds them and looks up every candidate from scratch, the reference that keeping them
+  /// must match bit for bit (tests; it costs a full detection per round).
+  void setKeepTracks(bool keep) { keepTracks_ = keep; }
 
   const std::vector<ContactBody>& bodies() const { return bodies_; }
   const BodyContactSettings& settings() const { return settings_; }
@@ -335,6 +347,7 @@ class BodyContacts {
   std::vector<uint32_t> chunkStart_;     ///< measure(): body b's chunks of vertices from chunkStart_[b].
   std::vector<Real> chunkMax_;           ///< measure(): per chunk, its squared moved_ and sinceRebuild_.
   bool tracksValid_ = false;
+  bool keepTracks_ = true;
   // The boxes per block of kBoundsBlock surface vertices at the rebuild (body b's blocks from
   // blockStart_[b]): a track visits only the blocks near the other body.
   static constexpr uint32_t kBoundsBlock = 256;
