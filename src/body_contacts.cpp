@@ -285,7 +285,8 @@ BodyContacts::BodyContacts(std::vector<ContactBody> bodies, const BodyContactSet
     : bodies_(std::move(bodies)), settings_(settings) {
   validate(settings_);
   Real thinnest = std::numeric_limits<Real>::infinity(), thickest = 0;
-  for (const ContactBody& b : bodies_) thinnest = std::min(thinnest, b.thickness), thickest = std::max(thickest, b.thickness);
+  for (const ContactBody& b : bodies_)
+    thinnest = std::min(thinnest, b.thickness), thickest = std::max(thickest, b.thickness);
   skin_ = kSkin * thinnest;
   loose_ = kLoose * thickest;
   const size_t B = bodies_.size();
@@ -764,8 +765,8 @@ void BodyContacts::detectPair(size_t a, size_t b, const BodyContactState& s, Bod
   // finds all members faster than one: on a busy machine waking the team costs more than this).
   auto one = [&](uint32_t j, QueryScratch& qs) {
     const uint32_t k = looked_[j];
-    slotState_[j] =
-        uint8_t(detectVertex(A, B, T.grid, T.vertices[k], r, x, qs, &slot_[j], &T.clearance[k], &T.nearest[T.vertices[k]]));
+    slotState_[j] = uint8_t(
+        detectVertex(A, B, T.grid, T.vertices[k], r, x, qs, &slot_[j], &T.clearance[k], &T.nearest[T.vertices[k]]));
     if (!keepTracks_) T.nearest[T.vertices[k]] = ContactBody::kNone;  // (the reference: no hint either)
     T.checkedAt[k] = x[A.vertices[T.vertices[k]]], T.faceDrift[k] = faceMoved;
     T.faceCorrected[k] = faceCorrected, T.checkedStage[k] = stage_;
@@ -989,7 +990,9 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
       corrected_.assign(B, 0);
     } else {  // only the vertices of the contacts moved since
       moved_ = movedStart_, sinceRebuild_ = sinceRebuildStart_;
-      auto grow = [](Real& to, Real d) { to = std::isnan(d) ? std::numeric_limits<Real>::infinity() : std::max(to, d); };
+      auto grow = [](Real& to, Real d) {
+        to = std::isnan(d) ? std::numeric_limits<Real>::infinity() : std::max(to, d);
+      };
       for (size_t k = 0; k < touched_.size(); ++k) {
         const uint32_t u = touched_[k], b = bodyOf_[u], i = bodies_[b].surfaceIndex(u);
         grow(moved_[b], (x[u] - s.previousPositions[u]).norm());

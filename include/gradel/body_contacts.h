@@ -271,32 +271,35 @@ class BodyContacts {
     Vec3 origin{0, 0, 0};
     Real cell = 1, inv = 1;  ///< [m] edge of a cell, its inverse.
     std::array<int64_t, 3> dims{0, 0, 0};
-    size_t count = 0;              ///< Cells (0: no face listed).
-    std::vector<uint32_t> tri;     ///< The listed faces' triangle ids, in listing order.
-    std::vector<Box> triBox;       ///< Their boxes (see above).
-    std::vector<Box> now;          ///< A track's: their boxes at the positions of the round (the queries' pruning).
-    std::vector<uint32_t> start;   ///< Per cell: its faces at items[start[c] .. start[c + 1]).
-    std::vector<uint32_t> items;   ///< Indices into tri.
-    std::vector<Box> cellBox;      ///< Per cell: its faces' boxes clipped to it (see buildGrid).
+    size_t count = 0;             ///< Cells (0: no face listed).
+    std::vector<uint32_t> tri;    ///< The listed faces' triangle ids, in listing order.
+    std::vector<Box> triBox;      ///< Their boxes (see above).
+    std::vector<Box> now;         ///< A track's: their boxes at the positions of the round (the queries' pruning).
+    std::vector<uint32_t> start;  ///< Per cell: its faces at items[start[c] .. start[c + 1]).
+    std::vector<uint32_t> items;  ///< Indices into tri.
+    std::vector<Box> cellBox;     ///< Per cell: its faces' boxes clipped to it (see buildGrid).
     std::array<std::vector<Real>, 3> cellLo,
-        cellHi;                    ///< Per axis and cell: its edges, grown by a rounding slack (outer cells: +-inf).
-    std::vector<uint32_t> fill;    ///< Scratch of the build.
+        cellHi;                  ///< Per axis and cell: its edges, grown by a rounding slack (outer cells: +-inf).
+    std::vector<uint32_t> fill;  ///< Scratch of the build.
     std::vector<std::array<int32_t, 6>> range;  ///< Scratch of the build: each face's cell range.
-    int64_t cellOf(Real v, int a) const;  ///< Clamped into the table.
+    int64_t cellOf(Real v, int a) const;        ///< Clamped into the table.
     bool rangeOf(const Vec3& lo, const Vec3& hi, std::array<int64_t, 6>& c) const;
   };
   // A pair of bodies across steps (ordered: a's vertices against b's faces), valid until either
   // body's surface moved farther than loose_ from where it was at the rebuild (sinceRebuild_) or a
   // step's search radius exceeds rCap_ (then every track is rebuilt).
   struct Track {
-    Grid grid;                       ///< b's faces that can come within rCap_ of a vertex of a before then.
-    std::vector<uint32_t> vertices;  ///< a's vertices that can come within rCap_ of one of them (indices into `vertices`).
-    std::vector<Real> clearance;     ///< Per candidate: its distance to b's surface at its last check was at least this (< 0: look).
-    std::vector<Vec3> checkedAt;     ///< Per candidate: where it was then.
-    std::vector<Real> faceDrift;     ///< Per candidate: how far b's surface had moved from the rebuild then.
-    std::vector<Real> faceCorrected;    ///< Per candidate: how far the stage's corrections had moved b's surface then.
+    Grid grid;  ///< b's faces that can come within rCap_ of a vertex of a before then.
+    std::vector<uint32_t>
+        vertices;  ///< a's vertices that can come within rCap_ of one of them (indices into `vertices`).
+    std::vector<Real>
+        clearance;  ///< Per candidate: its distance to b's surface at its last check was at least this (< 0: look).
+    std::vector<Vec3> checkedAt;         ///< Per candidate: where it was then.
+    std::vector<Real> faceDrift;         ///< Per candidate: how far b's surface had moved from the rebuild then.
+    std::vector<Real> faceCorrected;     ///< Per candidate: how far the stage's corrections had moved b's surface then.
     std::vector<uint32_t> checkedStage;  ///< Per candidate: the stage (resolve call) of its last check.
-    std::vector<uint32_t> nearest;   ///< Per vertex of a (index into `vertices`): its nearest face of b when last looked up (kNone: none).
+    std::vector<uint32_t>
+        nearest;  ///< Per vertex of a (index into `vertices`): its nearest face of b when last looked up (kNone: none).
   };
   void rebuildTracks(const Vec3* x);
   void buildTrack(size_t a, size_t b, const Vec3* x);
@@ -341,7 +344,8 @@ class BodyContacts {
   std::vector<Box> bounds_;       ///< Per body: its surface's box at the last rebuild.
   std::vector<Real> moved_;       ///< Per body: the largest distance a surface vertex moved in the step [m].
   std::vector<Real> movedStart_;  ///< moved_ at round 0 (a later round adds the contacts' vertices).
-  std::vector<Real> sinceRebuild_;       ///< Per body: the farthest a surface vertex is from where it was at the rebuild [m].
+  std::vector<Real>
+      sinceRebuild_;  ///< Per body: the farthest a surface vertex is from where it was at the rebuild [m].
   std::vector<Real> sinceRebuildStart_;  ///< sinceRebuild_ at round 0 (a later round adds the contacts' vertices).
   std::vector<std::vector<Vec3>> ref_;   ///< Per body and surface vertex: its position at the rebuild.
   std::vector<uint32_t> chunkStart_;     ///< measure(): body b's chunks of vertices from chunkStart_[b].
@@ -356,10 +360,10 @@ class BodyContacts {
   std::vector<uint32_t> touched_;   ///< World ids of the vertices of the step's contacts (first-seen order).
   std::vector<uint8_t> isTouched_;  ///< Per world vertex.
   std::vector<Vec3> touchedStart_;  ///< Their positions when the stage began.
-  std::vector<Real> corrected_;     ///< Per body: the farthest the stage's corrections moved a vertex of its surface [m].
-  uint32_t stage_ = 0;              ///< resolve() calls so far.
-  std::vector<uint32_t> bodyOf_;    ///< Per world vertex: the body whose surface holds it (bodies().size(): none).
-  std::vector<Track> tracks_;       ///< Per ordered pair (a * bodies + b).
+  std::vector<Real> corrected_;   ///< Per body: the farthest the stage's corrections moved a vertex of its surface [m].
+  uint32_t stage_ = 0;            ///< resolve() calls so far.
+  std::vector<uint32_t> bodyOf_;  ///< Per world vertex: the body whose surface holds it (bodies().size(): none).
+  std::vector<Track> tracks_;     ///< Per ordered pair (a * bodies + b).
   // Per body: its triangles in patches of kPatch near each other, so that a rebuild visits only
   // the faces of the patches whose box meets a pair's region (updatePatches).
   static constexpr size_t kPatch = 32;
