@@ -200,45 +200,43 @@ Vec3 vertexPseudoNormal(const ContactBody& body, uint32_t s, const Vec3* x) {
 
 // The angle-weighted pseudo-normal (not normalised) of the feature of triangle t that the closest
 // point lies on (closestPointOnTriangle's feature), from the body's faces around it.
-Vec3 pseudoNormal(const ContactBody& body, uint32_t t, int feature, const Vec3* x) {
+// f(u) for each face around the feature of triangle t that a closest point lies on
+// (closestPointOnTriangle's): the face itself; an edge's faces, those holding both of its ends; a
+// corner's faces (with those that hold it inside, buildContactBody), in the body's order.
+template <class F>
+void forFeatureFaces(const ContactBody& body, uint32_t t, int feature, F&& f) {
   const auto& tri = body.triangles[t];
-  if (feature == 0) return unit(faceNormal(tri, x));
-  if (feature <= 3) {  // an edge: every face holding both of its ends
-    const uint32_t a = tri[size_t(feature - 1)], b = tri[size_t(feature % 3)];
-    const uint32_t s = body.surfaceIndex(a);
-    Vec3 n = Vec3::Zero();
-    for (uint32_t k = body.vertexTriStart[s]; k < body.vertexTriStart[s + 1]; ++k) {
-      const auto& u = body.triangles[body.vertexTris[k]];
-      if (u[0] == b || u[1] == b || u[2] == b) n += unit(faceNormal(u, x));
+  if (feature == 0) return f(tri);
+  const uint32_t a = tri[size_t(feature <= 3 ? feature - 1 : feature - 4)];
+  const uint32_t s = body.surfaceIndex(a);
+  for (uint32_t k = body.vertexTriStart[s]; k < body.vertexTriStart[s + 1]; ++k) {
+    const auto& u = body.triangles[body.vertexTris[k]];
+    if (feature <= 3) {  // an edge
+      const uint32_t b = tri[size_t(feature % 3)];
+      if (u[0] != b && u[1] != b && u[2] != b) continue;
     }
-    return n;
+    f(u);
   }
-  return vertexPseudoNormal(body, body.surfaceIndex(tri[size_t(feature - 4)]), x);
 }
 
-// Which side of the faces around a closest point's feature (closestPointOnTriangle's) the offset
-// d = p - c lies on: 1 in front of every one (strictly), -1 behind every one, 0 mixed or on one.
+Vec3 pseudoNormal(const ContactBody& body, uint32_t t, int feature, const Vec3* x) {
+  if (feature == 0) return unit(faceNormal(body.triangles[t], x));
+  if (feature <= 3) {  // an edge: the unit normals of its faces
+    Vec3 n = Vec3::Zero();
+    forFeatureFaces(body, t, feature, [&](const std::array<uint32_t, 3>& u) { n += unit(faceNormal(u, x)); });
+    return n;
+  }
+  return vertexPseudoNormal(body, body.surfaceIndex(body.triangles[t][size_t(feature - 4)]), x);
+}
+
+// Which side of the faces around a closest point's feature the offset d = p - c lies on: 1 in
+// front of every one (strictly), -1 behind every one, 0 mixed or on one.
 int sideOfFaces(const ContactBody& body, uint32_t t, int feature, const Vec3& d, const Vec3* x) {
   int front = 0, behind = 0, faces = 0;
-  auto add = [&](const std::array<uint32_t, 3>& u) {
+  forFeatureFaces(body, t, feature, [&](const std::array<uint32_t, 3>& u) {
     const Real s = faceNormal(u, x).dot(d);
     ++faces, front += s > 0, behind += s < 0;
-  };
-  const auto& tri = body.triangles[t];
-  if (feature == 0) {
-    add(tri);
-  } else {
-    const uint32_t a = tri[size_t(feature <= 3 ? feature - 1 : feature - 4)];
-    const uint32_t s = body.surfaceIndex(a);
-    for (uint32_t k = body.vertexTriStart[s]; k < body.vertexTriStart[s + 1]; ++k) {
-      const auto& u = body.triangles[body.vertexTris[k]];
-      if (feature <= 3) {  // an edge: the faces holding both of its ends
-        const uint32_t b = tri[size_t(feature % 3)];
-        if (u[0] != b && u[1] != b && u[2] != b) continue;
-      }
-      add(u);
-    }
-  }
+  });
   return faces > 0 && front == faces ? 1 : (faces > 0 && behind == faces ? -1 : 0);
 }
 
@@ -273,6 +271,8 @@ constexpr Real kLoose = 0.5, kRadiusSlack = 0.25;
 // A track's grid: cells of twice this (same unit); the queries start from their last answer, so
 // their boxes are small and fine cells hold few faces.
 constexpr Real kTrackCell = 0.5;
+// measure(): surface vertices per chunk (a unit of the team's work).
+constexpr uint32_t kMeasureChunk = 4096;
 
 // Squared distance from p to a box (0 inside): a lower bound of the distance to what it holds.
 Real boxDistance2(const Vec3& lo, const Vec3& hi, const Vec3& p) {
@@ -296,13 +296,16 @@ BodyContacts::BodyContacts(std::vector<ContactBody> bodies, const BodyContactSet
   moved_.assign(B, 0), movedStart_.assign(B, 0), sinceRebuild_.assign(B, 0), sinceRebuildStart_.assign(B, 0);
   ref_.resize(B);
   uint32_t vertexEnd = 0;
-  blockStart_.assign(1, 0);
+  blockStart_.assign(1, 0), chunkStart_.assign(1, 0);
   for (size_t b = 0; b < B; ++b) {
     vertexEnd = std::max(vertexEnd, bodies_[b].vertexEnd);
     blockStart_.push_back(blockStart_.back() +
                           uint32_t((bodies_[b].vertices.size() + kBoundsBlock - 1) / kBoundsBlock));
+    chunkStart_.push_back(chunkStart_.back() +
+                          uint32_t((bodies_[b].vertices.size() + kMeasureChunk - 1) / kMeasureChunk));
     ref_[b].resize(bodies_[b].vertices.size());
   }
+  chunkMax_.resize(2 * size_t(chunkStart_.back()));  // (every chunk writes both of its entries)
   blockBox_.resize(blockStart_.back());
   isTouched_.assign(vertexEnd, 0);
   bodyOf_.assign(vertexEnd, uint32_t(B));
@@ -322,14 +325,8 @@ void BodyContacts::measure(const BodyContactState& s) {
   const Vec3 *x = s.positions, *x0 = s.previousPositions;
   // In chunks of kMeasureChunk vertices (on the team's members when there are many), each chunk's
   // maxima into its own slot: max is exact, so the result is the same at any thread count.
-  constexpr uint32_t kMeasureChunk = 4096;
   const size_t B = bodies_.size();
-  chunkStart_.assign(1, 0);
-  for (size_t b = 0; b < B; ++b)
-    chunkStart_.push_back(chunkStart_.back() +
-                          uint32_t((bodies_[b].vertices.size() + kMeasureChunk - 1) / kMeasureChunk));
   const uint32_t chunks = chunkStart_.back();
-  chunkMax_.assign(2 * size_t(chunks), 0);
   auto one = [&](uint32_t c) {
     const size_t b = size_t(std::upper_bound(chunkStart_.begin(), chunkStart_.end(), c) - chunkStart_.begin()) - 1;
     const std::vector<uint32_t>& vs = bodies_[b].vertices;
@@ -939,18 +936,13 @@ void BodyContacts::takeBack(const BodyContactState& s, BodyContactStats& stats) 
   Vec3* x = s.positions;
   const Vec3* x0 = s.previousPositions;
   const size_t B = bodies_.size();
-  auto bodyOf = [&](uint32_t u) {
-    for (size_t b = 0; b < B; ++b)
-      if (u >= bodies_[b].vertexBegin && u < bodies_[b].vertexEnd) return b;
-    return B;
-  };
   std::vector<uint8_t> back(B, 0);
   std::vector<std::vector<Vec3>> end(B);  // a body's positions when it joined
   Real f = 1;
   for (;;) {
     bool grew = false;
     for (const Contact& c : round_)
-      for (const size_t b : {bodyOf(c.vertex), bodyOf(c.face[0])})
+      for (const size_t b : {size_t(bodyOf_[c.vertex]), size_t(bodyOf_[c.face[0]])})  // (both on a surface)
         if (b < B && !back[b]) {
           back[b] = 1, grew = true;
           end[b].assign(x + bodies_[b].vertexBegin, x + bodies_[b].vertexEnd);

@@ -348,7 +348,7 @@ class BodyContacts {
       sinceRebuild_;  ///< Per body: the farthest a surface vertex is from where it was at the rebuild [m].
   std::vector<Real> sinceRebuildStart_;  ///< sinceRebuild_ at round 0 (a later round adds the contacts' vertices).
   std::vector<std::vector<Vec3>> ref_;   ///< Per body and surface vertex: its position at the rebuild.
-  std::vector<uint32_t> chunkStart_;     ///< measure(): body b's chunks of vertices from chunkStart_[b].
+  std::vector<uint32_t> chunkStart_;     ///< measure(): body b's chunks of surface vertices from chunkStart_[b].
   std::vector<Real> chunkMax_;           ///< measure(): per chunk, its squared moved_ and sinceRebuild_.
   bool tracksValid_ = false;
   bool keepTracks_ = true;
