@@ -258,6 +258,9 @@ Vec3 relative(const BodyContacts::Contact& c, const Vec3* y) {
 }
 
 constexpr Real kSkin = 1e-6;  // [thickness] a corrected vertex ends this far outside
+// [thickness] a step in which two surfaces together moved at most this far (before the
+// corrections) is small (detectVertex).
+constexpr Real kSmallStep = 0.25;
 
 // A triangle whose box lies farther than this times the best squared distance so far (plus a
 // tiny absolute slack) cannot be nearer than the best, nor as near: the slack covers rounding.
@@ -731,6 +734,7 @@ void BodyContacts::detectPair(size_t a, size_t b, const BodyContactState& s, Bod
   const ContactBody& A = bodies_[a];
   const ContactBody& B = bodies_[b];
   const Real r = searchRadius(a, b);
+  const bool smallStep = movedStart_[a] + movedStart_[b] <= kSmallStep * std::max(A.thickness, B.thickness);
   const Real faceMoved = sinceRebuild_[b];
   const Vec3* x = s.positions;
   looked_.clear();
@@ -762,8 +766,8 @@ void BodyContacts::detectPair(size_t a, size_t b, const BodyContactState& s, Bod
   // finds all members faster than one: on a busy machine waking the team costs more than this).
   auto one = [&](uint32_t j, QueryScratch& qs) {
     const uint32_t k = looked_[j];
-    slotState_[j] = uint8_t(
-        detectVertex(A, B, T.grid, T.vertices[k], r, x, qs, &slot_[j], &T.clearance[k], &T.nearest[T.vertices[k]]));
+    slotState_[j] = uint8_t(detectVertex(A, B, T.grid, T.vertices[k], r, smallStep, x, qs, &slot_[j], &T.clearance[k],
+                                         &T.nearest[T.vertices[k]]));
     if (!keepTracks_) T.nearest[T.vertices[k]] = ContactBody::kNone;  // (the reference: no hint either)
     T.checkedAt[k] = x[A.vertices[T.vertices[k]]], T.faceDrift[k] = faceMoved;
     T.faceCorrected[k] = faceCorrected, T.checkedStage[k] = stage_;
@@ -789,7 +793,8 @@ void BodyContacts::detectPair(size_t a, size_t b, const BodyContactState& s, Bod
 // Surface vertex i (index into A.vertices) against the faces of B in grid g (the pseudo-normal
 // test, see the header). Reads the grid and positions only: any member may run any vertex.
 int BodyContacts::detectVertex(const ContactBody& A, const ContactBody& B, const Grid& g, uint32_t i, Real r,
-                               const Vec3* x, QueryScratch& qs, Contact* out, Real* clearance, uint32_t* hint) const {
+                               bool smallStep, const Vec3* x, QueryScratch& qs, Contact* out, Real* clearance,
+                               uint32_t* hint) const {
   const Real slack2 = 1e-24 * B.thickness * B.thickness;  // rounding of a box beside a point on a face
   const uint32_t v = A.vertices[i];
   const Vec3& p = x[v];
@@ -857,6 +862,29 @@ int BodyContacts::detectVertex(const ContactBody& A, const ContactBody& B, const
       const Vec3 cu = facingCp.w[0] * x[u[0]] + facingCp.w[1] * x[u[1]] + facingCp.w[2] * x[u[2]];
       const Real depth = -fn.dot(p - cu);
       *out = {v, u, facingCp.w, fn, depth};
+      return 2;
+    }
+  }
+  if (side == 0 && smallStep) {
+    // In front of some faces around the nearest edge or corner and behind others (a concave
+    // one: outside is in front of them all). Along c - p the push would carry the vertex round
+    // the feature to behind the faces it was in front of, and the next round would push it back
+    // (two 64^3 balls pressed together: one vertex found at the same corner in all 8 rounds).
+    // Out of the face it is deepest behind instead, at the feature's point on that face. (Only
+    // in a small step: where a frame step crushed a ball, the faces around a feature can fold
+    // back to back, and there this push left more vertices inside the other ball than the push
+    // to the feature's point: two balls at 5 m/s each way, dt = 1/60 s.)
+    Real deepest = 0;
+    std::array<uint32_t, 3> face{};
+    Vec3 faceN = Vec3::Zero();
+    forFeatureFaces(B, bestTri, bestCp.feature, [&](const std::array<uint32_t, 3>& u) {
+      const Vec3 fn = unit(faceNormal(u, x));
+      const Real behind = -fn.dot(p - c);
+      if (behind > deepest) deepest = behind, face = u, faceN = fn;
+    });
+    if (deepest > 0) {
+      const ClosestPoint at = closestPointOnTriangle(c, x[face[0]], x[face[1]], x[face[2]]);
+      *out = {v, face, at.w, faceN, deepest};
       return 2;
     }
   }
@@ -1039,13 +1067,20 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
     const size_t first = contacts_.size();
     contacts_.insert(contacts_.end(), round_.begin(), round_.end());
     for (const Contact& c : round_) markTouched(c, x);
-    for (int it = 0; it < kIterations; ++it)
+    // kIterations sweeps, then more (up to kMaxIterations) while a sweep still found a contact
+    // inside along its normal: where contacts share vertices (a corner pushed by the vertices
+    // around it) each sweep undoes part of the one before, and what a round leaves the next
+    // finds again (two 64^3 balls pressed together: the same vertex found against the same corner
+    // in all 8 rounds, 0.4x shallower each, then the last resort, step after step).
+    for (int it = 0; it < kMaxIterations; ++it) {
+      bool inside = false;
       for (size_t k = 0; k < contacts_.size(); ++k) {
         const Contact& c = contacts_[k];
         const Real W = contactInvMass(c, im);
         if (!(W > 0)) continue;
         const Real gap = c.n.dot(relative(c, x)) - skin_;
         if (gap >= 0) continue;
+        inside = inside || gap < -skin_;
         applyPair(c, im, x, (-gap / W) * c.n);
         if (it == 0 && k >= first && settings_.friction > 0) {
           Vec3 slip = relative(c, x) - relative(c, s.previousPositions);
@@ -1054,6 +1089,8 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
           if (len > 0) applyPair(c, im, x, (-(len <= allowed ? Real(1) : allowed / len) / W) * slip);
         }
       }
+      if (it + 1 >= kIterations && !inside) break;
+    }
   }
   if (fellBack) takeBack(s, stats);
   // Velocities: equal and opposite impulses on the relative velocity at each contact.

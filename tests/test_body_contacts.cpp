@@ -700,13 +700,19 @@ TEST(BodyContactScenes, DISABLED_TwoSpheresContactShare) {
   double stage = 0;
   size_t contacts = 0, looked = 0, rebuilds = 0;
   const auto t0 = std::chrono::steady_clock::now();
+  const int every = env("GRADEL_CONTACT_VERBOSE", 0);  // print every this many steps (and each take-back)
   for (int k = 0; k < steps; ++k) {
+    const auto s0 = std::chrono::steady_clock::now();
     w.step();
+    const double ms = 1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - s0).count();
     const BodyContactStats& st = w.bodyContactStats();
     stage += st.seconds, contacts += st.contacts, looked += st.candidates, rebuilds += size_t(st.rebuilds);
-    if (std::getenv("GRADEL_CONTACT_VERBOSE") && (k + 1) % 100 == 0)
-      std::printf("  step %d: %zu contacts, %zu lookups, %d rounds, %d rebuilds, %d take-backs, %.2f ms in the stage\n",
-                  k + 1, st.contacts, st.candidates, st.rounds, st.rebuilds, st.takeBacks, 1e3 * st.seconds);
+    if (every > 0 && ((k + 1) % every == 0 || st.takeBacks > 0))
+      std::printf(
+          "  step %d: %zu contacts, %zu lookups, %d rounds, %d rebuilds, %d take-backs "
+          "(to %g), depth %.3g m, %.2f ms in the stage, %.2f ms the step\n",
+          k + 1, st.contacts, st.candidates, st.rounds, st.rebuilds, st.takeBacks, st.takenBackTo, st.maxDepth,
+          1e3 * st.seconds, ms);
   }
   const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf(

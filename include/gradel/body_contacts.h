@@ -55,8 +55,14 @@
 //                depth (as the manipulators, contacts.cpp frictionSlipCorrection). Linear momentum
 //                is conserved to rounding (every impulse J on the vertex has -w_k J on the face's
 //                corners, sum w_k = 1).
-//                The projections run Gauss-Seidel over the contacts, then the detection runs
-//                again (a corrected face can move under a neighbour), up to kRounds rounds; a
+//                In a small step (the two surfaces moved at most a quarter voxel together), a
+//                vertex in front of some faces around its nearest edge or corner and behind
+//                others (a concave feature) is pushed out of the face it is deepest behind, not
+//                along c - p, which would carry it round the feature to behind the others.
+//                The projections run Gauss-Seidel over the contacts (kIterations sweeps, more up
+//                to kMaxIterations while one still finds a contact inside by more than the
+//                skin), then the detection runs again (a corrected face can move under a
+//                neighbour), up to kRounds rounds; a
 //                vertex still inside then (contradicting contacts where two coarse staircases
 //                cross, each vertex behind a face of the other) goes back to where it was
 //                relative to its face at the start of the step.
@@ -219,8 +225,9 @@ class BodyContacts {
   const BodyContactSettings& settings() const { return settings_; }
   bool empty() const { return bodies_.size() < 2 && !settings_.selfContact; }
 
-  static constexpr int kRounds = 8;      ///< Detection rounds per step at most.
-  static constexpr int kIterations = 4;  ///< Gauss-Seidel sweeps over the contacts per round.
+  static constexpr int kRounds = 8;          ///< Detection rounds per step at most.
+  static constexpr int kIterations = 4;      ///< Gauss-Seidel sweeps over the contacts per round, at least.
+  static constexpr int kMaxIterations = 32;  ///< ... and at most (while a sweep finds one inside along its normal).
   /// The last resort halves the taken-back bodies' motion down to this fraction, then takes it all back.
   static constexpr Real kTakeBackLeast = 1.0 / 16;
 
@@ -323,8 +330,8 @@ class BodyContacts {
   void forCandidateTriangles(const Grid& g, const Vec3& lo, const Vec3& hi, QueryScratch& q, F&& f) const;
   // One vertex of a pair's narrow phase (detectPair): 1 looked up, 2 in contact (into *out);
   // *clearance: a lower bound of its distance to b's surface (< 0: inside, or unknown).
-  int detectVertex(const ContactBody& A, const ContactBody& B, const Grid& g, uint32_t i, Real r, const Vec3* x,
-                   QueryScratch& qs, Contact* out, Real* clearance, uint32_t* hint) const;
+  int detectVertex(const ContactBody& A, const ContactBody& B, const Grid& g, uint32_t i, Real r, bool smallStep,
+                   const Vec3* x, QueryScratch& qs, Contact* out, Real* clearance, uint32_t* hint) const;
   struct Nearest {
     Real d2;       ///< [m^2] squared distance to it (reach^2 when none).
     uint32_t tri;  ///< Its id, or kNone.
