@@ -60,9 +60,9 @@
 //                others (a concave feature) is pushed out of the face it is deepest behind, not
 //                along c - p, which would carry it round the feature to behind the others.
 //                The projections run Gauss-Seidel over the contacts (kIterations sweeps, more up
-//                to kMaxIterations while one still finds a contact inside by more than the
-//                skin), then the detection runs again (a corrected face can move under a
-//                neighbour), up to kRounds rounds; a
+//                to kMaxIterations while one still finds a vertex behind its contact point along
+//                the contact's normal), then the detection runs again (a corrected face can move
+//                under a neighbour), up to kRounds rounds; a
 //                vertex still inside then (contradicting contacts where two coarse staircases
 //                cross, each vertex behind a face of the other) goes back to where it was
 //                relative to its face at the start of the step.
