@@ -198,6 +198,20 @@ Vec3 vertexPseudoNormal(const ContactBody& body, uint32_t s, const Vec3* x) {
   return n;
 }
 
+// Whether f . n >= 0 for the angle-weighted pseudo-normal n of surface vertex s: its weights are
+// positive, so where f is on one side of every face around the vertex the answer needs no angle
+// (atan2 per face); only mixed sides (or a flat face) compute n.
+bool facesAlong(const ContactBody& body, uint32_t s, const Vec3& f, const Vec3* x) {
+  int along = 0, against = 0, faces = 0;
+  for (uint32_t k = body.vertexTriStart[s]; k < body.vertexTriStart[s + 1]; ++k) {
+    const Real d = faceNormal(body.triangles[body.vertexTris[k]], x).dot(f);
+    ++faces, along += d > 0, against += d < 0;
+  }
+  if (faces > 0 && against == faces) return false;
+  if (faces > 0 && along == faces) return true;
+  return f.dot(vertexPseudoNormal(body, s, x)) >= 0;
+}
+
 // The angle-weighted pseudo-normal (not normalised) of the feature of triangle t that the closest
 // point lies on (closestPointOnTriangle's feature), from the body's faces around it.
 // f(u) for each face around the feature of triangle t that a closest point lies on
@@ -670,15 +684,20 @@ void BodyContacts::forCandidateTriangles(const Grid& g, const Vec3& lo, const Ve
 // cells) that lies farther than the best so far, and a face whose box does: the face a point is
 // nearest to is listed in the cell holding that nearest point, which is no farther than it. A
 // face may be tested twice (it spans several cells): the same distance, no tie with itself.
+// With `accept`: the nearest face for which accept(t, closest point) holds (asked only of a face
+// nearer than the best so far, or as near with a lower id).
+template <class Accept>
 BodyContacts::Nearest BodyContacts::nearestTriangle(const Grid& g, const ContactBody& faces, const Vec3& p, Real reach,
-                                                    const Vec3* x, uint32_t hint) const {
+                                                    const Vec3* x, uint32_t hint, Accept&& accept) const {
   Nearest n{reach * reach, ContactBody::kNone, {}};
   const Real slack2 = 1e-24 * faces.thickness * faces.thickness;  // rounding of a box beside a point on a face
   auto test = [&](uint32_t t) {
     const auto& tri = faces.triangles[t];
     const ClosestPoint cp = closestPointOnTriangle(p, x[tri[0]], x[tri[1]], x[tri[2]]);
-    const Real d2 = (p - (cp.w[0] * x[tri[0]] + cp.w[1] * x[tri[1]] + cp.w[2] * x[tri[2]])).squaredNorm();
-    if (d2 < n.d2 || (d2 == n.d2 && n.tri != ContactBody::kNone && t < n.tri)) n.d2 = d2, n.tri = t, n.cp = cp;
+    const Vec3 c = cp.w[0] * x[tri[0]] + cp.w[1] * x[tri[1]] + cp.w[2] * x[tri[2]];
+    const Real d2 = (p - c).squaredNorm();
+    if ((d2 < n.d2 || (d2 == n.d2 && n.tri != ContactBody::kNone && t < n.tri)) && accept(t, c))
+      n.d2 = d2, n.tri = t, n.cp = cp;
   };
   // A face known to be near (the last answer) bounds the search: the same answer, sooner.
   if (hint != ContactBody::kNone) test(hint);
@@ -724,33 +743,39 @@ BodyContacts::Nearest BodyContacts::nearestTriangle(const Grid& g, const Contact
   return n;
 }
 
+BodyContacts::Nearest BodyContacts::nearestTriangle(const Grid& g, const ContactBody& faces, const Vec3& p, Real reach,
+                                                    const Vec3* x, uint32_t hint) const {
+  return nearestTriangle(g, faces, p, reach, x, hint, [](uint32_t, const Vec3&) { return true; });
+}
+
 // Surface vertices of body a against the faces of body b (the pseudo-normal test, see the header),
 // from the pair's track: only its candidates, and of those only the ones that may have reached b's
 // surface since their last check (they were at least `clearance` from it then; since, the vertex
-// moved what it moved and b's faces at most sinceRebuild_[b] plus what they had moved then).
-void BodyContacts::detectPair(size_t a, size_t b, const BodyContactState& s, BodyContactStats& stats) {
+// moved what it moved and b's faces at most sinceRebuild_[b] plus what they had moved then). Lists
+// them (looked_, lookedJob_) as a job of the round's batch (detectPairs).
+void BodyContacts::preparePair(size_t a, size_t b, const BodyContactState& s) {
   Track& T = tracks_[a * bodies_.size() + b];
-  if (T.grid.count == 0 || T.vertices.empty()) return;
+  PairJob job{uint32_t(a), uint32_t(b), 0, false, 0, 0, uint32_t(looked_.size()), uint32_t(looked_.size())};
+  if (T.grid.count == 0 || T.vertices.empty()) return jobs_.push_back(job);
   const ContactBody& A = bodies_[a];
   const ContactBody& B = bodies_[b];
-  const Real r = searchRadius(a, b);
-  const bool smallStep = movedStart_[a] + movedStart_[b] <= kSmallStep * std::max(A.thickness, B.thickness);
-  const Real faceMoved = sinceRebuild_[b];
+  job.r = searchRadius(a, b);
+  job.smallStep = movedStart_[a] + movedStart_[b] <= kSmallStep * std::max(A.thickness, B.thickness);
+  job.faceMoved = sinceRebuild_[b], job.faceCorrected = corrected_[b];
   const Vec3* x = s.positions;
-  looked_.clear();
-  const Real faceCorrected = corrected_[b];
   for (uint32_t k = 0; k < T.vertices.size(); ++k) {
     // How far b's faces moved since the check: from the rebuild, or (checked in this stage) from
     // where the stage began: only the corrections of its rounds moved them since.
-    Real faces = faceMoved + T.faceDrift[k];
-    if (T.checkedStage[k] == stage_) faces = std::min(faces, faceCorrected + T.faceCorrected[k]);
+    Real faces = job.faceMoved + T.faceDrift[k];
+    if (T.checkedStage[k] == stage_) faces = std::min(faces, job.faceCorrected + T.faceCorrected[k]);
     const Real m = T.clearance[k] - faces;
     if (keepTracks_ && m > 0 && (x[A.vertices[T.vertices[k]]] - T.checkedAt[k]).squaredNorm() < m * m)
       continue;  // still outside
-    looked_.push_back(k);
+    looked_.push_back(k), lookedJob_.push_back(uint32_t(jobs_.size()));
   }
-  const uint32_t count = uint32_t(looked_.size());
-  if (count == 0) return;
+  job.end = uint32_t(looked_.size());
+  jobs_.push_back(job);
+  if (job.end == job.begin) return;
   prepareScratch(T.grid);
   Grid& g = T.grid;  // the listed faces' boxes now: the queries prune by them
   g.now.resize(g.tri.size());
@@ -759,20 +784,39 @@ void BodyContacts::detectPair(size_t a, size_t b, const BodyContactState& s, Bod
     g.now[e] = {x[u[0]].cwiseMin(x[u[1]]).cwiseMin(x[u[2]]), x[u[0]].cwiseMax(x[u[1]]).cwiseMax(x[u[2]])};
   }
   if (T.nearest.size() != A.vertices.size()) T.nearest.assign(A.vertices.size(), ContactBody::kNone);
+}
+
+// One detection pass into round_ over the pairs of bodies with pick[a * B + b] set (in index
+// order; self-contact for a == b): the narrow phase of every pair as one batch, each vertex into
+// its own slot (and its own entries of its track), gathered in pair then vertex order: the same
+// contacts at any thread count. On the team's members for more than a few lookups (minParallel_;
+// the world hands the stage its team only while the step's governor finds all members faster than
+// one: on a busy machine waking the team costs more than this). active_: which pairs found one.
+void BodyContacts::detectPairs(const BodyContactState& s, BodyContactStats& stats, const std::vector<uint8_t>& pick) {
+  const size_t B = bodies_.size();
+  jobs_.clear(), looked_.clear(), lookedJob_.clear();
+  for (size_t a = 0; a < B; ++a)
+    for (size_t b = 0; b < B; ++b) {
+      if (!pick[a * B + b]) continue;
+      if (a == b)
+        jobs_.push_back({uint32_t(a), uint32_t(a), 0, false, 0, 0, 0, 0});  // (self-contact: when gathered)
+      else
+        preparePair(a, b, s);
+    }
+  const uint32_t count = uint32_t(looked_.size());
   slot_.resize(count), slotState_.resize(count);
-  // Each vertex into its own slot (and its own entries of the track), then gathered in vertex
-  // order: the same contacts at any thread count. On the team's members for more than a few
-  // lookups (minParallel_; the world hands the stage its team only while the step's governor
-  // finds all members faster than one: on a busy machine waking the team costs more than this).
+  const Vec3* x = s.positions;
   auto one = [&](uint32_t j, QueryScratch& qs) {
-    const uint32_t k = looked_[j];
-    slotState_[j] = uint8_t(detectVertex(A, B, T.grid, T.vertices[k], r, smallStep, x, qs, &slot_[j], &T.clearance[k],
-                                         &T.nearest[T.vertices[k]]));
-    if (!keepTracks_) T.nearest[T.vertices[k]] = ContactBody::kNone;  // (the reference: no hint either)
-    T.checkedAt[k] = x[A.vertices[T.vertices[k]]], T.faceDrift[k] = faceMoved;
-    T.faceCorrected[k] = faceCorrected, T.checkedStage[k] = stage_;
+    const PairJob& job = jobs_[lookedJob_[j]];
+    Track& T = tracks_[job.a * B + job.b];
+    const uint32_t k = looked_[j], i = T.vertices[k];
+    slotState_[j] = uint8_t(detectVertex(bodies_[job.a], bodies_[job.b], T.grid, i, job.r, job.smallStep, x, qs,
+                                         &slot_[j], &T.clearance[k], &T.nearest[i]));
+    if (!keepTracks_) T.nearest[i] = ContactBody::kNone;  // (the reference: no hint either)
+    T.checkedAt[k] = x[bodies_[job.a].vertices[i]], T.faceDrift[k] = job.faceMoved;
+    T.faceCorrected[k] = job.faceCorrected, T.checkedStage[k] = stage_;
   };
-  constexpr uint32_t kChunk = 32;
+  constexpr uint32_t kChunk = 16;
   if (team_ && team_->members() > 1 && count >= minParallel_) {
     std::atomic<uint32_t> next{0};
     team_->run([&](int t) {
@@ -783,10 +827,18 @@ void BodyContacts::detectPair(size_t a, size_t b, const BodyContactState& s, Bod
     for (uint32_t j = 0; j < count; ++j) one(j, scratch_[0]);
   }
   stats.candidates += count;
-  for (uint32_t j = 0; j < count; ++j) {
-    if (slotState_[j] != 2) continue;
-    round_.push_back(slot_[j]);
-    stats.maxDepth = std::max(stats.maxDepth, slot_[j].depth);
+  for (const PairJob& job : jobs_) {
+    const size_t before = round_.size();
+    if (job.a == job.b) {
+      detectSelf(job.a, s, stats);
+    } else {
+      for (uint32_t j = job.begin; j < job.end; ++j) {
+        if (slotState_[j] != 2) continue;
+        round_.push_back(slot_[j]);
+        stats.maxDepth = std::max(stats.maxDepth, slot_[j].depth);
+      }
+    }
+    active_[job.a * B + job.b] = round_.size() > before;
   }
 }
 
@@ -826,36 +878,19 @@ int BodyContacts::detectVertex(const ContactBody& A, const ContactBody& B, const
   // own normal). Where two staircases interlock, the nearest face can be the riser of a step
   // that the vertex's body lies against on the same side (both normals along +x, say): pushing
   // each vertex out through such faces moves the two bodies into each other and never ends.
-  const Vec3 nv = vertexPseudoNormal(A, i, x);
   Vec3 n = dist > 0 ? Vec3((c - p) / dist) : unit(pn);
   if (n.squaredNorm() == 0) return 1;
-  if (faceNormal(tri, x).dot(nv) >= 0) {
-    // Only a face about as near (and within the search box): a far one would move the vertex
-    // far (and its face with it).
-    const Real reach = dist + 0.5 * B.thickness;
-    const Vec3 qlo = p - Vec3::Constant(r), qhi = p + Vec3::Constant(r);
-    Real bestFacing = reach * reach;
-    uint32_t facing = ContactBody::kNone;
-    ClosestPoint facingCp{};
-    // (A face within reach meets p +- reach: the listing needs no wider box.)
-    const Real listed = std::min(r, std::sqrt(bestFacing * kPrune + slack2));
-    forCandidateTriangles(g, p - Vec3::Constant(listed), p + Vec3::Constant(listed), qs, [](uint32_t) {});
-    const Box* boxes = g.now.empty() ? g.triBox.data() : g.now.data();
-    for (uint32_t e : qs.candidates) {
-      if (boxDistance2(boxes[e].lo, boxes[e].hi, p) > bestFacing * kPrune + slack2) continue;
-      const uint32_t t = g.tri[e];
-      const auto& u = B.triangles[t];
-      if (!meets(x[u[0]].cwiseMin(x[u[1]]).cwiseMin(x[u[2]]), x[u[0]].cwiseMax(x[u[1]]).cwiseMax(x[u[2]]), qlo, qhi))
-        continue;  // (a track's boxes are grown: the face itself must meet the search box)
-      const Vec3 fn = unit(faceNormal(u, x));
-      if (!(fn.dot(nv) < 0)) continue;
-      const ClosestPoint cp = closestPointOnTriangle(p, x[u[0]], x[u[1]], x[u[2]]);
-      const Vec3 cu = cp.w[0] * x[u[0]] + cp.w[1] * x[u[1]] + cp.w[2] * x[u[2]];
-      if (!(fn.dot(p - cu) < 0)) continue;  // in front of its plane: no push out of it
-      const Real d2 = (p - cu).squaredNorm();
-      if (d2 < bestFacing || (d2 == bestFacing && facing != ContactBody::kNone && t < facing))
-        bestFacing = d2, facing = t, facingCp = cp;
-    }
+  if (facesAlong(A, i, faceNormal(tri, x), x)) {
+    const Vec3 nv = vertexPseudoNormal(A, i, x);
+    // Only a face about as near (and within the search radius): a far one would move the vertex
+    // far (and its face with it). The nearest one that faces the vertex with p behind its plane.
+    const Real reach = std::min(r, dist + 0.5 * B.thickness);
+    const Nearest f = nearestTriangle(g, B, p, reach, x, ContactBody::kNone, [&](uint32_t t, const Vec3& cu) {
+      const Vec3 fn = faceNormal(B.triangles[t], x);
+      return fn.dot(nv) < 0 && fn.dot(p - cu) < 0;
+    });
+    const uint32_t facing = f.tri;
+    const ClosestPoint facingCp = f.cp;
     if (facing != ContactBody::kNone) {
       const auto& u = B.triangles[facing];
       const Vec3 fn = unit(faceNormal(u, x));
@@ -946,14 +981,9 @@ bool BodyContacts::detectAll(const BodyContactState& s, BodyContactStats& stats)
   measure(s);
   const size_t B = bodies_.size();
   if (B >= 2) rebuildTracks(s.positions), ++stats.rebuilds;
-  for (size_t a = 0; a < B; ++a)
-    for (size_t b = 0; b < B; ++b) {
-      if (a == b && !settings_.selfContact) continue;
-      if (a == b)
-        detectSelf(a, s, stats);
-      else
-        detectPair(a, b, s, stats);
-    }
+  pick_.assign(B * B, 1);
+  for (size_t a = 0; a < B; ++a) pick_[a * B + a] = settings_.selfContact;
+  detectPairs(s, stats, pick_);
   return !round_.empty();
 }
 
@@ -1031,6 +1061,7 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
     for (size_t a = 0; a < B; ++a)
       for (size_t b = 0; b < B; ++b)
         if (active_[a * B + b]) movedBodies_[a] = movedBodies_[b] = 1;
+    pick_.assign(B * B, 0);
     for (size_t a = 0; a < B; ++a)
       for (size_t b = 0; b < B; ++b) {
         if (a == b && !settings_.selfContact) continue;
@@ -1038,13 +1069,9 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
           active_[a * B + b] = 0;
           continue;
         }
-        const size_t before = round_.size();
-        if (a == b)
-          detectSelf(a, s, stats);
-        else
-          detectPair(a, b, s, stats);
-        active_[a * B + b] = round_.size() > before;
+        pick_[a * B + b] = 1;
       }
+    detectPairs(s, stats, pick_);
     stats.rounds = round + 1;
     if (round_.empty()) break;
     if (round + 1 == kRounds) {

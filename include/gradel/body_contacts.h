@@ -313,7 +313,18 @@ class BodyContacts {
   void measure(const BodyContactState& s);
   bool tracksHold() const;
   Real searchRadius(size_t a, size_t b) const;
-  void detectPair(size_t a, size_t b, const BodyContactState& s, BodyContactStats& stats);
+  // A pair's part of a detection pass (preparePair, detectPairs): its lookups are
+  // looked_[begin, end); a == b: self-contact (detectSelf, when gathered).
+  struct PairJob {
+    uint32_t a, b;
+    Real r;              ///< [m] search radius.
+    bool smallStep;      ///< detectVertex.
+    Real faceMoved;      ///< [m] sinceRebuild_[b] now.
+    Real faceCorrected;  ///< [m] corrected_[b] now.
+    uint32_t begin, end;
+  };
+  void preparePair(size_t a, size_t b, const BodyContactState& s);
+  void detectPairs(const BodyContactState& s, BodyContactStats& stats, const std::vector<uint8_t>& pick);
   void detectSelf(size_t a, const BodyContactState& s, BodyContactStats& stats);
   bool detectAll(const BodyContactState& s, BodyContactStats& stats);
   void takeBack(const BodyContactState& s, BodyContactStats& stats);
@@ -337,6 +348,9 @@ class BodyContacts {
     uint32_t tri;  ///< Its id, or kNone.
     ClosestPoint cp;
   };
+  template <class Accept>
+  Nearest nearestTriangle(const Grid& g, const ContactBody& faces, const Vec3& p, Real reach, const Vec3* x,
+                          uint32_t hint, Accept&& accept) const;
   Nearest nearestTriangle(const Grid& g, const ContactBody& faces, const Vec3& p, Real reach, const Vec3* x,
                           uint32_t hint = ContactBody::kNone) const;
   void updatePatches(const Vec3* x);
@@ -385,9 +399,12 @@ class BodyContacts {
   std::vector<QueryScratch> scratch_;  ///< Per member (one when serial).
   ThreadTeam* team_ = nullptr;
   uint32_t minParallel_ = kMinParallel;
-  std::vector<Contact> slot_;         ///< Per vertex of a pair's query: its contact, if any.
+  std::vector<Contact> slot_;         ///< Per entry of looked_: its contact, if any.
   std::vector<uint8_t> slotState_;    ///< Per vertex: detectVertex's answer (0: skipped).
-  std::vector<uint32_t> looked_;      ///< A pair's candidates to look up this round (indices into its track).
+  std::vector<uint32_t> looked_;      ///< The pass's candidates to look up (indices into their pair's track).
+  std::vector<uint32_t> lookedJob_;   ///< Per entry of looked_: its pair (index into jobs_).
+  std::vector<PairJob> jobs_;         ///< The pass's pairs, in order.
+  std::vector<uint8_t> pick_;         ///< Per (vertex body, face body): detected in this pass.
   std::vector<uint8_t> active_;       ///< Per (vertex body, face body): contacts in the last round.
   std::vector<uint8_t> movedBodies_;  ///< Per body: a correction of the last round moved its vertices.
 };
