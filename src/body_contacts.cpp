@@ -311,20 +311,22 @@ BodyContacts::BodyContacts(std::vector<ContactBody> bodies, const BodyContactSet
   active_.assign(B * B, 0);
   tracks_.resize(B * B);
   moved_.assign(B, 0), movedStart_.assign(B, 0), sinceRebuild_.assign(B, 0), sinceRebuildStart_.assign(B, 0);
-  ref_.resize(B);
+  sinceAxis_.assign(B, 0), sinceAxisStart_.assign(B, 0);
   uint32_t vertexEnd = 0;
   blockStart_.assign(1, 0), chunkStart_.assign(1, 0);
   for (size_t b = 0; b < B; ++b) {
     vertexEnd = std::max(vertexEnd, bodies_[b].vertexEnd);
     blockStart_.push_back(blockStart_.back() +
                           uint32_t((bodies_[b].vertices.size() + kBoundsBlock - 1) / kBoundsBlock));
-    chunkStart_.push_back(chunkStart_.back() +
-                          uint32_t((bodies_[b].vertices.size() + kMeasureChunk - 1) / kMeasureChunk));
-    ref_[b].resize(bodies_[b].vertices.size());
+    chunkStart_.push_back(
+        chunkStart_.back() +
+        uint32_t((bodies_[b].vertexEnd - bodies_[b].vertexBegin + kMeasureChunk - 1) / kMeasureChunk));
   }
-  chunkMax_.resize(2 * size_t(chunkStart_.back()));  // (every chunk writes both of its entries)
+  chunkMotion_.resize(chunkStart_.back());  // (every chunk writes its own)
   blockBox_.resize(blockStart_.back());
   isTouched_.assign(vertexEnd, 0);
+  ref_.assign(vertexEnd, RefPoint{0, 0, 0, 0});
+  refRounding_.assign(B, Vec3::Zero());
   bodyOf_.assign(vertexEnd, uint32_t(B));
   for (size_t b = 0; b < B; ++b)
     for (uint32_t u : bodies_[b].vertices) bodyOf_[u] = uint32_t(b);
@@ -336,30 +338,32 @@ Real BodyContacts::searchRadius(size_t a, size_t b) const {
   return std::max(bodies_[a].thickness, bodies_[b].thickness) + moved_[a] + moved_[b];
 }
 
-// Per body, one pass over its surface vertices: the farthest one moved in the step (moved_) and
-// the farthest one is from where it was at the last rebuild (sinceRebuild_; with valid tracks).
+// The bounds of a body's motion from its BodyMotion: how far its surface moved in the step and
+// since the rebuild (Euclidean: at most the root of the sum of the axes' largest squares) and the
+// latter per axis (the largest of them: what keeps a face in its box, tracksHold).
+void BodyContacts::setMotion(size_t b, const BodyMotion& m) {
+  moved_[b] = std::sqrt(m.moved2[0] + m.moved2[1] + m.moved2[2]);
+  // From the rounded positions of the rebuild: at most the rounding farther per axis.
+  Vec3 since;
+  for (int a = 0; a < 3; ++a) since[a] = std::sqrt(m.since2[size_t(a)]) + refRounding_[b][a];
+  sinceRebuild_[b] = tracksValid_ ? since.norm() : 0;
+  sinceAxis_[b] = tracksValid_ ? since.maxCoeff() : 0;
+}
+
+// Per body, one pass over its vertices (BodyMotion; what an explicit step measures in its own
+// vertex pass and hands in: BodyContactState::motion).
 void BodyContacts::measure(const BodyContactState& s) {
-  const Vec3 *x = s.positions, *x0 = s.previousPositions;
   // In chunks of kMeasureChunk vertices (on the team's members when there are many), each chunk's
   // maxima into its own slot: max is exact, so the result is the same at any thread count.
   const size_t B = bodies_.size();
   const uint32_t chunks = chunkStart_.back();
   auto one = [&](uint32_t c) {
     const size_t b = size_t(std::upper_bound(chunkStart_.begin(), chunkStart_.end(), c) - chunkStart_.begin()) - 1;
-    const std::vector<uint32_t>& vs = bodies_[b].vertices;
-    const Vec3* ref = ref_[b].data();
-    const size_t i0 = size_t(c - chunkStart_[b]) * kMeasureChunk, i1 = std::min(vs.size(), i0 + kMeasureChunk);
-    Real moved2 = 0, since2 = 0;
-    if (tracksValid_) {
-      for (size_t i = i0; i < i1; ++i) {
-        const Vec3& p = x[vs[i]];
-        moved2 = std::max(moved2, (p - x0[vs[i]]).squaredNorm());
-        since2 = std::max(since2, (p - ref[i]).squaredNorm());
-      }
-    } else {
-      for (size_t i = i0; i < i1; ++i) moved2 = std::max(moved2, (x[vs[i]] - x0[vs[i]]).squaredNorm());
-    }
-    chunkMax_[2 * size_t(c)] = moved2, chunkMax_[2 * size_t(c) + 1] = since2;
+    const size_t i0 = bodies_[b].vertexBegin + size_t(c - chunkStart_[b]) * kMeasureChunk;
+    BodyMotion m;
+    addMotion(s.positions, s.previousPositions, ref_.data(), i0,
+              std::min<size_t>(bodies_[b].vertexEnd, i0 + kMeasureChunk), m);
+    chunkMotion_[c] = m;
   };
   if (team_ && team_->members() > 1 && chunks >= 4) {
     std::atomic<uint32_t> next{0};
@@ -370,10 +374,9 @@ void BodyContacts::measure(const BodyContactState& s) {
     for (uint32_t c = 0; c < chunks; ++c) one(c);
   }
   for (size_t b = 0; b < B; ++b) {
-    Real moved2 = 0, since2 = 0;
-    for (uint32_t c = chunkStart_[b]; c < chunkStart_[b + 1]; ++c)
-      moved2 = std::max(moved2, chunkMax_[2 * size_t(c)]), since2 = std::max(since2, chunkMax_[2 * size_t(c) + 1]);
-    moved_[b] = std::sqrt(moved2), sinceRebuild_[b] = std::sqrt(since2);
+    BodyMotion m;
+    for (uint32_t c = chunkStart_[b]; c < chunkStart_[b + 1]; ++c) m.add(chunkMotion_[c]);
+    setMotion(b, m);
   }
 }
 
@@ -383,7 +386,7 @@ bool BodyContacts::tracksHold() const {
   if (!tracksValid_) return false;
   const size_t B = bodies_.size();
   for (size_t a = 0; a < B; ++a) {
-    if (!(sinceRebuild_[a] <= loose_)) return false;
+    if (!(sinceAxis_[a] <= loose_)) return false;
     for (size_t b = 0; b < B; ++b)
       if (a != b && !(searchRadius(a, b) <= rCap_)) return false;
   }
@@ -410,15 +413,20 @@ void BodyContacts::rebuildTracks(const Vec3* x) {
       const uint32_t i1 = std::min<uint32_t>(i0 + kBoundsBlock, uint32_t(body.vertices.size()));
       Box box;
       for (uint32_t i = i0; i < i1; ++i) {
-        const Vec3& p = x[body.vertices[i]];
-        ref_[b][i] = p;
-        box.add(p);
+        box.add(x[body.vertices[i]]);
       }
       blockBox_[k] = box;
       all.add(box);
     }
     bounds_[b] = all;
-    sinceRebuild_[b] = sinceRebuildStart_[b] = 0;
+    Vec3 rounding = Vec3::Zero();
+    for (uint32_t u = body.vertexBegin; u < body.vertexEnd; ++u) {
+      ref_[u] = {float(x[u].x()), float(x[u].y()), float(x[u].z()), 0.f};
+      for (int a = 0; a < 3; ++a)
+        rounding[a] = std::max(rounding[a], std::abs(Real(ref_[u][size_t(a)]) - x[u][a]));  // (NaN: left out)
+    }
+    refRounding_[b] = rounding;
+    sinceRebuild_[b] = sinceRebuildStart_[b] = sinceAxis_[b] = sinceAxisStart_[b] = 0;
   }
   updatePatches(x);
   for (size_t a = 0; a < B; ++a)
@@ -1035,18 +1043,25 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
     // Broad phase: how far each body's surface moved in the step and since the tracks' rebuild
     // (round 0: one pass over the surfaces; a later round adds what the corrections moved since).
     if (round == 0) {
-      measure(s);
-      movedStart_ = moved_, sinceRebuildStart_ = sinceRebuild_;
+      if (s.motion && useGivenMotion_) {
+        for (size_t b = 0; b < B; ++b) setMotion(b, s.motion[b]);
+      } else {
+        measure(s);
+      }
+      movedStart_ = moved_, sinceRebuildStart_ = sinceRebuild_, sinceAxisStart_ = sinceAxis_;
       corrected_.assign(B, 0);
     } else {  // only the vertices of the contacts moved since
-      moved_ = movedStart_, sinceRebuild_ = sinceRebuildStart_;
+      moved_ = movedStart_, sinceRebuild_ = sinceRebuildStart_, sinceAxis_ = sinceAxisStart_;
       auto grow = [](Real& to, Real d) {
         to = std::isnan(d) ? std::numeric_limits<Real>::infinity() : std::max(to, d);
       };
       for (size_t k = 0; k < touched_.size(); ++k) {
-        const uint32_t u = touched_[k], b = bodyOf_[u], i = bodies_[b].surfaceIndex(u);
+        const uint32_t u = touched_[k], b = bodyOf_[u];
         grow(moved_[b], (x[u] - s.previousPositions[u]).norm());
-        grow(sinceRebuild_[b], (x[u] - ref_[b][i]).norm());
+        const RefPoint& q = ref_[u];
+        const Vec3 d = (x[u] - Vec3(q[0], q[1], q[2])).cwiseAbs() + refRounding_[b];
+        grow(sinceRebuild_[b], d.norm());
+        grow(sinceAxis_[b], d.hasNaN() ? std::numeric_limits<Real>::quiet_NaN() : d.cwiseAbs().maxCoeff());
         grow(corrected_[b], (x[u] - touchedStart_[k]).norm());
       }
     }

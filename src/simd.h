@@ -32,6 +32,14 @@ inline d4 loadVec3(const Vec3& v) {
   return d4{v.x(), v.y(), v.z(), 0};
 #endif
 }
+/// Four floats as doubles.
+inline d4 loadFloat4(const float* p) {
+#if defined(__AVX__)
+  return (d4)_mm256_cvtps_pd(_mm_loadu_ps(p));
+#else
+  return d4{p[0], p[1], p[2], p[3]};
+#endif
+}
 /// Writes lanes 0-2 into a Vec3.
 inline void storeVec3(Vec3& v, d4 a) {
 #if defined(__AVX__)

@@ -251,6 +251,9 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
   // from the values this pass loads anyway, instead of a pass of its own.
   Vec3* startX = bodyContacts_ ? bodyContactStartX_.data() : nullptr;
   Vec3* startV = bodyContacts_ ? bodyContactStartV_.data() : nullptr;
+  // ... and how far the bodies moved (BodyMotion, per block: stageBodyContacts gathers them).
+  BodyMotion* motion = bodyContacts_ ? bodyMotionBlock_.data() : nullptr;
+  const RefPoint* reference = bodyContacts_ ? bodyContacts_->referencePositions() : nullptr;
   Real depth = 0;
   // One loop per integrator and per "contacts possible": neither test is made per vertex, and
   // without contacts nothing is kept for them.
@@ -259,6 +262,8 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
     for (size_t b = begin, be; b < end; b = be) {
       be = std::min(end, (b / kBlock + 1) * kBlock);  // blocks aligned to kBlock (the contact forces' partial sums)
       d4 lo = splat(std::numeric_limits<Real>::infinity()), hi = -lo;
+      d4 moved2 = splat(0), since2 = splat(0);  // (addMotion, lane per axis, from the values at hand)
+      bool touched = false;
       gatherVertexForces(m, *stageRest_, scratch_->frames.data(), positions, b, be, [&](size_t i, d4 force) {
         const d4 a = force * invMass[i] + g;
         const d4 x0 = loadVec3(positions[i]), v0 = loadVec3(velocities[i]);
@@ -271,6 +276,10 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
         else
           symplecticEulerStep(x, v, a, dt, vd);
         storeVec3(positions[i], x), storeVec3(velocities[i], v);
+        if (motion) {
+          const d4 d = x - x0, e = x - loadFloat4(reference[i].data());
+          moved2 = max(d * d, moved2), since2 = max(e * e, since2);  // (a NaN lane keeps the maximum)
+        }
         if constexpr (contacts()) {
           start[i - b] = x0, startVelocity[i - b] = v0;
           lo = min(lo, min(x0, x)), hi = max(hi, max(x0, x));
@@ -280,15 +289,26 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
         // Broad phase (a NaN position cannot be changed by a contact, so it may be skipped).
         bool touch = !none(lo < cb->wallLo) || !none(hi > cb->wallHi);
         for (size_t k = 0; !touch && k < cb->lo.size(); ++k) touch = none(hi < cb->lo[k]) && none(lo > cb->hi[k]);
-        if (!touch) continue;
-        ContactForce* impulse = &scratch_->blockImpulse[b / kBlock * surfaces];
-        std::fill(impulse, impulse + surfaces, ContactForce{});
-        scratch_->blockTouched[b / kBlock] = 1;
-        for (size_t i = b; i < be; ++i) {
-          Vec3 previous, previousVelocity;
-          storeVec3(previous, start[i - b]), storeVec3(previousVelocity, startVelocity[i - b]);
-          depth = std::max(depth, resolveVertexContacts(previous, previousVelocity, positions[i], velocities[i],
-                                                        m.mass[i], impulse));
+        touched = touch;
+        if (touch) {
+          ContactForce* impulse = &scratch_->blockImpulse[b / kBlock * surfaces];
+          std::fill(impulse, impulse + surfaces, ContactForce{});
+          scratch_->blockTouched[b / kBlock] = 1;
+          for (size_t i = b; i < be; ++i) {
+            Vec3 previous, previousVelocity;
+            storeVec3(previous, start[i - b]), storeVec3(previousVelocity, startVelocity[i - b]);
+            depth = std::max(depth, resolveVertexContacts(previous, previousVelocity, positions[i], velocities[i],
+                                                          m.mass[i], impulse));
+          }
+        }
+      }
+      if (motion) {
+        BodyMotion& bm = motion[b / kBlock];
+        if (touched) {  // a wall or manipulator may have moved a vertex: from the positions now (in cache)
+          bm = BodyMotion{};
+          addMotion(positions, startX, reference, b, be, bm);
+        } else {
+          bm.moved2 = {moved2[0], moved2[1], moved2[2]}, bm.since2 = {since2[0], since2[1], since2[2]};
         }
       }
     }
@@ -517,8 +537,32 @@ void World::stageBodyContacts() {
   // On the team when the step's own stages run on it (the governor: one thread is not faster now).
   const bool team = team_ && teamMembers_ > 1 && !(governor_ && governor_->usingOne());
   bodyContacts_->setTeam(team ? team_.get() : nullptr);
-  bodyContactStats_ =
-      bodyContacts_->resolve({x, v, bodyContactStartX_.data(), bodyContactStartV_.data(), bodyContactInvMass_.data()});
+  // An explicit step measured the bodies' motion in its vertex pass, per block (stageVertices):
+  // per body, its blocks, and again here the blocks that hold vertices of several bodies or a
+  // pinned vertex (set after the pass).
+  const BodyMotion* motion = nullptr;
+  if (bodyMotionMeasured_) {
+    const size_t B = bodyContacts_->bodies().size(), V = model_->numVertices();
+    const RefPoint* ref = bodyContacts_->referencePositions();
+    bodyMotion_.assign(B, BodyMotion{});
+    for (size_t k = 0; k < bodyMotionBlockBody_.size(); ++k) {
+      const uint32_t body = bodyMotionBlockBody_[k];
+      if (body < B) {
+        bodyMotion_[body].add(bodyMotionBlock_[k]);
+      } else if (body == kMixedBlock) {
+        for (size_t c = 0; c < B; ++c) {
+          const ContactBody& cb = bodyContacts_->bodies()[c];
+          const size_t begin = std::max<size_t>(k * kVertexBlock, cb.vertexBegin);
+          const size_t end = std::min<size_t>({(k + 1) * kVertexBlock, V, cb.vertexEnd});
+          if (begin < end) addMotion(x, bodyContactStartX_.data(), ref, begin, end, bodyMotion_[c]);
+        }
+      }
+    }
+    motion = bodyMotion_.data();
+    bodyMotionMeasured_ = false;
+  }
+  bodyContactStats_ = bodyContacts_->resolve(
+      {x, v, bodyContactStartX_.data(), bodyContactStartV_.data(), bodyContactInvMass_.data(), motion});
   scratch_->maxContactDepth = std::max(scratch_->maxContactDepth, bodyContactStats_.maxDepth);
   if (!domain_.enabled || bodyContacts_->contacts().empty()) return;
   std::vector<uint32_t> moved;
@@ -597,11 +641,27 @@ void World::setBodyContacts(std::vector<ContactBody> bodies, const BodyContactSe
   updateBodyContactInvMass();
 }
 
-// The inverse masses the stage uses: the model's, 0 for pinned vertices (immovable).
+// The inverse masses the stage uses: the model's, 0 for pinned vertices (immovable); and per
+// block of the vertex pass, the body whose vertices it holds (BodyMotion): one, none (B), or
+// kMixedBlock (several bodies' vertices, or a pinned one: measured after the pins).
 void World::updateBodyContactInvMass() {
   if (!bodyContacts_) return;
   bodyContactInvMass_ = model_->invMass;
   for (uint32_t u : pinSet_.vertices) bodyContactInvMass_[u] = 0;
+  const size_t V = model_->numVertices(), blocks = (V + kVertexBlock - 1) / kVertexBlock;
+  const std::vector<ContactBody>& bodies = bodyContacts_->bodies();
+  const uint32_t B = uint32_t(bodies.size());
+  bodyMotionBlock_.assign(blocks, BodyMotion{});
+  bodyMotionBlockBody_.assign(blocks, B);
+  for (uint32_t c = 0; c < B; ++c)
+    for (size_t k = bodies[c].vertexBegin / kVertexBlock; k * kVertexBlock < bodies[c].vertexEnd; ++k) {
+      uint32_t& body = bodyMotionBlockBody_[k];
+      const bool whole =
+          k * kVertexBlock >= bodies[c].vertexBegin && std::min(V, (k + 1) * kVertexBlock) <= bodies[c].vertexEnd;
+      body = body == B && whole ? c : kMixedBlock;
+    }
+  for (uint32_t u : pinSet_.vertices) bodyMotionBlockBody_[u / kVertexBlock] = kMixedBlock;
+  bodyMotionMeasured_ = false;
 }
 
 // The members a step runs on: the threads asked for, at most one per kMinVerticesPerThread vertices.
@@ -673,6 +733,7 @@ void World::stepExplicit() {
   for (Manipulator& m : manipulators_) m.previousPosition = m.position;
   state_.time += dt_;
   if (!pinSet_.empty()) applyPins(state_.time);
+  bodyMotionMeasured_ = bodyContacts_ != nullptr;  // (stageVertices)
 }
 
 void World::setPins(std::vector<PinSettings> pins) {

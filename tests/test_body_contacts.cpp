@@ -599,6 +599,38 @@ TEST(BodyContactsWorld, SameStateAtOneAndTwoThreads) {
   EXPECT_EQ(hashes[0], hashes[1]);
 }
 
+// An explicit step measures how far the bodies moved in its vertex pass (BodyMotion, per block of
+// vertices; again after the pins where a block holds two bodies' vertices or a pinned one, and
+// where walls moved a vertex): the same bits as the stage's own pass over the bodies, with two
+// balls whose vertex ranges split a block, a pin with a path, and walls the balls hit.
+TEST(BodyContactsWorld, MotionFromTheVertexPassGivesTheStagesBits) {
+  auto run = [](bool given) {
+    std::vector<test::Body> balls;
+    balls.push_back(test::makeBody("sphere", 9, 3, LayoutKind::Gradational));
+    balls.push_back(test::makeBody("sphere", 9, 3, LayoutKind::Voxel, {}, 0.01, Vec3(0.092, 0.003, 0)));
+    DomainSettings walls{true, Vec3(-0.02, -0.005, -0.05), Vec3(0.2, 0.1, 0.05), 0.5, 0.2};
+    WorldOfBodies w(std::move(balls), {Vec3(0.6, -0.2, 0), Vec3(-0.6, 0, 0)}, explicitFree(), {0.5, 0.2, false}, walls);
+    EXPECT_NE(w.range(1).vertexBegin % 16, 0u) << "a block holds both balls' vertices";
+    PinSettings pin;
+    const Vec3 c = w.centre(1);
+    pin.min = c - Vec3::Constant(0.012), pin.max = c + Vec3::Constant(0.012), pin.body = 1;
+    pin.path.keys = {{0, Vec3::Zero()}, {0.05, Vec3(-0.01, 0, 0)}};
+    w.world->setPins({pin});
+    w.world->bodyContacts()->setUseGivenMotion(given);
+    std::vector<uint64_t> hashes;
+    size_t contacts = 0;
+    for (int s = 0; s < 400; ++s)
+      w.world->step(), hashes.push_back(w.world->stateHash()), contacts += w.world->bodyContactStats().contacts;
+    EXPECT_GT(contacts, 100u) << "the balls met";
+    return hashes;
+  };
+  const std::vector<uint64_t> given = run(true), own = run(false);
+  size_t firstDiff = given.size();
+  for (size_t k = 0; k < given.size() && firstDiff == given.size(); ++k)
+    if (given[k] != own[k]) firstDiff = k;
+  EXPECT_EQ(firstDiff, given.size()) << "the states part at step " << firstDiff;
+}
+
 }  // namespace
 }  // namespace gradel
 

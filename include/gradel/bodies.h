@@ -14,10 +14,10 @@ namespace gradel {
 
 /// Concatenates the models (in the given order): per-vertex and per-element arrays appended,
 /// element vertex ids offset by the vertices before, `bodies` the bodies of every model in turn
-/// (offset likewise), the materials tables appended (elementMaterial offset). Totals are recomputed: totalMass summed over every vertex in order, the
-/// smallest periods the minimum over the models. The top-level voxelSize, origin and material are
-/// the first body's. One model gives a copy of it. Throws std::invalid_argument for no models, a
-/// null model, models of different `dim`, or more than 2^32 - 1 vertices, elements or pairs.
+/// (offset likewise), the materials tables appended (elementMaterial offset). Totals are recomputed: totalMass summed
+/// over every vertex in order, the smallest periods the minimum over the models. The top-level voxelSize, origin and
+/// material are the first body's. One model gives a copy of it. Throws std::invalid_argument for no models, a null
+/// model, models of different `dim`, or more than 2^32 - 1 vertices, elements or pairs.
 RestModel combineRestModels(const std::vector<std::shared_ptr<const RestModel>>& models);
 
 }  // namespace gradel

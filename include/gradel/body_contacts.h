@@ -12,21 +12,21 @@
 //                its faces' boxes grown by loose = half a voxel: the most a face may move before
 //                the rebuild), and a's candidate vertices, those within loose + rCap of such a
 //                box (any other one stays farther than rCap from every face of b until then). Per
-//                step one pass over each body's surface vertices measures how far it moved in the
-//                step and since the rebuild (on the team's members for many vertices; maxima,
-//                the same at any thread count); every track is rebuilt when a surface moved more
-//                than loose since the rebuild or a pair's search radius r passed rCap (set to the
-//                r of the rebuild plus a quarter voxel). A candidate is looked up only when it
-//                may have reached b's surface since its last check: it was at least its
-//                clearance (the distance to its nearest face, in front) from it then; since, it
-//                moved what it moved and b's faces at most what b's surface moved since the
-//                rebuild (or, checked in this stage, what the stage's corrections moved it) plus
-//                as much then. For a closed surface that does not pass through itself the
-//                skipped vertices are outside (the same bits as looking them all up: test
-//                KeptTracksGiveTheBitsOfDetectingFromScratch; where a crushed body's surface folds
-//                through itself the sign test below is no consistent inside/outside and the two
-//                can differ). The rounds after the first measure only the vertices the
-//                corrections moved (the only ones that moved): the rounds cost the contact area.
+//                step, how far each body moved in the step and since the rebuild (BodyMotion: per
+//                axis the largest squared coordinate difference; the explicit step measures it in
+//                its own vertex pass, where the positions are at hand, against the rebuild's
+//                positions rounded to float: half the bytes; other steps in a pass of the stage);
+//                every track is rebuilt when a surface moved more than loose along an axis since
+//                the rebuild (a face then still lies in its box grown by loose) or a pair's search
+//                radius r passed rCap (set to the r of the rebuild plus a quarter voxel). A candidate is looked up only
+//                when it may have reached b's surface since its last check: it was at least its clearance (the distance
+//                to its nearest face, in front) from it then; since, it moved what it moved and b's faces at most what
+//                b's surface moved since the rebuild (or, checked in this stage, what the stage's corrections moved it)
+//                plus as much then. For a closed surface that does not pass through itself the skipped vertices are
+//                outside (the same bits as looking them all up: test KeptTracksGiveTheBitsOfDetectingFromScratch; where
+//                a crushed body's surface folds through itself the sign test below is no consistent inside/outside and
+//                the two can differ). The rounds after the first measure only the vertices the corrections moved (the
+//                only ones that moved): the rounds cost the contact area.
 //   narrow phase the nearest triangle of the other body within r = thickness + the largest
 //                distances both bodies' surfaces moved in the step (from the vertex's last answer,
 //                which bounds the search; the nearest cell first; a cell or a triangle whose box
@@ -181,6 +181,37 @@ ClosestPoint closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b,
 std::vector<ContactBody> buildContactBodies(const RestModel& world, const std::vector<const Layout*>& layouts,
                                             const std::vector<const VoxelVolume*>& volumes);
 
+/// A vertex's position at the tracks' last rebuild, rounded to float (x, y, z, 0): half the bytes
+/// a step streams to measure how far it has moved since; the stage adds the rounding back.
+using RefPoint = std::array<float, 4>;
+
+/// How far a body moved, what the stage's first pass measures (BodyContacts::measure): per axis,
+/// the largest square of a vertex's coordinate difference between the end of the step and its
+/// start (moved2) and between the end of the step and its RefPoint (since2;
+/// BodyContacts::referencePositions()), over every vertex of the body (its surface moves no
+/// farther). An explicit step measures it in its own vertex pass, where the positions are at hand
+/// (World::stageVertices), and hands it in (BodyContactState::motion).
+struct BodyMotion {
+  std::array<Real, 3> moved2{0, 0, 0};  ///< [m^2]
+  std::array<Real, 3> since2{0, 0, 0};  ///< [m^2]
+  void add(const BodyMotion& m) {
+    for (int a = 0; a < 3; ++a)
+      moved2[size_t(a)] = std::max(moved2[size_t(a)], m.moved2[size_t(a)]),
+      since2[size_t(a)] = std::max(since2[size_t(a)], m.since2[size_t(a)]);
+  }
+};
+
+/// Adds vertices [begin, end) to m: x the end of the step, x0 its start, ref the rebuild's
+/// positions (world ids). A NaN difference is left out (max keeps the larger of two numbers).
+inline void addMotion(const Vec3* x, const Vec3* x0, const RefPoint* ref, size_t begin, size_t end, BodyMotion& m) {
+  for (size_t u = begin; u < end; ++u)
+    for (int a = 0; a < 3; ++a) {
+      const Real d = x[u][a] - x0[u][a], e = x[u][a] - Real(ref[u][size_t(a)]);
+      m.moved2[size_t(a)] = d * d > m.moved2[size_t(a)] ? d * d : m.moved2[size_t(a)];
+      m.since2[size_t(a)] = e * e > m.since2[size_t(a)] ? e * e : m.since2[size_t(a)];
+    }
+}
+
 /// The combined state the stage reads and corrects (world vertex ids; all arrays of one length).
 struct BodyContactState {
   Vec3* positions = nullptr;                 ///< [m] end of the step: corrected in place.
@@ -188,6 +219,8 @@ struct BodyContactState {
   const Vec3* previousPositions = nullptr;   ///< [m] start of the step (every vertex of a body: the last resort).
   const Vec3* previousVelocities = nullptr;  ///< [m/s] start of the step (the bounce).
   const Real* invMass = nullptr;             ///< [1/kg] 0 = immovable (pinned).
+  /// Per body (bodies() order), measured by the caller at these positions, or nullptr: the stage measures it.
+  const BodyMotion* motion = nullptr;
 };
 
 /// What one call found.
@@ -220,8 +253,13 @@ class BodyContacts {
   /// rebuilds them and looks up every candidate from scratch, the reference that keeping them
   /// must match bit for bit (tests; it costs a full detection per round).
   void setKeepTracks(bool keep) { keepTracks_ = keep; }
+  /// Whether the stage uses the motion a caller measured (BodyContactState::motion; the default)
+  /// or measures it in its own pass (measure()), the reference the caller's must match (tests).
+  void setUseGivenMotion(bool use) { useGivenMotion_ = use; }
 
   const std::vector<ContactBody>& bodies() const { return bodies_; }
+  /// Per world vertex: its position at the tracks' last rebuild (BodyMotion).
+  const RefPoint* referencePositions() const { return ref_.data(); }
   const BodyContactSettings& settings() const { return settings_; }
   bool empty() const { return bodies_.size() < 2 && !settings_.selfContact; }
 
@@ -311,6 +349,7 @@ class BodyContacts {
   void rebuildTracks(const Vec3* x);
   void buildTrack(size_t a, size_t b, const Vec3* x);
   void measure(const BodyContactState& s);
+  void setMotion(size_t b, const BodyMotion& m);
   bool tracksHold() const;
   Real searchRadius(size_t a, size_t b) const;
   // A pair's part of a detection pass (preparePair, detectPairs): its lookups are
@@ -363,16 +402,20 @@ class BodyContacts {
   Real rCap_ = 0;   ///< [m] the largest search radius the tracks hold (set at the rebuild).
   // scratch
   std::vector<Box> bounds_;       ///< Per body: its surface's box at the last rebuild.
-  std::vector<Real> moved_;       ///< Per body: the largest distance a surface vertex moved in the step [m].
+  std::vector<Real> moved_;       ///< Per body: at least the largest distance a surface vertex moved in the step [m].
   std::vector<Real> movedStart_;  ///< moved_ at round 0 (a later round adds the contacts' vertices).
   std::vector<Real>
-      sinceRebuild_;  ///< Per body: the farthest a surface vertex is from where it was at the rebuild [m].
+      sinceRebuild_;  ///< Per body: at least the farthest a surface vertex is from where it was at the rebuild [m].
   std::vector<Real> sinceRebuildStart_;  ///< sinceRebuild_ at round 0 (a later round adds the contacts' vertices).
-  std::vector<std::vector<Vec3>> ref_;   ///< Per body and surface vertex: its position at the rebuild.
-  std::vector<uint32_t> chunkStart_;     ///< measure(): body b's chunks of surface vertices from chunkStart_[b].
-  std::vector<Real> chunkMax_;           ///< measure(): per chunk, its squared moved_ and sinceRebuild_.
+  std::vector<RefPoint> ref_;            ///< Per world vertex: its position at the rebuild (rounded).
+  std::vector<Vec3> refRounding_;        ///< Per body and axis: the largest |rounding| in its ref_ [m].
+  std::vector<Real> sinceAxis_;          ///< Per body: sinceRebuild_ along the farthest axis (tracksHold) [m].
+  std::vector<Real> sinceAxisStart_;     ///< sinceAxis_ at round 0.
+  std::vector<uint32_t> chunkStart_;     ///< measure(): body b's chunks of vertices from chunkStart_[b].
+  std::vector<BodyMotion> chunkMotion_;  ///< measure(): per chunk.
   bool tracksValid_ = false;
   bool keepTracks_ = true;
+  bool useGivenMotion_ = true;
   // The boxes per block of kBoundsBlock surface vertices at the rebuild (body b's blocks from
   // blockStart_[b]): a track visits only the blocks near the other body.
   static constexpr uint32_t kBoundsBlock = 256;

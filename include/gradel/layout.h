@@ -19,9 +19,9 @@
 //
 // Placement (sec. 3.2), `gradational`: at each level, a group gets an element if it holds a
 //   surface cell (a filled cell with an empty face neighbour, or one of another label, at that
-//   level; see volume.h) or an empty cell (partly filled group) or two labels; those cells are then emptied, the volume is halved, the
-//   element size doubles; repeat until the volume is empty. `uniform`: every group with a filled
-//   voxel at level 0 is an element. `voxel`: one element per filled voxel.
+//   level; see volume.h) or an empty cell (partly filled group) or two labels; those cells are then emptied, the volume
+//   is halved, the element size doubles; repeat until the volume is empty. `uniform`: every group with a filled voxel
+//   at level 0 is an element. `voxel`: one element per filled voxel.
 //
 // Numbering: vertices are sorted by lattice coordinate (z, then y, then x); elements by level,
 //   then block origin (z, y, x), then (where several elements share a block: the voxel layout,

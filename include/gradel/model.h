@@ -42,9 +42,9 @@ struct RestModel {
   std::vector<uint8_t> onSurface;   ///< 1 if the vertex is a corner of a voxel face on the body's boundary.
 
   // ---- per element ----
-  std::vector<Real> stiffness;  ///< k_e [N/m], see material.h.
-  std::vector<Real> size;       ///< [m] block edge 2 * cellSize * h (voxel layout: h); normalises stress.
-  std::vector<uint8_t> level;   ///< Layout level (0 = finest).
+  std::vector<Real> stiffness;            ///< k_e [N/m], see material.h.
+  std::vector<Real> size;                 ///< [m] block edge 2 * cellSize * h (voxel layout: h); normalises stress.
+  std::vector<uint8_t> level;             ///< Layout level (0 = finest).
   std::vector<uint16_t> elementMaterial;  ///< Index into `materials` of the element's region.
 
   // ---- materials per region (material.h regionMaterial): one per label of the layout ----

@@ -36,7 +36,8 @@ struct ShapeSpec {
   std::vector<Primitive> primitives;    ///< Union; at least one.
 };
 
-/// Rasterises the union (labelled when a primitive's label is not 1). Throws InputError for a bad spec or an empty result.
+/// Rasterises the union (labelled when a primitive's label is not 1). Throws InputError for a bad spec or an empty
+/// result.
 VoxelVolume rasterize(const ShapeSpec& spec);
 
 /// The CLI's presets, inscribed in a size^dim grid: "box" (the full grid), "sphere" (disk in

@@ -121,6 +121,7 @@ class World {
   void setBodyContacts(std::vector<ContactBody> bodies, const BodyContactSettings& settings);
   /// The stage (nullptr without body contacts) and what it found in the last step.
   const BodyContacts* bodyContacts() const { return bodyContacts_.get(); }
+  BodyContacts* bodyContacts() { return bodyContacts_.get(); }  ///< For tests and tools (its switches).
   const BodyContactStats& bodyContactStats() const { return bodyContactStats_; }
 
   void setThreads(int n) { sim_.threads = n < 1 ? 1 : n; }
@@ -214,6 +215,13 @@ class World {
   BodyContactStats bodyContactStats_;
   std::vector<Vec3> bodyContactStartX_, bodyContactStartV_;
   std::vector<Real> bodyContactInvMass_;
+  // How far the bodies moved in an explicit step (BodyMotion), measured in its vertex pass per
+  // block of vertices: per block the body whose vertices it holds (or kMixedBlock: measured after
+  // the pins), the blocks' and the bodies' motion.
+  static constexpr uint32_t kMixedBlock = 0xffffffffu;
+  std::vector<uint32_t> bodyMotionBlockBody_;
+  std::vector<BodyMotion> bodyMotionBlock_, bodyMotion_;
+  bool bodyMotionMeasured_ = false;  ///< The last step's vertex pass filled bodyMotionBlock_.
   /// Frame-size integrators: the last step's body-contact multipliers [N] by (vertex << 32 | face's body), sorted.
   std::vector<std::pair<uint64_t, Real>> bodyContactLambda_;
   int teamMembers_ = 0;
