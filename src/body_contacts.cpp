@@ -290,6 +290,8 @@ constexpr Real kLoose = 0.5, kRadiusSlack = 0.25;
 constexpr Real kTrackCell = 0.5;
 // measure(): surface vertices per chunk (a unit of the team's work).
 constexpr uint32_t kMeasureChunk = 4096;
+// shiftCells(): a vertex a round's local bound skips keeps at most this clearance (same unit).
+constexpr Real kShiftMargin = 0.125;
 
 // Squared distance from p to a box (0 inside): a lower bound of the distance to what it holds.
 Real boxDistance2(const Vec3& lo, const Vec3& hi, const Vec3& p) {
@@ -325,6 +327,8 @@ BodyContacts::BodyContacts(std::vector<ContactBody> bodies, const BodyContactSet
   chunkMotion_.resize(chunkStart_.back());  // (every chunk writes its own)
   blockBox_.resize(blockStart_.back());
   isTouched_.assign(vertexEnd, 0);
+  roundShift_.assign(vertexEnd, 0);
+  roundShiftMax_.assign(B, 0);
   ref_.assign(vertexEnd, RefPoint{0, 0, 0, 0});
   refRounding_.assign(B, Vec3::Zero());
   bodyOf_.assign(vertexEnd, uint32_t(B));
@@ -448,7 +452,8 @@ bool meets(const Vec3& lo0, const Vec3& hi0, const Vec3& lo1, const Vec3& hi1) {
 void BodyContacts::buildTrack(size_t a, size_t b, const Vec3* x) {
   Track& T = tracks_[a * bodies_.size() + b];
   T.vertices.clear(), T.clearance.clear(), T.checkedAt.clear(), T.faceDrift.clear();
-  T.faceCorrected.clear(), T.checkedStage.clear();
+  T.faceCorrected.clear(), T.checkedStage.clear(), T.checkedRound.clear();
+  T.roundClearance.clear(), T.roundAt.clear(), T.roundStage.clear(), T.roundOf.clear();
   T.grid.count = 0, T.grid.tri.clear(), T.grid.triBox.clear();
   const ContactBody& A = bodies_[a];
   const ContactBody& F = bodies_[b];
@@ -492,6 +497,9 @@ void BodyContacts::buildTrack(size_t a, size_t b, const Vec3* x) {
       T.faceDrift.push_back(0);
       T.faceCorrected.push_back(0);
       T.checkedStage.push_back(stage_ - 1);
+      T.checkedRound.push_back(0);
+      T.roundClearance.push_back(-1), T.roundAt.push_back(p), T.roundStage.push_back(stage_ - 1),
+          T.roundOf.push_back(0);
     }
   }
 }
@@ -552,6 +560,7 @@ void BodyContacts::markTouched(const Contact& c, const Vec3* x) {
     isTouched_[u] = 1;
     touched_.push_back(u);
     touchedStart_.push_back(x[u]);
+    touchedLast_.push_back(x[u]);
   };
   mark(c.vertex);
   for (uint32_t u : c.face) mark(u);
@@ -756,6 +765,52 @@ BodyContacts::Nearest BodyContacts::nearestTriangle(const Grid& g, const Contact
   return nearestTriangle(g, faces, p, reach, x, hint, [](uint32_t, const Vec3&) { return true; });
 }
 
+// The cells of pair (a, b)'s grid that a face of b moved by the last round's corrections may
+// reach: a face whose corners moved at most e (the largest of their roundShift_) is within e of
+// where it was; a vertex of a within e_a (roundShiftMax_[a]). A vertex checked then at clearance
+// c that moved d <= e_a since is still outside if every such face has e + d < c or lies farther
+// than e + d from it now (along the straight paths from then to now neither reached the other):
+// each face's box now, grown by e + e_a + margin, marks its cells with e (cellShift_; a box
+// reaching out of the grid's box: outsideShift_), and a vertex's cell bounds the faces that can
+// have reached it. Its distance to b's surface is then at least c - d - (its cell's e) from the
+// faces that moved by e and the others, and at least `margin` from the moved faces not marked in
+// its cell. False when a face is not finite (then no cell bounds anything).
+bool BodyContacts::shiftCells(size_t a, size_t b, const Vec3* x, Real margin) {
+  const Grid& g = tracks_[a * bodies_.size() + b].grid;
+  const ContactBody& F = bodies_[b];
+  if (cellShift_.size() < g.count) cellShift_.resize(g.count, 0);
+  cellShiftSet_.clear();
+  outsideShift_ = 0;
+  const Real ea = roundShiftMax_[a];
+  for (uint32_t u : touched_) {
+    if (bodyOf_[u] != b || !(roundShift_[u] > 0)) continue;
+    const uint32_t s = F.surfaceIndex(u);
+    for (uint32_t j = F.vertexTriStart[s]; j < F.vertexTriStart[s + 1]; ++j) {
+      const auto& t = F.triangles[F.vertexTris[j]];
+      const Real e = std::max({roundShift_[t[0]], roundShift_[t[1]], roundShift_[t[2]]});
+      const Vec3 grow = Vec3::Constant(e + ea + margin);
+      const Vec3 lo = x[t[0]].cwiseMin(x[t[1]]).cwiseMin(x[t[2]]) - grow;
+      const Vec3 hi = x[t[0]].cwiseMax(x[t[1]]).cwiseMax(x[t[2]]) + grow;
+      if (!lo.allFinite() || !hi.allFinite()) {
+        for (uint32_t cell : cellShiftSet_) cellShift_[cell] = 0;
+        return false;
+      }
+      if (!(lo.array() >= g.box.lo.array()).all() || !(hi.array() <= g.box.hi.array()).all())
+        outsideShift_ = std::max(outsideShift_, e);
+      std::array<int64_t, 6> c;
+      for (int k = 0; k < 3; ++k) c[size_t(k)] = g.cellOf(lo[k], k), c[size_t(k + 3)] = g.cellOf(hi[k], k);
+      for (int64_t kz = c[2]; kz <= c[5]; ++kz)
+        for (int64_t ky = c[1]; ky <= c[4]; ++ky)
+          for (int64_t kx = c[0]; kx <= c[3]; ++kx) {
+            const uint32_t cell = uint32_t((kz * g.dims[1] + ky) * g.dims[0] + kx);
+            if (cellShift_[cell] == 0) cellShiftSet_.push_back(cell);
+            cellShift_[cell] = std::max(cellShift_[cell], e);
+          }
+    }
+  }
+  return true;
+}
+
 // Surface vertices of body a against the faces of body b (the pseudo-normal test, see the header),
 // from the pair's track: only its candidates, and of those only the ones that may have reached b's
 // surface since their last check (they were at least `clearance` from it then; since, the vertex
@@ -771,16 +826,42 @@ void BodyContacts::preparePair(size_t a, size_t b, const BodyContactState& s) {
   job.smallStep = movedStart_[a] + movedStart_[b] <= kSmallStep * std::max(A.thickness, B.thickness);
   job.faceMoved = sinceRebuild_[b], job.faceCorrected = corrected_[b];
   const Vec3* x = s.positions;
+  // From round 2 on, a vertex checked in the last round can have been reached only by a face that
+  // the last round's corrections moved, and only if one came near it: a bound per cell of the
+  // grid (round 1 moves every contact of round 0: no bound to gain).
+  const Real margin = kShiftMargin * std::max(A.thickness, B.thickness);
+  const bool local = keepTracks_ && round_index_ >= 2 && shiftCells(a, b, x, margin);
+  const Grid& grid = T.grid;
   for (uint32_t k = 0; k < T.vertices.size(); ++k) {
     // How far b's faces moved since the check: from the rebuild, or (checked in this stage) from
     // where the stage began: only the corrections of its rounds moved them since.
     Real faces = job.faceMoved + T.faceDrift[k];
+    const Vec3& p = x[A.vertices[T.vertices[k]]];
+    const bool checkedLast = T.checkedStage[k] == stage_ && T.checkedRound[k] + 1 == round_index_;
+    const bool boundLast = T.roundStage[k] == stage_ && T.roundOf[k] + 1 == round_index_;
+    if (local && (checkedLast || boundLast)) {
+      // Checked (or found outside by this bound) in the last round: only the faces that round
+      // moved, near it (shiftCells), can have reached it since.
+      const Real c = checkedLast ? T.clearance[k] : T.roundClearance[k];
+      const Vec3& at = checkedLast ? T.checkedAt[k] : T.roundAt[k];
+      const bool in = !((p.array() < grid.box.lo.array()).any() || (p.array() > grid.box.hi.array()).any());
+      const size_t cell =
+          size_t((grid.cellOf(p.z(), 2) * grid.dims[1] + grid.cellOf(p.y(), 1)) * grid.dims[0] + grid.cellOf(p.x(), 0));
+      const Real near = std::max(cellShift_[cell], in ? Real(0) : outsideShift_);
+      const Real m = c - (p - at).norm() - near;
+      if (m > 0) {  // outside, at least min(m, margin) from b's surface: for the next round's bound
+        T.roundClearance[k] = std::min(m, margin), T.roundAt[k] = p;
+        T.roundStage[k] = stage_, T.roundOf[k] = uint8_t(round_index_);
+        continue;
+      }
+    }
     if (T.checkedStage[k] == stage_) faces = std::min(faces, job.faceCorrected + T.faceCorrected[k]);
     const Real m = T.clearance[k] - faces;
-    if (keepTracks_ && m > 0 && (x[A.vertices[T.vertices[k]]] - T.checkedAt[k]).squaredNorm() < m * m)
-      continue;  // still outside
+    if (keepTracks_ && m > 0 && (p - T.checkedAt[k]).squaredNorm() < m * m) continue;  // still outside
     looked_.push_back(k), lookedJob_.push_back(uint32_t(jobs_.size()));
   }
+  if (local)
+    for (uint32_t c : cellShiftSet_) cellShift_[c] = 0;
   job.end = uint32_t(looked_.size());
   jobs_.push_back(job);
   if (job.end == job.begin) return;
@@ -791,7 +872,7 @@ void BodyContacts::preparePair(size_t a, size_t b, const BodyContactState& s) {
     const auto& u = B.triangles[g.tri[e]];
     g.now[e] = {x[u[0]].cwiseMin(x[u[1]]).cwiseMin(x[u[2]]), x[u[0]].cwiseMax(x[u[1]]).cwiseMax(x[u[2]])};
   }
-  if (T.nearest.size() != A.vertices.size()) T.nearest.assign(A.vertices.size(), ContactBody::kNone);
+  if (T.nearest.size() != 2 * A.vertices.size()) T.nearest.assign(2 * A.vertices.size(), ContactBody::kNone);
 }
 
 // One detection pass into round_ over the pairs of bodies with pick[a * B + b] set (in index
@@ -819,10 +900,10 @@ void BodyContacts::detectPairs(const BodyContactState& s, BodyContactStats& stat
     Track& T = tracks_[job.a * B + job.b];
     const uint32_t k = looked_[j], i = T.vertices[k];
     slotState_[j] = uint8_t(detectVertex(bodies_[job.a], bodies_[job.b], T.grid, i, job.r, job.smallStep, x, qs,
-                                         &slot_[j], &T.clearance[k], &T.nearest[i]));
-    if (!keepTracks_) T.nearest[i] = ContactBody::kNone;  // (the reference: no hint either)
+                                         &slot_[j], &T.clearance[k], &T.nearest[2 * size_t(i)]));
+    if (!keepTracks_) T.nearest[2 * size_t(i)] = T.nearest[2 * size_t(i) + 1] = ContactBody::kNone;  // (the reference)
     T.checkedAt[k] = x[bodies_[job.a].vertices[i]], T.faceDrift[k] = job.faceMoved;
-    T.faceCorrected[k] = job.faceCorrected, T.checkedStage[k] = stage_;
+    T.faceCorrected[k] = job.faceCorrected, T.checkedStage[k] = stage_, T.checkedRound[k] = uint8_t(round_index_);
   };
   constexpr uint32_t kChunk = 16;
   if (team_ && team_->members() > 1 && count >= minParallel_) {
@@ -893,12 +974,13 @@ int BodyContacts::detectVertex(const ContactBody& A, const ContactBody& B, const
     // Only a face about as near (and within the search radius): a far one would move the vertex
     // far (and its face with it). The nearest one that faces the vertex with p behind its plane.
     const Real reach = std::min(r, dist + 0.5 * B.thickness);
-    const Nearest f = nearestTriangle(g, B, p, reach, x, ContactBody::kNone, [&](uint32_t t, const Vec3& cu) {
+    const Nearest f = nearestTriangle(g, B, p, reach, x, hint[1], [&](uint32_t t, const Vec3& cu) {
       const Vec3 fn = faceNormal(B.triangles[t], x);
       return fn.dot(nv) < 0 && fn.dot(p - cu) < 0;
     });
     const uint32_t facing = f.tri;
     const ClosestPoint facingCp = f.cp;
+    if (facing != ContactBody::kNone) hint[1] = facing;
     if (facing != ContactBody::kNone) {
       const auto& u = B.triangles[facing];
       const Vec3 fn = unit(faceNormal(u, x));
@@ -985,6 +1067,7 @@ void BodyContacts::detectSelf(size_t a, const BodyContactState& s, BodyContactSt
 // surface).
 bool BodyContacts::detectAll(const BodyContactState& s, BodyContactStats& stats) {
   round_.clear();
+  round_index_ = 0;
   tracksValid_ = false;
   measure(s);
   const size_t B = bodies_.size();
@@ -1034,8 +1117,8 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
   Vec3* x = s.positions;
   Vec3* v = s.velocities;
   const Real* im = s.invMass;
-  for (uint32_t u : touched_) isTouched_[u] = 0;
-  touched_.clear(), touchedStart_.clear();
+  for (uint32_t u : touched_) isTouched_[u] = 0, roundShift_[u] = 0;
+  touched_.clear(), touchedStart_.clear(), touchedLast_.clear();
   ++stage_;
   bool fellBack = false;
   const size_t B = bodies_.size();
@@ -1064,6 +1147,16 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
         grow(sinceAxis_[b], d.hasNaN() ? std::numeric_limits<Real>::quiet_NaN() : d.cwiseAbs().maxCoeff());
         grow(corrected_[b], (x[u] - touchedStart_[k]).norm());
       }
+      // What the last round's corrections moved (a vertex found then sat where it was at the
+      // stage's start until its first correction): the local bound of the skips (shiftCells).
+      roundShiftMax_.assign(B, 0);
+      for (size_t k = 0; k < touched_.size(); ++k) {
+        const uint32_t u = touched_[k];
+        roundShift_[u] = (x[u] - touchedLast_[k]).norm();
+        if (std::isnan(roundShift_[u])) roundShift_[u] = std::numeric_limits<Real>::infinity();
+        roundShiftMax_[bodyOf_[u]] = std::max(roundShiftMax_[bodyOf_[u]], roundShift_[u]);
+        touchedLast_[k] = x[u];
+      }
     }
     if (B >= 2 && (!keepTracks_ || !tracksHold())) {
       rebuildTracks(x), ++stats.rebuilds;  // (sinceRebuild_ 0: a later round adds the corrections to come)
@@ -1072,6 +1165,7 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
     // moved: a contact of a's vertices against b's faces moves vertices of both, so it can push
     // a vertex of b into a face of a (pair (b, a)) or into a third body's faces as well.
     round_.clear();
+    round_index_ = round;
     movedBodies_.assign(B, 0);
     for (size_t a = 0; a < B; ++a)
       for (size_t b = 0; b < B; ++b)

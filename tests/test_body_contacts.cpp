@@ -720,6 +720,33 @@ TEST(BodyContactScenes, GraspedBallPushedAgainstABlock) {
 }  // namespace gradel
 
 namespace gradel {
+// Two balls pressed into each other (the speed measurement's scene, smaller): keeping the tracks
+// across steps and rounds (with the bound of round 2 on, from what the last round's corrections
+// moved: preparePair) gives the bits of detecting every candidate in every round, through steps
+// whose corrections need 3 and more rounds.
+TEST(BodyContactScenes, PressedBallsKeptTracksGiveTheBitsOfDetectingFromScratch) {
+  auto run = [](bool keep, int* multiRound) {
+    BuiltScene b = buildScene(contactBenchScene(16));
+    World& w = *b.world;
+    w.bodyContacts()->setKeepTracks(keep);
+    while (w.bodyContactStats().contacts == 0) w.step();
+    std::vector<uint64_t> hashes;
+    for (int k = 0; k < 300; ++k) {
+      w.step();
+      hashes.push_back(w.stateHash());
+      if (multiRound) *multiRound += w.bodyContactStats().rounds >= 3;
+    }
+    return hashes;
+  };
+  int multiRound = 0;
+  const std::vector<uint64_t> kept = run(true, &multiRound), scratch = run(false, nullptr);
+  EXPECT_GT(multiRound, 20) << "steps with 3 or more rounds";
+  size_t firstDiff = kept.size();
+  for (size_t k = 0; k < kept.size() && firstDiff == kept.size(); ++k)
+    if (kept[k] != scratch[k]) firstDiff = k;
+  EXPECT_EQ(firstDiff, kept.size()) << "the states part at step " << firstDiff;
+}
+
 // The speed measurement of issue 12 (not run by default; GRADEL_CONTACT_SIZE, _STEPS, _THREADS):
 // two spheres in contact, the share of the step time spent in the body-contact stage.
 TEST(BodyContactScenes, DISABLED_TwoSpheresContactShare) {

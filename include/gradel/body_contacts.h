@@ -343,8 +343,15 @@ class BodyContacts {
     std::vector<Real> faceDrift;         ///< Per candidate: how far b's surface had moved from the rebuild then.
     std::vector<Real> faceCorrected;     ///< Per candidate: how far the stage's corrections had moved b's surface then.
     std::vector<uint32_t> checkedStage;  ///< Per candidate: the stage (resolve call) of its last check.
-    std::vector<uint32_t>
-        nearest;  ///< Per vertex of a (index into `vertices`): its nearest face of b when last looked up (kNone: none).
+    std::vector<uint8_t> checkedRound;   ///< Per candidate: the round of that stage.
+    // Per candidate, what a round's local bound found (preparePair, shiftCells): outside, at least
+    // roundClearance from b's surface at roundAt, in round roundOf of stage roundStage.
+    std::vector<Real> roundClearance;
+    std::vector<Vec3> roundAt;
+    std::vector<uint32_t> roundStage;
+    std::vector<uint8_t> roundOf;
+    std::vector<uint32_t> nearest;  ///< Per vertex of a (index into `vertices`): its nearest face of b and its nearest
+                                    ///< facing face (detectVertex) when last found (kNone: none).
   };
   void rebuildTracks(const Vec3* x);
   void buildTrack(size_t a, size_t b, const Vec3* x);
@@ -378,8 +385,9 @@ class BodyContacts {
   void prepareScratch(const Grid& g);
   template <class F>
   void forCandidateTriangles(const Grid& g, const Vec3& lo, const Vec3& hi, QueryScratch& q, F&& f) const;
-  // One vertex of a pair's narrow phase (detectPair): 1 looked up, 2 in contact (into *out);
-  // *clearance: a lower bound of its distance to b's surface (< 0: inside, or unknown).
+  // One vertex of a pair's narrow phase (detectPairs): 1 looked up, 2 in contact (into *out);
+  // *clearance: a lower bound of its distance to b's surface (< 0: inside, or unknown); hint[0]
+  // and hint[1]: its nearest face and its nearest facing face when last found (searches start there).
   int detectVertex(const ContactBody& A, const ContactBody& B, const Grid& g, uint32_t i, Real r, bool smallStep,
                    const Vec3* x, QueryScratch& qs, Contact* out, Real* clearance, uint32_t* hint) const;
   struct Nearest {
@@ -421,9 +429,20 @@ class BodyContacts {
   static constexpr uint32_t kBoundsBlock = 256;
   std::vector<uint32_t> blockStart_;
   std::vector<Box> blockBox_;
-  std::vector<uint32_t> touched_;   ///< World ids of the vertices of the step's contacts (first-seen order).
-  std::vector<uint8_t> isTouched_;  ///< Per world vertex.
-  std::vector<Vec3> touchedStart_;  ///< Their positions when the stage began.
+  std::vector<uint32_t> touched_;    ///< World ids of the vertices of the step's contacts (first-seen order).
+  std::vector<uint8_t> isTouched_;   ///< Per world vertex.
+  std::vector<Vec3> touchedStart_;   ///< Their positions when the stage began.
+  std::vector<Vec3> touchedLast_;    ///< Their positions at the last round's detection.
+  std::vector<Real> roundShift_;     ///< Per world vertex: how far it moved since the last round's detection [m].
+  std::vector<Real> roundShiftMax_;  ///< Per body: the largest roundShift_ of its vertices [m].
+  int round_index_ = 0;              ///< The round being detected (resolve).
+  // A pair's bound on how far b's faces near a point moved since the last round's detection (round
+  // 2 on; preparePair): per cell of its track's grid, the largest shift of a face that moved then
+  // and may reach a point of the cell; a point outside the grid's box: outsideShift_.
+  std::vector<Real> cellShift_;
+  std::vector<uint32_t> cellShiftSet_;
+  Real outsideShift_ = 0;
+  bool shiftCells(size_t a, size_t b, const Vec3* x, Real margin);
   std::vector<Real> corrected_;   ///< Per body: the farthest the stage's corrections moved a vertex of its surface [m].
   uint32_t stage_ = 0;            ///< resolve() calls so far.
   std::vector<uint32_t> bodyOf_;  ///< Per world vertex: the body whose surface holds it (bodies().size(): none).
