@@ -290,6 +290,8 @@ constexpr Real kLoose = 0.5, kRadiusSlack = 0.25;
 constexpr Real kTrackCell = 0.5;
 // measure(): surface vertices per chunk (a unit of the team's work).
 constexpr uint32_t kMeasureChunk = 4096;
+// detectPairs(): faces per chunk of the boxes now (a unit of the team's work).
+constexpr uint32_t kBoxChunk = 512;
 // shiftCells(): a vertex a round's local bound skips keeps at most this clearance (same unit).
 constexpr Real kShiftMargin = 0.125;
 
@@ -866,12 +868,9 @@ void BodyContacts::preparePair(size_t a, size_t b, const BodyContactState& s) {
   jobs_.push_back(job);
   if (job.end == job.begin) return;
   prepareScratch(T.grid);
-  Grid& g = T.grid;  // the listed faces' boxes now: the queries prune by them
-  g.now.resize(g.tri.size());
-  for (size_t e = 0; e < g.tri.size(); ++e) {
-    const auto& u = B.triangles[g.tri[e]];
-    g.now[e] = {x[u[0]].cwiseMin(x[u[1]]).cwiseMin(x[u[2]]), x[u[0]].cwiseMax(x[u[1]]).cwiseMax(x[u[2]])};
-  }
+  T.grid.now.resize(T.grid.tri.size());  // the listed faces' boxes now (detectPairs): the queries prune by them
+  for (size_t e = 0; e < T.grid.tri.size(); e += kBoxChunk)
+    boxChunks_.push_back({uint32_t(jobs_.size() - 1), uint32_t(e)});
   if (T.nearest.size() != 2 * A.vertices.size()) T.nearest.assign(2 * A.vertices.size(), ContactBody::kNone);
 }
 
@@ -883,7 +882,7 @@ void BodyContacts::preparePair(size_t a, size_t b, const BodyContactState& s) {
 // one: on a busy machine waking the team costs more than this). active_: which pairs found one.
 void BodyContacts::detectPairs(const BodyContactState& s, BodyContactStats& stats, const std::vector<uint8_t>& pick) {
   const size_t B = bodies_.size();
-  jobs_.clear(), looked_.clear(), lookedJob_.clear();
+  jobs_.clear(), looked_.clear(), lookedJob_.clear(), boxChunks_.clear();
   for (size_t a = 0; a < B; ++a)
     for (size_t b = 0; b < B; ++b) {
       if (!pick[a * B + b]) continue;
@@ -905,14 +904,28 @@ void BodyContacts::detectPairs(const BodyContactState& s, BodyContactStats& stat
     T.checkedAt[k] = x[bodies_[job.a].vertices[i]], T.faceDrift[k] = job.faceMoved;
     T.faceCorrected[k] = job.faceCorrected, T.checkedStage[k] = stage_, T.checkedRound[k] = uint8_t(round_index_);
   };
+  // The pairs' faces' boxes now, in chunks of kBoxChunk, then the lookups.
+  auto boxes = [&](uint32_t c) {
+    const PairJob& job = jobs_[boxChunks_[c][0]];
+    Grid& g = tracks_[job.a * B + job.b].grid;
+    const ContactBody& F = bodies_[job.b];
+    for (size_t e = boxChunks_[c][1]; e < std::min<size_t>(g.tri.size(), boxChunks_[c][1] + kBoxChunk); ++e) {
+      const auto& u = F.triangles[g.tri[e]];
+      g.now[e] = {x[u[0]].cwiseMin(x[u[1]]).cwiseMin(x[u[2]]), x[u[0]].cwiseMax(x[u[1]]).cwiseMax(x[u[2]])};
+    }
+  };
+  const uint32_t boxChunks = uint32_t(boxChunks_.size());
   constexpr uint32_t kChunk = 16;
   if (team_ && team_->members() > 1 && count >= minParallel_) {
-    std::atomic<uint32_t> next{0};
+    std::atomic<uint32_t> nextBox{0}, next{0};
     team_->run([&](int t) {
+      for (uint32_t c; (c = nextBox.fetch_add(1, std::memory_order_relaxed)) < boxChunks;) boxes(c);
+      team_->barrier();
       for (uint32_t j0; (j0 = next.fetch_add(kChunk, std::memory_order_relaxed)) < count;)
         for (uint32_t j = j0; j < std::min(count, j0 + kChunk); ++j) one(j, scratch_[size_t(t)]);
     });
   } else {
+    for (uint32_t c = 0; c < boxChunks; ++c) boxes(c);
     for (uint32_t j = 0; j < count; ++j) one(j, scratch_[0]);
   }
   stats.candidates += count;

@@ -461,14 +461,15 @@ class BodyContacts {
   std::vector<QueryScratch> scratch_;  ///< Per member (one when serial).
   ThreadTeam* team_ = nullptr;
   uint32_t minParallel_ = kMinParallel;
-  std::vector<Contact> slot_;         ///< Per entry of looked_: its contact, if any.
-  std::vector<uint8_t> slotState_;    ///< Per vertex: detectVertex's answer (0: skipped).
-  std::vector<uint32_t> looked_;      ///< The pass's candidates to look up (indices into their pair's track).
-  std::vector<uint32_t> lookedJob_;   ///< Per entry of looked_: its pair (index into jobs_).
-  std::vector<PairJob> jobs_;         ///< The pass's pairs, in order.
-  std::vector<uint8_t> pick_;         ///< Per (vertex body, face body): detected in this pass.
-  std::vector<uint8_t> active_;       ///< Per (vertex body, face body): contacts in the last round.
-  std::vector<uint8_t> movedBodies_;  ///< Per body: a correction of the last round moved its vertices.
+  std::vector<Contact> slot_;        ///< Per entry of looked_: its contact, if any.
+  std::vector<uint8_t> slotState_;   ///< Per vertex: detectVertex's answer (0: skipped).
+  std::vector<uint32_t> looked_;     ///< The pass's candidates to look up (indices into their pair's track).
+  std::vector<uint32_t> lookedJob_;  ///< Per entry of looked_: its pair (index into jobs_).
+  std::vector<PairJob> jobs_;        ///< The pass's pairs, in order.
+  std::vector<std::array<uint32_t, 2>> boxChunks_;  ///< The pass's chunks of faces' boxes now: (job, first face).
+  std::vector<uint8_t> pick_;                       ///< Per (vertex body, face body): detected in this pass.
+  std::vector<uint8_t> active_;                     ///< Per (vertex body, face body): contacts in the last round.
+  std::vector<uint8_t> movedBodies_;                ///< Per body: a correction of the last round moved its vertices.
 };
 
 /// Winding number of a closed triangle surface (world ids into x) about p: 1 inside, 0 outside
