@@ -198,19 +198,40 @@ Vec3 vertexPseudoNormal(const ContactBody& body, uint32_t s, const Vec3* x) {
   return n;
 }
 
-// Whether f . n >= 0 for the angle-weighted pseudo-normal n of surface vertex s: its weights are
-// positive, so where f is on one side of every face around the vertex the answer needs no angle
-// (atan2 per face); only mixed sides (or a flat face) compute n.
-bool facesAlong(const ContactBody& body, uint32_t s, const Vec3& f, const Vec3* x) {
-  int along = 0, against = 0, faces = 0;
-  for (uint32_t k = body.vertexTriStart[s]; k < body.vertexTriStart[s + 1]; ++k) {
-    const Real d = faceNormal(body.triangles[body.vertexTris[k]], x).dot(f);
-    ++faces, along += d > 0, against += d < 0;
+// Which way a surface vertex's body lies, asked of several directions f: whether f . n >= 0 for
+// its angle-weighted pseudo-normal n. The weights are positive, so where f is on one side of every
+// face around the vertex the answer needs no angle (atan2 per face); only mixed sides (or a flat
+// face) compute n, once.
+class OwnSide {
+ public:
+  OwnSide(const ContactBody& body, uint32_t s, const Vec3* x) : body_(body), s_(s), x_(x) {
+    const uint32_t k0 = body.vertexTriStart[s], k1 = body.vertexTriStart[s + 1];
+    count_ = k1 - k0 <= kMax ? int(k1 - k0) : -1;  // (more faces than kept: always n)
+    for (int k = 0; k < count_; ++k)
+      normals_[size_t(k)] = faceNormal(body.triangles[body.vertexTris[k0 + uint32_t(k)]], x);
   }
-  if (faces > 0 && against == faces) return false;
-  if (faces > 0 && along == faces) return true;
-  return f.dot(vertexPseudoNormal(body, s, x)) >= 0;
-}
+  bool along(const Vec3& f) {
+    int along = 0, against = 0;
+    for (int k = 0; k < count_; ++k) {
+      const Real d = normals_[size_t(k)].dot(f);
+      along += d > 0, against += d < 0;
+    }
+    if (count_ > 0 && against == count_) return false;
+    if (count_ > 0 && along == count_) return true;
+    if (!haveN_) n_ = vertexPseudoNormal(body_, s_, x_), haveN_ = true;
+    return f.dot(n_) >= 0;
+  }
+
+ private:
+  static constexpr uint32_t kMax = 24;
+  const ContactBody& body_;
+  uint32_t s_;
+  const Vec3* x_;
+  std::array<Vec3, kMax> normals_;
+  int count_ = 0;
+  bool haveN_ = false;
+  Vec3 n_;
+};
 
 // The angle-weighted pseudo-normal (not normalised) of the feature of triangle t that the closest
 // point lies on (closestPointOnTriangle's feature), from the body's faces around it.
@@ -867,7 +888,6 @@ void BodyContacts::preparePair(size_t a, size_t b, const BodyContactState& s) {
   job.end = uint32_t(looked_.size());
   jobs_.push_back(job);
   if (job.end == job.begin) return;
-  prepareScratch(T.grid);
   T.grid.now.resize(T.grid.tri.size());  // the listed faces' boxes now (detectPairs): the queries prune by them
   for (size_t e = 0; e < T.grid.tri.size(); e += kBoxChunk)
     boxChunks_.push_back({uint32_t(jobs_.size() - 1), uint32_t(e)});
@@ -894,12 +914,12 @@ void BodyContacts::detectPairs(const BodyContactState& s, BodyContactStats& stat
   const uint32_t count = uint32_t(looked_.size());
   slot_.resize(count), slotState_.resize(count);
   const Vec3* x = s.positions;
-  auto one = [&](uint32_t j, QueryScratch& qs) {
+  auto one = [&](uint32_t j) {
     const PairJob& job = jobs_[lookedJob_[j]];
     Track& T = tracks_[job.a * B + job.b];
     const uint32_t k = looked_[j], i = T.vertices[k];
-    slotState_[j] = uint8_t(detectVertex(bodies_[job.a], bodies_[job.b], T.grid, i, job.r, job.smallStep, x, qs,
-                                         &slot_[j], &T.clearance[k], &T.nearest[2 * size_t(i)]));
+    slotState_[j] = uint8_t(detectVertex(bodies_[job.a], bodies_[job.b], T.grid, i, job.r, job.smallStep, x, &slot_[j],
+                                         &T.clearance[k], &T.nearest[2 * size_t(i)]));
     if (!keepTracks_) T.nearest[2 * size_t(i)] = T.nearest[2 * size_t(i) + 1] = ContactBody::kNone;  // (the reference)
     T.checkedAt[k] = x[bodies_[job.a].vertices[i]], T.faceDrift[k] = job.faceMoved;
     T.faceCorrected[k] = job.faceCorrected, T.checkedStage[k] = stage_, T.checkedRound[k] = uint8_t(round_index_);
@@ -918,15 +938,15 @@ void BodyContacts::detectPairs(const BodyContactState& s, BodyContactStats& stat
   constexpr uint32_t kChunk = 16;
   if (team_ && team_->members() > 1 && count >= minParallel_) {
     std::atomic<uint32_t> nextBox{0}, next{0};
-    team_->run([&](int t) {
+    team_->run([&](int) {
       for (uint32_t c; (c = nextBox.fetch_add(1, std::memory_order_relaxed)) < boxChunks;) boxes(c);
       team_->barrier();
       for (uint32_t j0; (j0 = next.fetch_add(kChunk, std::memory_order_relaxed)) < count;)
-        for (uint32_t j = j0; j < std::min(count, j0 + kChunk); ++j) one(j, scratch_[size_t(t)]);
+        for (uint32_t j = j0; j < std::min(count, j0 + kChunk); ++j) one(j);
     });
   } else {
     for (uint32_t c = 0; c < boxChunks; ++c) boxes(c);
-    for (uint32_t j = 0; j < count; ++j) one(j, scratch_[0]);
+    for (uint32_t j = 0; j < count; ++j) one(j);
   }
   stats.candidates += count;
   for (const PairJob& job : jobs_) {
@@ -947,9 +967,7 @@ void BodyContacts::detectPairs(const BodyContactState& s, BodyContactStats& stat
 // Surface vertex i (index into A.vertices) against the faces of B in grid g (the pseudo-normal
 // test, see the header). Reads the grid and positions only: any member may run any vertex.
 int BodyContacts::detectVertex(const ContactBody& A, const ContactBody& B, const Grid& g, uint32_t i, Real r,
-                               bool smallStep, const Vec3* x, QueryScratch& qs, Contact* out, Real* clearance,
-                               uint32_t* hint) const {
-  const Real slack2 = 1e-24 * B.thickness * B.thickness;  // rounding of a box beside a point on a face
+                               bool smallStep, const Vec3* x, Contact* out, Real* clearance, uint32_t* hint) const {
   const uint32_t v = A.vertices[i];
   const Vec3& p = x[v];
   const Nearest near = nearestTriangle(g, B, p, r, x, *hint);
@@ -982,14 +1000,14 @@ int BodyContacts::detectVertex(const ContactBody& A, const ContactBody& B, const
   // each vertex out through such faces moves the two bodies into each other and never ends.
   Vec3 n = dist > 0 ? Vec3((c - p) / dist) : unit(pn);
   if (n.squaredNorm() == 0) return 1;
-  if (facesAlong(A, i, faceNormal(tri, x), x)) {
-    const Vec3 nv = vertexPseudoNormal(A, i, x);
+  OwnSide own(A, i, x);
+  if (own.along(faceNormal(tri, x))) {
     // Only a face about as near (and within the search radius): a far one would move the vertex
     // far (and its face with it). The nearest one that faces the vertex with p behind its plane.
     const Real reach = std::min(r, dist + 0.5 * B.thickness);
     const Nearest f = nearestTriangle(g, B, p, reach, x, hint[1], [&](uint32_t t, const Vec3& cu) {
       const Vec3 fn = faceNormal(B.triangles[t], x);
-      return fn.dot(nv) < 0 && fn.dot(p - cu) < 0;
+      return fn.dot(p - cu) < 0 && !own.along(fn);
     });
     const uint32_t facing = f.tri;
     const ClosestPoint facingCp = f.cp;

@@ -389,7 +389,7 @@ class BodyContacts {
   // *clearance: a lower bound of its distance to b's surface (< 0: inside, or unknown); hint[0]
   // and hint[1]: its nearest face and its nearest facing face when last found (searches start there).
   int detectVertex(const ContactBody& A, const ContactBody& B, const Grid& g, uint32_t i, Real r, bool smallStep,
-                   const Vec3* x, QueryScratch& qs, Contact* out, Real* clearance, uint32_t* hint) const;
+                   const Vec3* x, Contact* out, Real* clearance, uint32_t* hint) const;
   struct Nearest {
     Real d2;       ///< [m^2] squared distance to it (reach^2 when none).
     uint32_t tri;  ///< Its id, or kNone.
