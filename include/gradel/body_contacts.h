@@ -18,15 +18,23 @@
 //                positions rounded to float: half the bytes; other steps in a pass of the stage);
 //                every track is rebuilt when a surface moved more than loose along an axis since
 //                the rebuild (a face then still lies in its box grown by loose) or a pair's search
-//                radius r passed rCap (set to the r of the rebuild plus a quarter voxel). A candidate is looked up only
-//                when it may have reached b's surface since its last check: it was at least its clearance (the distance
-//                to its nearest face, in front) from it then; since, it moved what it moved and b's faces at most what
-//                b's surface moved since the rebuild (or, checked in this stage, what the stage's corrections moved it)
-//                plus as much then. For a closed surface that does not pass through itself the skipped vertices are
-//                outside (the same bits as looking them all up: test KeptTracksGiveTheBitsOfDetectingFromScratch; where
-//                a crushed body's surface folds through itself the sign test below is no consistent inside/outside and
-//                the two can differ). The rounds after the first measure only the vertices the corrections moved (the
-//                only ones that moved): the rounds cost the contact area.
+//                radius r passed rCap (set to the r of the rebuild plus a quarter voxel). A
+//                candidate is looked up only when it may have reached b's surface since its last
+//                check: it was at least its clearance (the distance to its nearest face, in front)
+//                from it then; since, it moved what it moved and b's faces at most what b's
+//                surface moved since the rebuild (or, checked in this stage, what the stage's
+//                corrections moved it) plus as much then. From round 2 on, a candidate checked in
+//                the last round is looked up again only where a face that the last round's
+//                corrections moved may have reached it (shiftCells: those faces mark the cells of
+//                the pair's grid they can reach). For a closed surface that does not pass through
+//                itself the skipped vertices are outside (the same bits as looking them all up:
+//                tests KeptTracksGiveTheBitsOfDetectingFromScratch and
+//                PressedBallsKeptTracksGiveTheBitsOfDetectingFromScratch; where a crushed body's
+//                surface folds through itself the sign test below is no consistent inside/outside
+//                and the two can differ). The rounds after the first measure only the vertices
+//                the corrections moved (the only ones that moved): the rounds cost the contact
+//                area. Each round is one pass over the pairs: their lookups one batch (on the
+//                thread team for many), gathered in pair then vertex order.
 //   narrow phase the nearest triangle of the other body within r = thickness + the largest
 //                distances both bodies' surfaces moved in the step (from the vertex's last answer,
 //                which bounds the search; the nearest cell first; a cell or a triangle whose box
@@ -88,8 +96,9 @@
 //                needs the nearest face, which for a vertex on its own surface is adjacent.)
 //
 // Everything runs in a fixed order (pairs of bodies in index order, vertices in id order, ties
-// between triangles broken by id); a pair's narrow phase may run on a thread team (setTeam), each
-// vertex into its own slot, gathered in vertex order: the result does not depend on the thread count.
+// between triangles broken by id); a round's narrow phase (every pair's lookups) may run on a
+// thread team (setTeam), each vertex into its own slot, gathered in pair then vertex order: the
+// result does not depend on the thread count.
 // 3D only: a 2D body's display surface is a flat region, not a closed surface.
 // Frame-size steps (implicit, large_step): the step's solve carries the contacts itself, as
 // one-sided constraints of its PCG (projective.h PairConstraint; World::stepImplicit): proximity()
@@ -243,9 +252,9 @@ class BodyContacts {
 
   /// Resolves every body-body (and, if on, self) contact of the step, in place. With a team
   /// (setTeam), the narrow phase of the pairs runs on its members, each vertex's finding into its
-  /// own slot, gathered in vertex order: the same result at any thread count.
+  /// own slot, gathered in pair then vertex order: the same result at any thread count.
   BodyContactStats resolve(const BodyContactState& state);
-  /// The world's thread team for the narrow phase (nullptr: serial), used for a pair with at least
+  /// The world's thread team for the narrow phase (nullptr: serial), used for a round with at least
   /// `minParallel` vertices to look up (below it, waking the team costs more than the work). Not owned.
   void setTeam(ThreadTeam* team, uint32_t minParallel = kMinParallel) { team_ = team, minParallel_ = minParallel; }
   static constexpr uint32_t kMinParallel = 128;
