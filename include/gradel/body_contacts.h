@@ -74,6 +74,20 @@
 //                vertex still inside then (contradicting contacts where two coarse staircases
 //                cross, each vertex behind a face of the other) goes back to where it was
 //                relative to its face at the start of the step.
+//   warm start   a pressed contact is found again every step (the step moves the vertex back
+//                behind the face it was pushed out of), and every vertex a round corrects must
+//                be looked up again in the next: two lookups or more per contact and step. So a
+//                stage begins with the contacts the last one ended with (setWarmStart; on by
+//                default): each whose vertex and face corners start this step where that stage
+//                left them, in a small step of its pair, and whose vertex lies behind its plane as
+//                found (normal n through its point at weights w on the face now), is round 0's,
+//                pushed out like a found one (Gauss-Seidel, friction, then the impulses below);
+//                the detection rounds follow and check every candidate as ever (the bounds count
+//                what round 0 moved), so the guarantee is unchanged: they find a vertex round 0
+//                left inside, or pushed into another face. Two 64^3 balls pressed, 400 steps:
+//                545 lookups a step against 971 (docs/speed.md). The result depends on the last
+//                stage's contacts, not only on the state: the same scene gives the same bits (at
+//                any thread count), a state set from outside starts cold.
 //   last resort  that is not always enough: where the bodies ended deep in each other (more than
 //                about a voxel; a frame step whose solve left them so) the nearest-face pushes
 //                contradict each other and the rounds move vertices further in, not out (two
@@ -240,6 +254,7 @@ struct BodyContactStats {
   int rounds = 0;         ///< Detection rounds run.
   int rebuilds = 0;       ///< Times the candidate lists kept across steps were rebuilt (see the header).
   int takeBacks = 0;      ///< Times the last resort took bodies back towards the step's start (0: not needed).
+  size_t warm = 0;        ///< Contacts of the last stage that the warm start applied (found inside their plane).
   Real takenBackTo = 1;   ///< [-] the fraction of the step's motion the taken-back bodies kept.
   double seconds = 0;     ///< Wall time of the call (measurements; no result depends on it).
 };
@@ -262,6 +277,9 @@ class BodyContacts {
   /// rebuilds them and looks up every candidate from scratch, the reference that keeping them
   /// must match bit for bit (tests; it costs a full detection per round).
   void setKeepTracks(bool keep) { keepTracks_ = keep; }
+  /// Whether each stage starts from the contacts the last one ended with (the default; header,
+  /// "warm start"). Off: every contact is found by the detection rounds (the reference, tests).
+  void setWarmStart(bool warm) { warmStart_ = warm, warm_.clear(), warmAt_.clear(); }
   /// Whether the stage uses the motion a caller measured (BodyContactState::motion; the default)
   /// or measures it in its own pass (measure()), the reference the caller's must match (tests).
   void setUseGivenMotion(bool use) { useGivenMotion_ = use; }
@@ -466,6 +484,13 @@ class BodyContacts {
   };
   std::vector<Patches> patches_;
   std::vector<Contact> contacts_, round_;
+  // The warm start (header): the last stage's body-body contacts and where their vertex and face
+  // corners ended it (4 per contact); used only where the step started there (previousPositions).
+  bool warmStart_ = true;
+  std::vector<Contact> warm_;
+  std::vector<Vec3> warmAt_;
+  bool applyWarm(const BodyContactState& s, BodyContactStats& stats);
+  void keepWarm(const Vec3* x);
   Grid grid_;                          ///< For one pass (self-contact, proximity).
   std::vector<QueryScratch> scratch_;  ///< Per member (one when serial).
   ThreadTeam* team_ = nullptr;
