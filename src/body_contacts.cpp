@@ -1170,12 +1170,29 @@ bool BodyContacts::applyWarm(const BodyContactState& s, BodyContactStats& stats)
 }
 
 // What the next stage's warm start reads: this stage's body-body contacts (not after the last
-// resort: x null), each with its plane as found, and where its vertex and face corners end the stage.
+// resort: x null), one per vertex and face, the first in the stage's order (a contact carried over
+// from the last stage comes first: its plane as first found, kept while the vertex is behind it),
+// and where its vertex and face corners end the stage. Measured (two 64^3 balls pressed, 1,500
+// steps, the whole collision): all of them, a vertex-face pair found again each step adding one,
+// grew to 6,000 contacts a step for 1,300 vertices (2,191 a step on average against 516), for the
+// same lookups and no faster; the last one found per pair is not behind its plane in the next
+// step (its bounce moves it away), which leaves no warm start (971 lookups a step at 400 steps).
 void BodyContacts::keepWarm(const Vec3* x) {
   warm_.clear(), warmAt_.clear();
   if (!warmStart_ || !x) return;
-  for (const Contact& c : contacts_) {
-    if (bodyOf_[c.vertex] == bodyOf_[c.face[0]]) continue;  // self-contact: found by its own rule
+  warmKeys_.clear();
+  for (uint32_t k = 0; k < contacts_.size(); ++k) {
+    const Contact& c = contacts_[k];
+    if (bodyOf_[c.vertex] != bodyOf_[c.face[0]])  // (self-contact: found by its own rule)
+      warmKeys_.push_back({{c.vertex, c.face[0], c.face[1], c.face[2]}, k});
+  }
+  std::stable_sort(warmKeys_.begin(), warmKeys_.end(), [](const auto& l, const auto& r) { return l.first < r.first; });
+  warmKeys_.erase(
+      std::unique(warmKeys_.begin(), warmKeys_.end(), [](const auto& l, const auto& r) { return l.first == r.first; }),
+      warmKeys_.end());  // (the first of each run of equal keys stays)
+  std::sort(warmKeys_.begin(), warmKeys_.end(), [](const auto& l, const auto& r) { return l.second < r.second; });
+  for (const auto& key : warmKeys_) {
+    const Contact& c = contacts_[key.second];
     warm_.push_back(c);
     warmAt_.insert(warmAt_.end(), {x[c.vertex], x[c.face[0]], x[c.face[1]], x[c.face[2]]});
   }

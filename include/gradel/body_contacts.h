@@ -80,7 +80,8 @@
 //                stage begins with the contacts the last one ended with (setWarmStart; on by
 //                default): each whose vertex and face corners start this step where that stage
 //                left them, in a small step of its pair, and whose vertex lies behind its plane as
-//                found (normal n through its point at weights w on the face now), is round 0's,
+//                found (normal n through its point at weights w on the face now; one per vertex
+//                and face, the plane as first found while the vertex stays behind it), is round 0's,
 //                pushed out like a found one (Gauss-Seidel, friction, then the impulses below);
 //                the detection rounds follow and check every candidate as ever (the bounds count
 //                what round 0 moved), so the guarantee is unchanged: they find a vertex round 0
@@ -129,6 +130,7 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "gradel/model.h"
@@ -489,6 +491,7 @@ class BodyContacts {
   bool warmStart_ = true;
   std::vector<Contact> warm_;
   std::vector<Vec3> warmAt_;
+  std::vector<std::pair<std::array<uint32_t, 4>, uint32_t>> warmKeys_;  ///< Scratch of keepWarm: (vertex, face), index.
   bool applyWarm(const BodyContactState& s, BodyContactStats& stats);
   void keepWarm(const Vec3* x);
   Grid grid_;                          ///< For one pass (self-contact, proximity).
