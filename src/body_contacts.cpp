@@ -1169,14 +1169,14 @@ bool BodyContacts::applyWarm(const BodyContactState& s, BodyContactStats& stats)
   return !round_.empty();
 }
 
-// What the next stage's warm start reads: this stage's body-body contacts (not after the last
-// resort: x null), one per vertex and face, the first in the stage's order (a contact carried over
-// from the last stage comes first: its plane as first found, kept while the vertex is behind it),
-// and where its vertex and face corners end the stage. Measured (two 64^3 balls pressed, 1,500
-// steps, the whole collision): all of them, a vertex-face pair found again each step adding one,
-// grew to 6,000 contacts a step for 1,300 vertices (2,191 a step on average against 516), for the
-// same lookups and no faster; the last one found per pair is not behind its plane in the next
-// step (its bounce moves it away), which leaves no warm start (971 lookups a step at 400 steps).
+// What the next stage's warm start reads: this stage's body-body contacts (after the last resort
+// too: dropping them there left a generic build's pressed balls in it for many steps), one per vertex and face, the
+// first in the stage's order (a contact carried over from the last stage comes first: its plane as first found, kept
+// while the vertex is behind it), and where its vertex and face corners end the stage. Measured (two 64^3 balls
+// pressed, 1,500 steps, the whole collision): all of them, a vertex-face pair found again each step adding one, grew to
+// 6,000 contacts a step for 1,300 vertices (2,191 a step on average against 516), for the same lookups and no faster;
+// the last one found per pair is not behind its plane in the next step (its bounce moves it away), which leaves no warm
+// start (971 lookups a step at 400 steps).
 void BodyContacts::keepWarm(const Vec3* x) {
   warm_.clear(), warmAt_.clear();
   if (!warmStart_ || !x) return;
@@ -1323,7 +1323,7 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
     }
   }
   if (fellBack) takeBack(s, stats);
-  keepWarm(fellBack ? nullptr : x);
+  keepWarm(x);
   // Velocities: equal and opposite impulses on the relative velocity at each contact.
   const Real e = settings_.restitution, mu = settings_.friction;
   for (const Contact& c : contacts_) {
