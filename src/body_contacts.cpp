@@ -1176,7 +1176,7 @@ bool BodyContacts::applyWarm(const BodyContactState& s, BodyContactStats& stats)
 // pressed, 1,500 steps, the whole collision): all of them, a vertex-face pair found again each step adding one, grew to
 // 6,000 contacts a step for 1,300 vertices (2,191 a step on average against 516), for the same lookups and no faster;
 // the last one found per pair is not behind its plane in the next step (its bounce moves it away), which leaves no warm
-// start (971 lookups a step at 400 steps).
+// start (891 lookups a step at 400 steps, against 971 without one).
 void BodyContacts::keepWarm(const Vec3* x) {
   warm_.clear(), warmAt_.clear();
   if (!warmStart_ || !x) return;

@@ -86,7 +86,7 @@
 //                the detection rounds follow and check every candidate as ever (the bounds count
 //                what round 0 moved), so the guarantee is unchanged: they find a vertex round 0
 //                left inside, or pushed into another face. Two 64^3 balls pressed, 400 steps:
-//                545 lookups a step against 971 (docs/speed.md). The result depends on the last
+//                575 lookups a step against 971 (docs/speed.md). The result depends on the last
 //                stage's contacts, not only on the state: the same scene gives the same bits (at
 //                any thread count), a state set from outside starts cold.
 //   last resort  that is not always enough: where the bodies ended deep in each other (more than
