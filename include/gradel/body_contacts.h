@@ -88,7 +88,8 @@
 //                left inside, or pushed into another face. Two 64^3 balls pressed, 400 steps:
 //                575 lookups a step against 971 (docs/speed.md). The result depends on the last
 //                stage's contacts, not only on the state: the same scene gives the same bits (at
-//                any thread count), a state set from outside starts cold.
+//                any thread count); a contact whose vertex or face corners were set from outside
+//                since is not carried over.
 //   last resort  that is not always enough: where the bodies ended deep in each other (more than
 //                about a voxel; a frame step whose solve left them so) the nearest-face pushes
 //                contradict each other and the rounds move vertices further in, not out (two
