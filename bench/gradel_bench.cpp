@@ -8,12 +8,14 @@
 //  - scene: a scene file (--scene FILE), run as `gradel run` would, frames computed, not written;
 //  - contact: two spheres of n voxels meeting head on (contactBenchScene, soft-soft contact, issue
 //    12): the `contact_steps` steps after they touch, timed per repetition on a fresh world;
-//    contact_stage_share = the body-contact stage's wall time / the steps' (the other rows: 0).
+//    contact_stage_share = the body-contact stage's wall time / the steps' (the other rows: 0);
+//    --contact-trace FILE writes every step of the first repetition (its contacts, lookups, the
+//    lookups of vertices the stage's own corrections moved, rounds, the stage's and step's time).
 //
 //   gradel-bench [--sets real,paper,contact] [--shapes sphere,box] [--sizes 16,32,64,128,256]
 //                [--layouts gradational,uniform] [--moduli 1e4,1e5,1e6] [--threads 1,2]
 //                [--scene FILE] [--integrator NAME] [--load] [--reps 5] [--min-time 0.2]
-//                [--find-realtime]
+//                [--find-realtime] [--contact-steps 40] [--contact-trace FILE]
 //
 // Columns: ns_per_vertex_step = wall time per step (frame work included) / unique vertices;
 // ns_per_pair_step the same per element-vertex pair; real_time_factor = simulated seconds per
@@ -36,6 +38,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <memory>
 #include <optional>
 #include <sstream>
 
@@ -165,7 +168,8 @@ Row measureScene(const Scene& scene, const std::string& set, int threads, int re
 // Two spheres in contact: per repetition a fresh world stepped until they touch, then `steps`
 // steps timed (wall clock of the steps and of the body-contact stage, BodyContactStats::seconds);
 // the medians of the repetitions. The hash after the timed steps (the same in every repetition).
-Row measureContact(int n, int threads, int steps, int reps) {
+// With `trace`: the first repetition's steps, one CSV row each (--contact-trace).
+Row measureContact(int n, int threads, int steps, int reps, std::FILE* trace) {
   Row r;
   r.set = "contact", r.shape = "two-spheres", r.n = n, r.threads = threads, r.layout = "gradational";
   std::vector<double> perStep, share;
@@ -176,7 +180,16 @@ Row measureContact(int n, int threads, int steps, int reps) {
     for (int i = 0; i < 100000 && w.bodyContactStats().contacts == 0; ++i) w.step();  // until they touch
     double stage = 0;
     const auto t0 = Clock::now();
-    for (int i = 0; i < steps; ++i) w.step(), stage += w.bodyContactStats().seconds;
+    for (int i = 0; i < steps; ++i) {
+      const auto s0 = Clock::now();
+      w.step();
+      const BodyContactStats& st = w.bodyContactStats();
+      stage += st.seconds;
+      if (trace && k == 0)
+        std::fprintf(trace, "%d,%d,%d,%zu,%zu,%zu,%zu,%d,%d,%d,%.1f,%.1f\n", n, threads, i + 1, st.contacts, st.warm,
+                     st.candidates, st.movedLookups, st.rounds, st.rebuilds, st.takeBacks, 1e6 * st.seconds,
+                     1e6 * std::chrono::duration<double>(Clock::now() - s0).count());
+    }
     const double total = std::chrono::duration<double>(Clock::now() - t0).count();
     perStep.push_back(total / steps), share.push_back(stage / total);
     r.hash = w.stateHash();
@@ -273,6 +286,7 @@ int main(int argc, char** argv) {
   std::string sets = "real,paper", shapes = "sphere,box", sizes = "16,32,64,128,256", layouts = "gradational,uniform",
               moduli = "1e4,1e5,1e6", threads = "1,2", sceneFile, integratorName;
   int reps = 5, contactSteps = 40;
+  std::string contactTrace;
   double minTime = 0.2, maxPairs = 4.0e7;
   bool findRt = false, load = false;
   app.add_option("--sets", sets,
@@ -280,6 +294,9 @@ int main(int argc, char** argv) {
                  "(two spheres in soft-soft contact)");
   app.add_option("--contact-steps", contactSteps, "contact set: steps timed after the spheres touch")
       ->check(CLI::Range(1, 100000));
+  app.add_option("--contact-trace", contactTrace,
+                 "contact set: write each step of the first repetition to this CSV file (contacts, lookups, the "
+                 "stage's and the step's time)");
   app.add_option("--shapes", shapes, "paper set: comma-separated shapes (sphere, box); the real set is a sphere");
   app.add_option("--sizes", sizes, "Comma-separated grid sizes n (voxels)");
   app.add_option("--layouts", layouts, "Comma-separated: gradational, uniform, voxel");
@@ -327,6 +344,13 @@ int main(int argc, char** argv) {
       std::printf("# skipped %s %d %s: ~%.0f pairs > --max-pairs\n", shape.c_str(), n, layoutKindName(layout), pairs);
       return true;
     };
+    std::unique_ptr<std::FILE, int (*)(std::FILE*)> trace(nullptr, std::fclose);
+    if (!contactTrace.empty()) {
+      trace.reset(std::fopen(contactTrace.c_str(), "w"));
+      if (!trace) throw std::runtime_error("--contact-trace: cannot write '" + contactTrace + "'");
+      std::fprintf(trace.get(),
+                   "n,threads,step,contacts,warm,lookups,moved_lookups,rounds,rebuilds,take_backs,stage_us,step_us\n");
+    }
     printHeader();
     if (scene)
       for (int t : threadList) {
@@ -338,7 +362,7 @@ int main(int argc, char** argv) {
         if (set == "contact") {
           for (int t : threadList) {
             std::fprintf(stderr, "contact two spheres %d threads %d\n", n, t);
-            emit(measureContact(n, t, contactSteps, reps));
+            emit(measureContact(n, t, contactSteps, reps, trace.get()));
           }
           continue;
         }

@@ -949,6 +949,10 @@ void BodyContacts::detectPairs(const BodyContactState& s, BodyContactStats& stat
     for (uint32_t j = 0; j < count; ++j) one(j);
   }
   stats.candidates += count;
+  for (uint32_t j = 0; j < count; ++j) {
+    const PairJob& job = jobs_[lookedJob_[j]];
+    stats.movedLookups += isTouched_[bodies_[job.a].vertices[tracks_[job.a * B + job.b].vertices[looked_[j]]]];
+  }
   for (const PairJob& job : jobs_) {
     const size_t before = round_.size();
     if (job.a == job.b) {

@@ -252,6 +252,10 @@ struct BodyContactState {
 /// What one call found.
 struct BodyContactStats {
   size_t candidates = 0;  ///< Vertex lookups in the narrow phase (all rounds).
+  /// Of those, lookups of vertices that this stage's own corrections had moved (a contact's vertex
+  /// or face corner, pushed out by an earlier round): each must be looked up again, whatever the
+  /// bounds, since it ends a correction a skin away from the other body (docs/speed.md, "the floor").
+  size_t movedLookups = 0;
   size_t contacts = 0;    ///< Vertex-face contacts resolved.
   Real maxDepth = 0;      ///< [m] deepest vertex found, before correction.
   int rounds = 0;         ///< Detection rounds run.
