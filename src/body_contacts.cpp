@@ -805,10 +805,15 @@ bool BodyContacts::shiftCells(size_t a, size_t b, const Vec3* x, Real margin) {
   cellShiftSet_.clear();
   outsideShift_ = 0;
   const Real ea = roundShiftMax_[a];
+  // Each face once, though up to three of its corners moved (the marks are maxima: order-free).
+  if (shiftSeen_.size() < F.triangles.size()) shiftSeen_.assign(F.triangles.size(), 0), shiftStamp_ = 0;
+  if (++shiftStamp_ == 0) std::fill(shiftSeen_.begin(), shiftSeen_.end(), 0), shiftStamp_ = 1;
   for (uint32_t u : touched_) {
     if (bodyOf_[u] != b || !(roundShift_[u] > 0)) continue;
     const uint32_t s = F.surfaceIndex(u);
     for (uint32_t j = F.vertexTriStart[s]; j < F.vertexTriStart[s + 1]; ++j) {
+      if (shiftSeen_[F.vertexTris[j]] == shiftStamp_) continue;
+      shiftSeen_[F.vertexTris[j]] = shiftStamp_;
       const auto& t = F.triangles[F.vertexTris[j]];
       const Real e = std::max({roundShift_[t[0]], roundShift_[t[1]], roundShift_[t[2]]});
       const Vec3 grow = Vec3::Constant(e + ea + margin);

@@ -474,6 +474,8 @@ class BodyContacts {
   // 2 on; preparePair): per cell of its track's grid, the largest shift of a face that moved then
   // and may reach a point of the cell; a point outside the grid's box: outsideShift_.
   std::vector<Real> cellShift_;
+  std::vector<uint32_t> shiftSeen_;  ///< shiftCells(): per face of the body, the call that last marked it.
+  uint32_t shiftStamp_ = 0;
   std::vector<uint32_t> cellShiftSet_;
   Real outsideShift_ = 0;
   bool shiftCells(size_t a, size_t b, const Vec3* x, Real margin);
