@@ -954,16 +954,15 @@ void BodyContacts::detectPairs(const BodyContactState& s, BodyContactStats& stat
     for (uint32_t j = 0; j < count; ++j) one(j);
   }
   stats.candidates += count;
-  for (uint32_t j = 0; j < count; ++j) {
-    const PairJob& job = jobs_[lookedJob_[j]];
-    stats.movedLookups += isTouched_[bodies_[job.a].vertices[tracks_[job.a * B + job.b].vertices[looked_[j]]]];
-  }
   for (const PairJob& job : jobs_) {
     const size_t before = round_.size();
     if (job.a == job.b) {
       detectSelf(job.a, s, stats);
     } else {
+      const std::vector<uint32_t>& candidates = tracks_[job.a * B + job.b].vertices;
+      const ContactBody& A = bodies_[job.a];
       for (uint32_t j = job.begin; j < job.end; ++j) {
+        stats.movedLookups += isTouched_[A.vertices[candidates[looked_[j]]]];
         if (slotState_[j] != 2) continue;
         round_.push_back(slot_[j]);
         stats.maxDepth = std::max(stats.maxDepth, slot_[j].depth);
