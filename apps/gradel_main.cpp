@@ -214,8 +214,9 @@ std::string likelyCause(const gradel::Scene& scene, double dt) {
     std::snprintf(
         buf, sizeof buf,
         "the likely cause is simulation.dt_fraction = %.3g (dt = %.3g s), too large: try a smaller dt_fraction "
-        "(stable up to 0.3; the default is 0.1)",
-        s.dtFraction, dt);
+        "(with dt_period \"%s\" the default is %.2g and the largest accepted %.2g)",
+        s.dtFraction > 0 ? s.dtFraction : gradel::defaultDtFraction(s.dtPeriod), dt, gradel::periodRuleName(s.dtPeriod),
+        gradel::defaultDtFraction(s.dtPeriod), gradel::maxDtFraction(s.dtPeriod));
   }
   return buf;
 }
@@ -355,6 +356,8 @@ int runScene(const RunOptions& o) {
   j["scene"] = scene.name;
   j["steps"] = std::llround(world.time() / dt);
   j["dt"] = dt;
+  j["integrator"] = gradel::integratorKindName(world.settings().integrator);
+  if (!world.integratorChoice().empty()) j["integrator_choice"] = world.integratorChoice();  // why auto picked it
   j["simulated_seconds"] = world.time();
   j["frames"] = pvd.size() / built.numBodies();
   j["bodies"] = built.numBodies();

@@ -29,6 +29,7 @@ set(GRADEL_CORE_SOURCES
   src/settings_check.cpp
   src/shapes.cpp
   src/size_limits.cpp
+  src/stability.cpp
   src/surface.cpp
   src/thread_team.cpp
   src/volume.cpp
@@ -116,4 +117,5 @@ set(GRADEL_TEST_SOURCES
   tests/test_scene_io.cpp
   tests/test_scenes.cpp
   tests/test_settings_check.cpp
+  tests/test_stability.cpp
   tests/test_surface.cpp)

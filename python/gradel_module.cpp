@@ -484,6 +484,13 @@ PYBIND11_MODULE(gradel, m) {
           "max_steps steps (default 1e9); Ctrl-C raises KeyboardInterrupt between steps.")
       .def_property_readonly("time", [](Simulation& s) { return s.world().time(); })
       .def_property_readonly("dt", [](Simulation& s) { return s.world().dt(); })
+      .def_property_readonly(
+          "integrator", [](Simulation& s) { return std::string(integratorKindName(s.world().settings().integrator)); },
+          "The integrator that runs (what \"auto\" resolved to).")
+      .def_property_readonly(
+          "integrator_choice", [](Simulation& s) { return s.world().integratorChoice(); },
+          "Why \"auto\" picked the integrator: both integrators' estimated wall seconds per simulated second "
+          "(empty when the integrator was named).")
       .def_property_readonly("num_vertices", [](Simulation& s) { return s.world().model().numVertices(); })
       .def_property_readonly("num_elements", [](Simulation& s) { return s.world().model().numElements(); })
       .def_property(

@@ -27,7 +27,8 @@ void positive(const char* field, Real x) {
 
 void validate(const SimulationSettings& s) {
   if (!(s.dt >= 0) || !std::isfinite(s.dt)) fail("dt", "must be 0 (auto) or a finite number of seconds > 0", s.dt);
-  if (!(s.dtFraction > 0 && s.dtFraction <= 1)) fail("dt_fraction", "must be in (0, 1]", s.dtFraction);
+  if (!(s.dtFraction >= 0 && s.dtFraction <= 1))
+    fail("dt_fraction", "must be in [0, 1] (0: the dt_period rule's default)", s.dtFraction);
   nonNegative("damping", s.damping);
   if (!s.gravity.allFinite()) throw InputError("gravity: must be finite");
   if (s.threads < 1 || s.threads > kMaxThreads)

@@ -17,6 +17,7 @@
 #include "gradel/integration.h"
 #include "gradel/rotation_fit.h"
 #include "gradel/settings_check.h"
+#include "gradel/stability.h"
 #include "huge_pages.h"
 #include "simd.h"
 #include "thread_team.h"
@@ -74,12 +75,19 @@ const char* integratorKindName(IntegratorKind k) {
 }
 
 PeriodRule parsePeriodRule(const std::string& name) {
+  if (name == "operator") return PeriodRule::Operator;
   if (name == "vertex") return PeriodRule::Vertex;
   if (name == "element") return PeriodRule::Element;
-  throw InputError("unknown period rule '" + name + "' (expected vertex or element)");
+  throw InputError("unknown period rule '" + name + "' (expected operator, vertex or element)");
 }
 
-const char* periodRuleName(PeriodRule r) { return r == PeriodRule::Element ? "element" : "vertex"; }
+const char* periodRuleName(PeriodRule r) {
+  if (r == PeriodRule::Operator) return "operator";
+  return r == PeriodRule::Element ? "element" : "vertex";
+}
+
+Real defaultDtFraction(PeriodRule r) { return r == PeriodRule::Operator ? 0.2 : 0.1; }
+Real maxDtFraction(PeriodRule r) { return r == PeriodRule::Element ? 0.1 : 0.3; }
 
 namespace {
 // A model made by hand without RestModel::bodies is one body.
@@ -96,6 +104,7 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
              std::vector<ManipulatorSettings> manipulators)
     : model_(withBodies(std::move(model))), stageRest_(std::make_unique<const ElementStageRest>(*model_)), sim_(sim),
       domain_(domain), scratch_(std::make_unique<StepScratch>()) {
+  if (sim_.dtFraction == 0) sim_.dtFraction = defaultDtFraction(sim_.dtPeriod);
   validate(sim_);
   validate(domain_, model_->dim);
   if (model_->dim == 2) sim_.gravity.z() = 0;  // a 2D body moves in its plane: the one place gravity is projected
@@ -108,7 +117,12 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
     const Real c = rm.vertexDamping(i, sim_.damping);
     uniform = uniform && c == uniformDamping_, minDamping = std::min(minDamping, c);
   }
-  const Real period = sim_.dtPeriod == PeriodRule::Element ? model_->smallestPeriod : model_->smallestVertexPeriod;
+  Real period = sim_.dtPeriod == PeriodRule::Element ? model_->smallestPeriod : model_->smallestVertexPeriod;
+  if (sim_.dtPeriod == PeriodRule::Operator) {
+    // The body's own fastest vibration (stability.h); a model without elements keeps the vertex bound.
+    frequency_ = highestFrequency(*model_);
+    if (frequency_.omega > 0) period = 2 * M_PI / frequency_.omega;
+  }
   // The implicit integrator is stable at any dt: "auto" is one display frame.
   if (sim_.integrator == IntegratorKind::Auto) chooseIntegrator(period);
   const bool frameStep = sim_.integrator == IntegratorKind::Implicit || sim_.integrator == IntegratorKind::LargeStep;
@@ -147,21 +161,31 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   for (ManipulatorSettings& s : manipulators) addManipulator(std::move(s));
 }
 
-// "auto": explicit (symplectic) while its dt = auto keeps real time on a busy machine
-// (kAutoExplicitSecondsPerVertexStep, integrator.h), the large step otherwise.
+IntegratorCost integratorCost(size_t vertices, double explicitDt, double largeDt) {
+  IntegratorCost c;
+  c.explicitWallPerSecond = double(vertices) * kAutoExplicitSecondsPerVertexStep / explicitDt;
+  c.largeStepWallPerSecond = double(vertices) * kAutoLargeStepSecondsPerVertexStep / largeDt;
+  c.pick = c.largeStepWallPerSecond < c.explicitWallPerSecond ? IntegratorKind::LargeStep
+                                                              : IntegratorKind::SymplecticEuler;
+  return c;
+}
+
+// "auto": the integrator that costs less wall time per simulated second (integratorCost): the
+// explicit step at its dt = auto against the large step at the scene's dt (or one 1/60 s frame).
 void World::chooseIntegrator(Real period) {
-  const Real explicitDt = sim_.dtFraction * period;
-  const double wallPerSecond = double(model_->numVertices()) * kAutoExplicitSecondsPerVertexStep / explicitDt;
-  char buf[256];
-  if (wallPerSecond <= 1) {
-    sim_.integrator = IntegratorKind::SymplecticEuler;
-    std::snprintf(buf, sizeof buf, "symplectic: its dt %.3g s keeps real time (~%.2g s per simulated s)", explicitDt,
-                  wallPerSecond);
-  } else {
-    sim_.integrator = IntegratorKind::LargeStep;
-    std::snprintf(buf, sizeof buf, "large_step: symplectic's dt %.3g s would need ~%.2g s per simulated s", explicitDt,
-                  wallPerSecond);
-  }
+  const Real explicitDt = sim_.dtFraction * period, largeDt = sim_.dt > 0 ? sim_.dt : 1.0 / 60.0;
+  const IntegratorCost c = integratorCost(model_->numVertices(), explicitDt, largeDt);
+  sim_.integrator = c.pick;
+  // A scene's dt is what the large step would take; the explicit step keeps its stable one.
+  if (c.pick == IntegratorKind::SymplecticEuler && sim_.dt > explicitDt) sim_.dt = 0;
+  char buf[320];
+  const bool explicitPick = c.pick == IntegratorKind::SymplecticEuler;
+  std::snprintf(buf, sizeof buf,
+                "%s: ~%.2g s per simulated s (symplectic at dt %.3g s: ~%.2g s; large_step at %.3g s: ~%.2g s; "
+                "2 threads, measured cost model)",
+                explicitPick ? "symplectic" : "large_step",
+                explicitPick ? c.explicitWallPerSecond : c.largeStepWallPerSecond, explicitDt,
+                c.explicitWallPerSecond, largeDt, c.largeStepWallPerSecond);
   integratorChoice_ = buf;
 }
 

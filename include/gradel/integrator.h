@@ -17,23 +17,38 @@ namespace gradel {
 ///   stable at any dt (dt = auto means 1/60 s here), dissipative.
 /// LargeStep: implicit midpoint by Newton-PCG, backward Euler in steps near contacts (large_step.h);
 ///   stable at any dt (dt = auto means 1/60 s), keeps a mode's amplitude and a spin's momentum.
-/// Auto: chosen when the World is built: symplectic while its dt = auto keeps real time (estimated
-///   from the vertex count and kAutoExplicitSecondsPerVertexStep below),
-///   large_step when it cannot (World::integratorChoice() says which and why).
+/// Auto: chosen when the World is built: whichever of symplectic (at its dt = auto) and large_step
+///   (at the scene's dt, or 1/60 s) costs less wall time per simulated second by the measured
+///   cost model below (integratorCost); World::integratorChoice() says which and why.
 enum class IntegratorKind { SymplecticEuler, ForwardEuler, Implicit, LargeStep, Auto };
 /// "symplectic" | "forward_euler" | "implicit" | "large_step" | "auto"
 IntegratorKind parseIntegratorKind(const std::string& name);
 const char* integratorKindName(IntegratorKind k);
 
 /// What "the smallest period" means for dt = auto.
+/// Operator (default): 2 pi / omega_max, the fastest vibration of the assembled body at rest
+///   (stability.h: Lanczos on M^-1 K, hanging vertices and regions included). Symplectic Euler is
+///   stable while omega_max dt < 2, i.e. dt_fraction < 1/pi = 0.318; the default 0.2 keeps
+///   omega_max dt = 1.26, 2-2.3x the vertex rule's steps. Chosen by measurement (docs/scenes.md): at
+///   0.25 two 8-voxel balls meeting at 1 m/s leave a vertex inside the other ball (body contacts
+///   assume smaller moves per step); at 0.2 every shipped scene, the validation suite and the
+///   body-contact tests hold.
+/// Vertex: the period of the stiffest vertex with all its elements (a bound within ~4 % of the
+///   operator's on uniform bodies); dt = T/10 keeps omega dt ~ 0.6 for every mode (the default
+///   before the operator rule: 2.5x smaller steps).
 /// Element: the paper's rule (sec. 3.4), the period of the smallest element on its own. A vertex
 ///   shared by n elements vibrates ~sqrt(n) times faster, so dt = T/10 lands at omega dt ~ 1.8,
 ///   just inside symplectic Euler's stability limit of 2: stable but with large energy swings.
-/// Vertex (default): the period of the stiffest vertex with all its elements; dt = T/10 then
-///   keeps omega dt ~ 0.6 for every mode.
-enum class PeriodRule { Vertex, Element };
-PeriodRule parsePeriodRule(const std::string& name);  ///< "vertex" | "element"
+enum class PeriodRule { Operator, Vertex, Element };
+PeriodRule parsePeriodRule(const std::string& name);  ///< "operator" | "vertex" | "element"
 const char* periodRuleName(PeriodRule r);
+/// dt_fraction when none is given (SimulationSettings::dtFraction = 0): operator 0.2, vertex and element the
+/// paper's 0.1.
+Real defaultDtFraction(PeriodRule r);
+/// The largest dt_fraction accepted with a rule: where symplectic Euler is still stable with a
+/// margin (operator 0.3, against the limit 1/pi; vertex 0.3, measured to diverge from 0.33 on the
+/// shipped scenes; element 0.1, measured to diverge from 0.15 on paper-table1).
+Real maxDtFraction(PeriodRule r);
 
 /// One worker thread per hardware thread (at least 1, at most 1024): the default, since results
 /// are identical at any count and the step's thread team never waits by spinning for long.
@@ -44,19 +59,28 @@ inline int hardwareThreads() { return int(std::clamp(std::thread::hardware_concu
 /// integrator and by the run budget to estimate a run's time.
 inline constexpr double kExplicitSecondsPerVertexStep = 30e-9;
 inline constexpr double kImplicitSecondsPerVertexStep = 4e-6;
-/// What `auto` assumes an explicit vertex-step costs [s] on one thread of a machine that is doing
-/// other work too (measured on the real scenes of gradel-bench beside other builds: 85-150 ns per
-/// vertex-step on the 2-core VM, docs/speed.md "Which integrator auto picks"; 11-30 ns when quiet).
-/// `auto` counts no thread speed-up (under load the governor often runs one member): it keeps the
-/// explicit step only where that runs in real time on a busy machine, since a wrong explicit pick
-/// runs far below real time while a wrong large-step pick still runs at frame rate.
-inline constexpr double kAutoExplicitSecondsPerVertexStep = 100e-9;
+/// The cost model of `auto`: wall seconds per vertex and step of each integrator on 2 threads of
+/// the project's 2-core VM, on the real-scene rows of gradel-bench (gravity, walls, a pressing
+/// manipulator, output frames; bench/results/2026-11-26-vm-auto.csv, docs/speed.md "Which
+/// integrator auto picks"). Only their ratio decides; the absolute figures are what the viewer,
+/// `gradel run` and Python report as the expected speed.
+inline constexpr double kAutoExplicitSecondsPerVertexStep = 25e-9;   ///< [s] symplectic, contacts included.
+inline constexpr double kAutoLargeStepSecondsPerVertexStep = 12e-6;  ///< [s] large step at 2 substeps.
+
+/// What `auto` compares: wall seconds per simulated second of each integrator for a body of
+/// `vertices` vertices, the explicit step at `explicitDt` and the large step at `largeDt`.
+struct IntegratorCost {
+  IntegratorKind pick = IntegratorKind::SymplecticEuler;  ///< The cheaper one (symplectic on a tie).
+  double explicitWallPerSecond = 0;   ///< [s / s] symplectic.
+  double largeStepWallPerSecond = 0;  ///< [s / s] large step.
+};
+IntegratorCost integratorCost(size_t vertices, double explicitDt, double largeDt);
 
 struct SimulationSettings {
   IntegratorKind integrator = IntegratorKind::SymplecticEuler;
-  Real dt = 0;                               ///< [s] time step; 0 = auto: dtFraction of the smallest element's period.
-  Real dtFraction = 0.1;                     ///< [-] the paper's 1/10 (sec. 3.4), used when dt is auto.
-  PeriodRule dtPeriod = PeriodRule::Vertex;  ///< Which smallest period dt = auto refers to.
+  Real dt = 0;  ///< [s] time step; 0 = auto: dtFraction of the smallest period (dtPeriod).
+  Real dtFraction = 0;  ///< [-] used when dt is auto, up to maxDtFraction(dtPeriod); 0 = defaultDtFraction(dtPeriod).
+  PeriodRule dtPeriod = PeriodRule::Operator;  ///< Which smallest period dt = auto refers to.
   Real damping = 0.0;         ///< [1/s] velocity damping rate c: v <- v / (1 + c dt) every step (never adds energy).
   Vec3 gravity{0, -9.81, 0};  ///< [m/s^2]
   int threads = hardwareThreads();  ///< Worker threads (results are identical at any count).

@@ -18,6 +18,7 @@
 #include "gradel/model.h"
 #include "gradel/pins.h"
 #include "gradel/projective.h"
+#include "gradel/stability.h"
 
 namespace gradel {
 
@@ -94,6 +95,9 @@ class World {
   const SimulationSettings& settings() const { return sim_; }
   /// Which integrator "auto" chose and why (empty when the integrator was given).
   const std::string& integratorChoice() const { return integratorChoice_; }
+  /// The body's fastest vibration at rest (stability.h), measured when dt_period is "operator"
+  /// (all zero otherwise): dt = dt_fraction 2 pi / omega.
+  const FrequencyEstimate& stabilityEstimate() const { return frequency_; }
   const DomainSettings& domain() const { return domain_; }
 
   std::vector<Manipulator>& manipulators() { return manipulators_; }
@@ -197,6 +201,7 @@ class World {
   Real uniformDamping_ = 0;             ///< [1/s] the rate of every vertex when vertexDampFactor_ is empty.
   std::vector<Real> vertexDampFactor_;  ///< Per vertex: 1 / (1 + c_i dt); empty: all share uniformDamping_.
   std::string integratorChoice_;
+  FrequencyEstimate frequency_;  ///< World(): the operator rule's estimate (stability.h).
   std::vector<PinSettings> pins_;
   PinSet pinSet_;
   std::unique_ptr<ProjectiveSolver>

@@ -122,6 +122,12 @@ class Simulation:
     @property
     def dt(self) -> float: ...
     @property
+    def integrator(self) -> str:
+        """The integrator that runs (what "auto" resolved to)."""
+    @property
+    def integrator_choice(self) -> str:
+        """Why "auto" picked the integrator (empty when the integrator was named)."""
+    @property
     def num_vertices(self) -> int: ...
     @property
     def num_elements(self) -> int: ...

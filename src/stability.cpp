@@ -1,0 +1,115 @@
+#include "gradel/stability.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+#include "gradel/element.h"
+#include "gradel/element_stiffness.h"
+
+namespace gradel {
+
+namespace {
+
+// y = M^-1/2 K M^-1/2 x over every element (frames at rest, fixed), z zeroed in 2D.
+struct RestOperator {
+  const RestModel& m;
+  std::vector<StiffnessFrame> frames;
+  std::vector<Real> invSqrtMass;
+  mutable std::vector<Vec3> scaled, elementOut;
+
+  explicit RestOperator(const RestModel& model) : m(model) {
+    const size_t E = m.numElements(), V = m.numVertices();
+    frames.resize(E);
+    size_t largest = 0;
+    for (size_t e = 0; e < E; ++e) {
+      const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
+      const Mat3 A = elementCovariance(m.restPositions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n));
+      frames[e] = elementStiffnessFrame(m.dim, A, Quat::Identity(), &m.restOffsets[b], int(n));
+      largest = std::max<size_t>(largest, n);
+    }
+    invSqrtMass.resize(V);
+    for (size_t i = 0; i < V; ++i) invSqrtMass[i] = 1 / std::sqrt(m.mass[i]);
+    scaled.resize(V), elementOut.resize(largest);
+  }
+
+  void apply(const std::vector<Vec3>& x, std::vector<Vec3>& y) const {
+    const size_t V = m.numVertices();
+    for (size_t i = 0; i < V; ++i) scaled[i] = invSqrtMass[i] * x[i];
+    std::fill(y.begin(), y.end(), Vec3::Zero());
+    for (size_t e = 0; e < m.numElements(); ++e) {
+      const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
+      elementStiffnessProduct(frames[e], scaled.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[e],
+                              elementOut.data());
+      for (uint32_t k = 0; k < n; ++k) y[m.elemVerts[b + k]] += elementOut[k];
+    }
+    for (size_t i = 0; i < V; ++i) {
+      y[i] *= invSqrtMass[i];
+      if (m.dim == 2) y[i].z() = 0;
+    }
+  }
+};
+
+double dot(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  double s = 0;
+  for (size_t i = 0; i < a.size(); ++i) s += a[i].dot(b[i]);
+  return s;
+}
+
+}  // namespace
+
+FrequencyEstimate highestFrequency(const RestModel& m, int iterations) {
+  FrequencyEstimate est;
+  const size_t V = m.numVertices();
+  if (m.numElements() == 0 || V == 0) return est;
+
+  // The upper bound: every element's K_e <= k_e I, so K <= diag(sum of k_e at each vertex).
+  std::vector<Real> kSum(V, 0.0);
+  for (size_t e = 0; e < m.numElements(); ++e)
+    for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) kSum[m.elemVerts[p]] += m.stiffness[e];
+  double bound = 0;
+  for (size_t i = 0; i < V; ++i) bound = std::max(bound, double(kSum[i] / m.mass[i]));
+  est.gershgorin = std::sqrt(bound);
+
+  const RestOperator op(m);
+  // A fixed start (a 64-bit LCG): the same estimate on every run and thread count.
+  std::vector<Vec3> q(V), qPrev(V, Vec3::Zero()), w(V);
+  uint64_t s = 0x9E3779B97F4A7C15ull;
+  auto uniform = [&] {
+    s = s * 6364136223846793005ull + 1442695040888963407ull;
+    return double(s >> 11) * 0x1.0p-53 - 0.5;
+  };
+  for (Vec3& v : q) v = Vec3(uniform(), uniform(), m.dim == 2 ? 0.0 : uniform());
+  const double n0 = std::sqrt(dot(q, q));
+  for (Vec3& v : q) v /= n0;
+
+  std::vector<double> alpha, beta;
+  double betaPrev = 0;
+  for (int j = 0; j < iterations; ++j) {
+    op.apply(q, w);
+    const double a = dot(q, w);
+    for (size_t i = 0; i < V; ++i) w[i] -= a * q[i] + betaPrev * qPrev[i];
+    const double b = std::sqrt(dot(w, w));
+    alpha.push_back(a), beta.push_back(b);
+    est.iterations = j + 1;
+    if (!(b > 1e-12 * std::max(std::abs(a), 1e-300))) break;  // the Krylov space closed: theta is exact
+    qPrev.swap(q);
+    for (size_t i = 0; i < V; ++i) q[i] = w[i] / b;
+    betaPrev = b;
+  }
+  const int k = int(alpha.size());
+  Eigen::MatrixXd T = Eigen::MatrixXd::Zero(k, k);
+  for (int i = 0; i < k; ++i) {
+    T(i, i) = alpha[i];
+    if (i + 1 < k) T(i, i + 1) = T(i + 1, i) = beta[i];
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(T);
+  const double theta = std::max(0.0, eig.eigenvalues()(k - 1));
+  const double residual = std::abs(beta[k - 1] * eig.eigenvectors()(k - 1, k - 1));
+  est.ritz = std::sqrt(theta);
+  est.omega = std::sqrt(std::min(theta + residual, bound));
+  return est;
+}
+
+}  // namespace gradel
