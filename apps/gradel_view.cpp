@@ -49,13 +49,16 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 // The default scene: the paper's 12^3 sphere on the floor and one free sphere manipulator
-// beside it, ready to be grabbed.
+// beside it, ready to be grabbed. Symplectic Euler, not "auto": the viewer does not let a cost
+// estimate switch its sphere to the large step (at sizes 32 and up "auto" took the large step
+// at 0.002-0.07x real time where the explicit step runs several times faster; issue 25). The
+// integrator box offers "auto" and the others.
 constexpr const char* kPlayScene = R"({
   "name": "play",
   "dim": 3,
   "body": { "shape": "sphere", "size": 12, "voxel_size": 0.01, "layout": "gradational", "position": [0, 0, 0] },
   "material": { "scaling": "consistent", "youngs_modulus": 1e5, "density": 1000 },
-  "simulation": { "integrator": "auto", "dt": "auto", "damping": 1.0, "gravity": [0, -9.81, 0] },
+  "simulation": { "integrator": "symplectic", "dt": "auto", "damping": 1.0, "gravity": [0, -9.81, 0] },
   "domain": { "min": [-0.3, 0.0, -0.3], "max": [0.4, 0.5, 0.4], "restitution": 0.3, "friction": 0.5 },
   "manipulators": [ { "type": "sphere", "radius": 0.03, "restitution": 0.5, "friction": 0.5,
                       "path": [ { "t": 0, "position": [-0.1, 0.06, 0.06] } ] } ]
@@ -86,7 +89,7 @@ struct Options {
 // Frame times [s] of a timing run (--run-for): their median and maximum, and the longest frame
 // while a rebuild ran.
 struct FrameTimes {
-  std::vector<double> all, work;  // frame to frame; a frame's own work (events, panel, drawing), cap excluded
+  std::vector<double> all, work, worldHeld;  // frame to frame; a frame's own work (events, panel, drawing), cap excluded
   double longestDuringRebuild = 0;
   static double median(std::vector<double> v) {
     if (v.empty()) return 0;
@@ -109,6 +112,7 @@ struct Figures {
   std::string integrator, choice;
   size_t elements = 0, vertices = 0, pairs = 0;
   std::vector<BodyRow> bodies;
+  std::vector<std::pair<Vec3, Vec3>> bounds;  // per body: lowest and highest vertex
 };
 
 // A world being built on a background thread, and what the panel asked for.
@@ -129,11 +133,18 @@ class Viewer {
  public:
   /// `threaded`: the simulation steps on its own thread paced to real time; otherwise each
   /// frame advances a fixed 1/60 s (screenshots: the picture does not depend on the machine).
-  Viewer(GLFWwindow* window, Scene scene, bool threaded, Clock::time_point start)
+  /// `bodySize` > 0: body 0 at that size, as the panel's slider sets it.
+  Viewer(GLFWwindow* window, Scene scene, bool threaded, Clock::time_point start, int bodySize)
       : window_(window), start_(start) {
     BuiltScene built = buildScene(scene);
     BodyView view = makeBodyView(built);
     install(std::move(scene), std::move(built), std::move(view), true, true);
+    if (bodySize > 0) {
+      resizeBody(0, bodySize);
+      built = buildScene(scene_);
+      view = makeBodyView(built);
+      install(scene_, std::move(built), std::move(view), false, true);
+    }
     if (threaded) stepper_ = std::thread([this] { stepLoop(); });
   }
 
@@ -145,20 +156,49 @@ class Viewer {
 
   double wallNow() const { return std::chrono::duration<double>(Clock::now() - start_).count(); }
 
-  // The world's lock, for the drawing thread: the stepping thread lets it in at its next batch.
-  std::unique_lock<std::mutex> lockWorld() {
+  // The viewer's state (everything but the world): held briefly by the stepping thread.
+  std::unique_lock<std::mutex> lockState() { return std::unique_lock<std::mutex>(stateMutex_); }
+
+  // The world, for the drawing thread: the stepping thread lets it in at its next batch (within
+  // its 4 ms budget); while one long step runs (the large step on a large body) this gives up
+  // after kWorldWait and the frame shows the last picture instead of waiting.
+  std::unique_lock<std::timed_mutex> tryWorld() {
+    static constexpr std::chrono::milliseconds kWorldWait{8};
     ++drawWaiting_;
-    std::unique_lock<std::mutex> lock(mutex_);
+    std::unique_lock<std::timed_mutex> lock(worldMutex_, std::defer_lock);
+    (void)lock.try_lock_for(kWorldWait);
     --drawWaiting_;
     return lock;
   }
 
-  // One frame's work on the world, under its lock: a finished rebuild is swapped in, the figures
-  // and the draw list are taken, the panel runs. Drawing happens after, without the lock.
-  DrawList frame(int width, int height) {
+  // One frame's work, under the state lock: a finished rebuild is swapped in; when the world is
+  // free the figures and the draw list are taken from it (else the last ones are shown); the
+  // panel runs. Drawing happens after, without the locks.
+  void frame(int width, int height) {
     const double now = wallNow();
-    std::unique_lock<std::mutex> lock = lockWorld();
+    std::unique_lock<std::mutex> state = lockState();
     finishRebuild(now);
+    if (diverged_) {
+      diverged_ = false;
+      status_ = "simulation diverged; reset";
+      requestRebuild(builtScene_, false, false, "reset");
+    }
+    std::unique_lock<std::timed_mutex> world = tryWorld();
+    if (world.owns_lock()) {
+      advanceByFrame();
+      refresh(now, width, height);
+      world.unlock();
+      worldHeldSeconds_ = wallNow() - now;
+    } else {
+      worldHeldSeconds_ = 0;
+    }
+    rates_.add(now, simTime_, steps_);  // every frame, also when the world was busy
+    panel(now);
+  }
+
+  // Without the stepping thread (screenshots) a fixed 1/60 s of simulated time a frame; the
+  // Step button's single step (both locks held).
+  void advanceByFrame() {
     World& w = *built_.world;
     if (!stepper_.joinable() && !paused_ && !rebuild_) {  // fixed 1/60 s of simulated time a frame
       const long n = std::max(1L, std::lround(kFrameSeconds * speed_ / w.dt()));
@@ -170,11 +210,11 @@ class Viewer {
       ++steps_;
       stepOnce_ = false;
     }
-    if (diverged_) {
-      diverged_ = false;
-      status_ = "simulation diverged; reset";
-      requestRebuild(builtScene_, false, false, "reset");
-    }
+  }
+
+  // The figures and the draw list from the world (both locks held).
+  void refresh(double now, int width, int height) {
+    World& w = *built_.world;
     figures_.time = w.time(), figures_.dt = w.dt();
     figures_.integrator = integratorKindName(w.settings().integrator);
     figures_.choice = w.integratorChoice();
@@ -182,24 +222,30 @@ class Viewer {
     figures_.pairs = w.model().numPairs();
     const std::vector<Real> es = w.elementStress();
     figures_.maxStress = es.empty() ? 0.0 : *std::max_element(es.begin(), es.end());
-    if (built_.numBodies() > 1) figures_.bodies = bodyTable(built_);
-    rates_.add(now, w.time(), steps_);
-    DrawList list = buildDrawList(body_, w, view_, width, height);
+    figures_.bodies = built_.numBodies() > 1 ? bodyTable(built_) : std::vector<BodyRow>{};
+    figures_.bounds.clear();
+    for (size_t b = 0; b < built_.numBodies(); ++b) {
+      const BodyRange& range = built_.range(b);
+      const std::vector<Vec3>& x = w.state().positions;
+      Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
+      if (range.vertexEnd > range.vertexBegin) lo = hi = x[range.vertexBegin];
+      for (uint32_t i = range.vertexBegin; i < range.vertexEnd; ++i) lo = lo.cwiseMin(x[i]), hi = hi.cwiseMax(x[i]);
+      figures_.bounds.push_back({lo, hi});
+    }
+    simTime_ = w.time();
+    list_ = buildDrawList(body_, w, view_, width, height);
     w.restartForceAverage();  // the force arrows: averaged over the steps between two frames
-    panel(now);
-    return list;
   }
 
-  void draw(DrawList list, int width, int height, Renderer& renderer) {
-    renderer.draw(list, camera_, width, height);
-  }
+  // Draws the last draw list (no lock: only the drawing thread touches it and the camera).
+  void draw(int width, int height, Renderer& renderer) { renderer.draw(list_, camera_, width, height); }
 
   // ---- mouse (GLFW callbacks on the drawing thread) ----
   void mouseButton(int button, int action, int mods) {
     if (ImGui::GetIO().WantCaptureMouse && action == GLFW_PRESS) return;
     double x, y;
     glfwGetCursorPos(window_, &x, &y);
-    std::unique_lock<std::mutex> lock = lockWorld();
+    std::unique_lock<std::mutex> state = lockState();
     if (action == GLFW_RELEASE) {
       drag_.reset();
       mode_ = Mode::None;
@@ -210,7 +256,11 @@ class Viewer {
     if (button == GLFW_MOUSE_BUTTON_LEFT) {
       int width, height;
       glfwGetWindowSize(window_, &width, &height);
-      if (const std::optional<size_t> m = pickManipulator(camera_, *built_.world, x, y, width, height)) {
+      // Picking needs the world; during one long step the press orbits instead.
+      std::unique_lock<std::timed_mutex> world = tryWorld();
+      const std::optional<size_t> m =
+          world.owns_lock() && !rebuild_ ? pickManipulator(camera_, *built_.world, x, y, width, height) : std::nullopt;
+      if (m) {
         drag_ = grabManipulator(camera_, *built_.world, *m, x, y, width, height);
         mode_ = Mode::Drag;
       } else {
@@ -222,7 +272,7 @@ class Viewer {
   }
 
   void cursor(double x, double y) {
-    std::unique_lock<std::mutex> lock = lockWorld();
+    std::unique_lock<std::mutex> state = lockState();
     const double dx = x - lastX_, dy = y - lastY_;
     lastX_ = x, lastY_ = y;
     int width, height;
@@ -237,7 +287,7 @@ class Viewer {
 
   void scroll(double dy) {
     if (ImGui::GetIO().WantCaptureMouse) return;
-    std::unique_lock<std::mutex> lock = lockWorld();
+    std::unique_lock<std::mutex> state = lockState();
     if (mode_ == Mode::Drag && drag_ && !camera_.flat) {
       int width, height;
       glfwGetWindowSize(window_, &width, &height);
@@ -247,30 +297,36 @@ class Viewer {
     camera_.zoom(dy);
   }
 
-  // ---- for main()'s timing runs and screenshots (call with the lock: lockWorld()) ----
-  World& world() { return *built_.world; }
+  // ---- for main()'s timing runs and screenshots (call with lockState()) ----
+  const Figures& figures() const { return figures_; }
   long totalSteps() const { return steps_; }
+  /// [s] how long the last frame held the world (figures + draw list); 0 when it was busy.
+  double worldHeldSeconds() const { return worldHeldSeconds_; }
   const RateWindow& rates() const { return rates_; }
   bool rebuilding() const { return rebuild_ != nullptr; }
   double lastRebuildSeconds() const { return lastRebuildSeconds_; }
   const ViewOptions& view() const { return view_; }
   void setView(const ViewOptions& v) { view_ = v; }
-  /// Body 0's size as the panel's slider sets it (a preset shape of the same physical extent).
-  void setBodySize(int size, bool inBackground) {
-    BodySettings& body = scene_.bodyAt(0);
-    BodyEdit& edit = edits_.at(0);
-    edit.sizeVoxels = sizeDraft_ = std::clamp(size, kMinBodySize, kMaxBodySize);
-    body.shape = presetShape(kShapes[edit.shapeIndex], edit.sizeVoxels, scene_.dim, edit.extent / edit.sizeVoxels);
-    body.source = nullptr;
-    if (inBackground) return requestRebuild(scene_, false, false, "size " + std::to_string(edit.sizeVoxels));
-    BuiltScene built = buildScene(scene_);
-    BodyView view = makeBodyView(built);
-    install(scene_, std::move(built), std::move(view), false, true);
+  /// Body 0's size as the panel's slider sets it, rebuilt in the background.
+  void setBodySize(int size) {
+    resizeBody(0, size);
+    requestRebuild(scene_, false, false, "size " + std::to_string(edits_.at(0).sizeVoxels));
   }
 
  private:
   enum class Mode { None, Orbit, Pan, Drag };
   static constexpr const char* kShapes[] = {"sphere", "box", "cylinder"};
+
+  // Body b of scene_ becomes a preset shape (its panel choice) of `size` voxels and the same
+  // physical extent.
+  void resizeBody(size_t b, int size) {
+    BodySettings& body = scene_.bodyAt(b);
+    BodyEdit& edit = edits_.at(b);
+    edit.sizeVoxels = std::clamp(size, kMinBodySize, kMaxBodySize);
+    if (int(b) == editBody_) sizeDraft_ = edit.sizeVoxels;
+    body.shape = presetShape(kShapes[edit.shapeIndex], edit.sizeVoxels, scene_.dim, edit.extent / edit.sizeVoxels);
+    body.source = nullptr;
+  }
 
   static bool finite(const World& w) {
     for (const Vec3& p : w.state().positions)
@@ -279,6 +335,8 @@ class Viewer {
   }
 
   // ---- stepping (its own thread) ----
+  // Each batch: what to do, from the state (brief); the steps, holding only the world; the
+  // result, into the state (brief). Never both locks at once.
   void stepLoop() {
     using namespace std::chrono_literals;
     while (!quit_) {
@@ -286,34 +344,46 @@ class Viewer {
         std::this_thread::sleep_for(50us);
         continue;
       }
-      std::unique_lock<std::mutex> lock(mutex_);
-      const double now = wallNow();
-      if (paused_ || rebuild_ || diverged_) {
-        pacer_.restart(now);  // a pause is not owed
-        lock.unlock();
-        std::this_thread::sleep_for(2ms);
-        continue;
+      long n = 0, generation = 0;
+      double wait = 2e-3;
+      std::optional<ManipulatorDrag> drag;
+      {
+        std::unique_lock<std::mutex> state = lockState();
+        const double now = wallNow();
+        if (paused_ || rebuild_ || diverged_) {
+          pacer_.restart(now);  // a pause is not owed
+        } else {
+          if (pacer_.speed() != double(speed_)) pacer_.setSpeed(speed_, now);
+          n = pacer_.due(now);
+          wait = pacer_.waitSeconds(now);
+          behind_ = pacer_.behind(now);
+        }
+        drag = drag_, generation = generation_;
       }
-      if (pacer_.speed() != double(speed_)) pacer_.setSpeed(speed_, now);
-      const long n = pacer_.due(now);
       if (n == 0) {
-        const double wait = pacer_.waitSeconds(now);
-        lock.unlock();
         std::this_thread::sleep_for(std::chrono::duration<double>(std::clamp(wait, 50e-6, 2e-3)));
         continue;
       }
+      std::unique_lock<std::timed_mutex> world(worldMutex_);
+      if (generation != generation_) continue;  // a rebuilt world came in meanwhile
       World& w = *built_.world;
       const auto t0 = Clock::now();
       const double batchSim = double(n) * w.dt();
       for (long k = 0; k < n; ++k) {
-        if (drag_) feedDrag(w, *drag_, double(k + 1) / double(n), batchSim);
+        if (drag) feedDrag(w, *drag, double(k + 1) / double(n), batchSim);
         w.step();
       }
-      if (drag_) drag_->from = drag_->to;
-      pacer_.stepped(n, std::chrono::duration<double>(Clock::now() - t0).count());
+      const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+      const bool ok = finite(w);
+      const double simTime = w.time();
+      world.unlock();
+      std::unique_lock<std::mutex> state = lockState();
+      if (generation != generation_) continue;
+      if (drag && drag_ && drag_->index == drag->index) drag_->from = drag->to;  // reached
+      pacer_.stepped(n, seconds);
       steps_ += n;
-      behind_ = pacer_.behind(now);
-      if (!finite(w)) diverged_ = true;
+      simTime_ = simTime;
+      if (!ok) diverged_ = true;
     }
   }
 
@@ -331,12 +401,16 @@ class Viewer {
   }
 
   void startRebuild(std::unique_ptr<Rebuild> r) {
-    keepManipulatorPoses(*built_.world, r->scene);
     r->start = wallNow();
     Rebuild* p = r.get();
     rebuild_ = std::move(r);
-    rebuild_->thread = std::thread([p] {
+    World* running = built_.world.get();  // not replaced while a rebuild is pending
+    rebuild_->thread = std::thread([this, p, running] {
       try {
+        {  // manipulators the user moved keep their place (waits for the batch being stepped)
+          std::unique_lock<std::timed_mutex> world(worldMutex_);
+          keepManipulatorPoses(*running, p->scene);
+        }
         p->built = buildScene(p->scene);
         p->phase = 1;
         p->view = makeBodyView(*p->built);
@@ -351,6 +425,8 @@ class Viewer {
 
   void finishRebuild(double now) {
     if (!rebuild_ || rebuild_->phase != 2) return;
+    std::unique_lock<std::timed_mutex> world = tryWorld();  // free: no batch starts during a rebuild
+    if (!world.owns_lock()) return;
     rebuild_->thread.join();
     std::unique_ptr<Rebuild> r = std::move(rebuild_);
     lastRebuildSeconds_ = now - r->start;
@@ -365,8 +441,9 @@ class Viewer {
     if (waiting_) startRebuild(std::move(waiting_));
   }
 
-  // A built world replaces the one running (called with the lock, or before stepping starts).
+  // A built world replaces the one running (called with both locks, or before stepping starts).
   void install(Scene scene, BuiltScene built, BodyView view, bool load, bool reframe) {
+    ++generation_;
     scene_ = std::move(scene);
     builtScene_ = scene_;
     built_ = std::move(built);
@@ -395,6 +472,9 @@ class Viewer {
     }
     syncEdits();
     if (reframe) reframeCamera();
+    int width, height;
+    glfwGetFramebufferSize(window_, &width, &height);
+    refresh(wallNow(), width, height);
   }
 
   void syncEdits() {
@@ -661,26 +741,26 @@ class Viewer {
     m.axis = Vec3(0, 1, 0);
     m.restitution = 0.3;
     m.friction = scene_.domain.friction;
-    // Beside the body being edited, on the side away from the other manipulators.
-    const std::vector<Vec3>& x = built_.world->state().positions;
-    const BodyRange& range = built_.range(size_t(editBody_));
-    Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
-    if (range.vertexEnd > range.vertexBegin) lo = hi = x[range.vertexBegin];
-    for (uint32_t i = range.vertexBegin; i < range.vertexEnd; ++i) lo = lo.cwiseMin(x[i]), hi = hi.cwiseMax(x[i]);
+    // Beside the body being edited (where the last figures saw it), on the side away from the
+    // other manipulators.
+    const auto& [lo, hi] = figures_.bounds.at(size_t(editBody_));
     const Vec3 c = (lo + hi) / 2;
     const Real side = scene_.manipulators.size() % 2 == 0 ? -1 : 1;
     Vec3 p = c + Vec3(side * (0.5 * extent + m.radius + 0.05), 0, 0);
     if (scene_.dim == 2) p.z() = 0;
     m.path.keys = {Keyframe{0, p, std::nullopt}};
-    keepManipulatorPoses(*built_.world, scene_);
     scene_.manipulators.push_back(m);
   }
 
   GLFWwindow* window_;
   Clock::time_point start_;
-  // Everything below is guarded by mutex_ (the stepping thread takes it for each batch).
-  std::mutex mutex_;
+  // The world (built_.world) is guarded by worldMutex_, held by the stepping thread for each batch;
+  // everything else below by stateMutex_. built_ is replaced only with both held.
+  std::mutex stateMutex_;
+  std::timed_mutex worldMutex_;
   std::atomic<int> drawWaiting_{0};
+  std::atomic<long> generation_{0};  // counts installed worlds
+  DrawList list_;                    // the last picture's draw list
   std::atomic<bool> quit_{false};
   std::thread stepper_;
   Scene scene_, original_, builtScene_;  // as edited / as loaded / as running
@@ -699,6 +779,8 @@ class Viewer {
   bool shift_ = false, paused_ = false, stepOnce_ = false, behind_ = false, diverged_ = false;
   float speed_ = 1.0f;
   long steps_ = 0;
+  double simTime_ = 0;  ///< [s] the world's time after the last batch
+  double worldHeldSeconds_ = 0;
   /// The panel's shape settings of one body (the scene holds the rest).
   struct BodyEdit {
     int shapeIndex = 0, sizeVoxels = 12;
@@ -786,11 +868,7 @@ int run(const Options& o) {
     Renderer renderer;
     const auto start = Clock::now();
     const bool fixedSteps = !o.screenshot.empty();  // a screenshot: fixed simulated time per frame
-    Viewer viewer(window, std::move(scene), !fixedSteps, start);
-    if (o.bodySize > 0) {
-      std::unique_lock<std::mutex> lock = viewer.lockWorld();
-      viewer.setBodySize(o.bodySize, false);
-    }
+    Viewer viewer(window, std::move(scene), !fixedSteps, start, o.bodySize);
     gViewer = &viewer;
     glfwSetMouseButtonCallback(window, onMouseButton);
     glfwSetCursorPosCallback(window, onCursor);
@@ -819,17 +897,17 @@ int run(const Options& o) {
       ImGui_ImplOpenGL3_NewFrame();
       ImGui_ImplGlfw_NewFrame();
       ImGui::NewFrame();
-      DrawList list = viewer.frame(fbw, fbh);
+      viewer.frame(fbw, fbh);
       ImGui::Render();
-      viewer.draw(std::move(list), fbw, fbh, renderer);
+      viewer.draw(fbw, fbh, renderer);
       ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
       ++frames;
 
       if (!o.screenshot.empty()) {
-        std::unique_lock<std::mutex> lock = viewer.lockWorld();
-        if (viewer.world().time() >= o.screenshotTime) {
+        std::unique_lock<std::mutex> lock = viewer.lockState();
+        if (viewer.figures().time >= o.screenshotTime) {
           writePng(o.screenshot, readPixels(fbw, fbh));
-          std::cout << nlohmann::json{{"screenshot", o.screenshot}, {"size", {fbw, fbh}}, {"t", viewer.world().time()}}
+          std::cout << nlohmann::json{{"screenshot", o.screenshot}, {"size", {fbw, fbh}}, {"t", viewer.figures().time}}
                            .dump()
                     << "\n";
           break;
@@ -844,35 +922,37 @@ int run(const Options& o) {
       }
       const double now = viewer.wallNow();
       if (o.runFor > 0) {  // a timing run: frame times, a rebuild asked for as the panel would
-        std::unique_lock<std::mutex> lock = viewer.lockWorld();
+        std::unique_lock<std::mutex> lock = viewer.lockState();
         times.all.push_back(now - last);
         times.work.push_back(work);
+        times.worldHeld.push_back(viewer.worldHeldSeconds());
         if (viewer.rebuilding()) times.longestDuringRebuild = std::max(times.longestDuringRebuild, now - last);
         if (rebuildAsked && !viewer.rebuilding() && !rebuildSeen) rebuildSeen = true, rebuildSeconds = viewer.lastRebuildSeconds();
         if (o.rebuildSize > 0 && !rebuildAsked && now - runStart >= o.rebuildAt) {
-          viewer.setBodySize(o.rebuildSize, true);
+          viewer.setBodySize(o.rebuildSize);
           rebuildAsked = true;
         }
       }
       last = now;
       if (o.runFor > 0 && now - runStart >= o.runFor) {
-        std::unique_lock<std::mutex> lock = viewer.lockWorld();
-        const World& w = viewer.world();
+        std::unique_lock<std::mutex> lock = viewer.lockState();
+        const Figures& f = viewer.figures();
         const double wall = now - runStart;
         nlohmann::json j;
         j["frames_per_second"] = double(frames) / wall;
         j["frame_ms_median"] = 1e3 * FrameTimes::median(times.all);
         j["frame_work_ms_median"] = 1e3 * FrameTimes::median(times.work);
+        j["world_held_ms_median"] = 1e3 * FrameTimes::median(times.worldHeld);
         j["frame_ms_max"] = 1e3 * times.longest();
         j["steps_per_second_last_s"] = viewer.rates().stepsPerSecond();
         j["real_time_factor_last_s"] = viewer.rates().realTimeFactor();
         j["steps"] = viewer.totalSteps();
-        j["sim_time"] = w.time();
-        j["integrator"] = integratorKindName(w.settings().integrator);
-        j["integrator_choice"] = w.integratorChoice();
-        j["dt"] = w.dt();
-        j["elements"] = w.model().numElements();
-        j["vertices"] = w.model().numVertices();
+        j["sim_time"] = f.time;
+        j["integrator"] = f.integrator;
+        j["integrator_choice"] = f.choice;
+        j["dt"] = f.dt;
+        j["elements"] = f.elements;
+        j["vertices"] = f.vertices;
         if (o.rebuildSize > 0) {
           j["rebuild_size"] = o.rebuildSize;
           j["rebuild_seconds"] = rebuildSeen ? rebuildSeconds : -1.0;  // -1: still building at the end
