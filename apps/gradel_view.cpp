@@ -409,7 +409,7 @@ class Viewer {
     World* running = built_.world.get();  // not replaced while a rebuild is pending
     rebuild_->thread = std::thread([this, p, running] {
       try {
-        {  // manipulators the user moved keep their place (waits for the batch being stepped)
+        if (!p->load) {  // new settings: manipulators the user moved keep their place (waits for the batch)
           std::unique_lock<std::timed_mutex> world(worldMutex_);
           keepManipulatorPoses(*running, p->scene);
         }
