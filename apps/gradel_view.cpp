@@ -450,7 +450,8 @@ class Viewer {
     builtScene_ = scene_;
     built_ = std::move(built);
     // One core is left to drawing (software GL draws on the CPU): with both cores stepping, on
-    // 2 cores the frames took 1.8x as long and the real-time factor did not rise (docs/viewer.md).
+    // 2 loaded cores the frames took longer and the real-time factor did not rise beyond the
+    // noise (docs/viewer.md).
     built_.world->setThreads(std::max(1, int(std::thread::hardware_concurrency()) - 1));
     body_ = std::move(view);
     drag_.reset();
