@@ -99,6 +99,21 @@ struct FrameTimes {
   double longest() const { return all.empty() ? 0 : *std::max_element(all.begin(), all.end()); }
 };
 
+// `spec` at `size` voxels along its longest side, the same physical extent: the grid, the
+// primitives and the voxel size scaled together (a scene's union of primitives keeps its shape).
+ShapeSpec scaledShape(const ShapeSpec& spec, int size) {
+  const int longest = *std::max_element(spec.dims.begin(), spec.dims.begin() + spec.dim);
+  const Real f = Real(size) / Real(longest);
+  ShapeSpec out = spec;
+  for (int i = 0; i < spec.dim; ++i) out.dims[size_t(i)] = std::max(1, int(std::lround(spec.dims[size_t(i)] * f)));
+  out.voxelSize = spec.voxelSize / f;
+  for (Primitive& p : out.primitives) {  // in 2D the z extent (one layer) stays
+    for (int i = 0; i < spec.dim; ++i) p.min[i] *= f, p.max[i] *= f, p.center[i] *= f;
+    p.radius *= f, p.halfLength *= f;
+  }
+  return out;
+}
+
 // A titled separator (ImGui 1.86 has no SeparatorText).
 void section(const char* title) {
   ImGui::Separator();
@@ -317,17 +332,46 @@ class Viewer {
 
  private:
   enum class Mode { None, Orbit, Pan, Drag };
-  static constexpr const char* kShapes[] = {"sphere", "box", "cylinder"};
+  static constexpr const char* kShapes[] = {"sphere", "box", "cylinder", "as loaded"};
+  static constexpr int kAsLoaded = 3;
 
-  // Body b of scene_ becomes a preset shape (its panel choice) of `size` voxels and the same
-  // physical extent.
+  // Body b of scene_ at `size` voxels and the same physical extent: its panel shape (a preset),
+  // or as loaded (a scene's union of primitives scaled; a volume from a file keeps the file's size).
   void resizeBody(size_t b, int size) {
-    BodySettings& body = scene_.bodyAt(b);
     BodyEdit& edit = edits_.at(b);
     edit.sizeVoxels = std::clamp(size, kMinBodySize, kMaxBodySize);
     if (int(b) == editBody_) sizeDraft_ = edit.sizeVoxels;
+    applyShape(b);
+  }
+
+  void applyShape(size_t b) {
+    BodySettings& body = scene_.bodyAt(b);
+    const BodyEdit& edit = edits_.at(b);
+    if (edit.shapeIndex == kAsLoaded) {
+      body.source = edit.loadedSource;
+      body.shape = edit.loadedSource ? edit.loadedShape : scaledShape(edit.loadedShape, edit.sizeVoxels);
+      return;
+    }
     body.shape = presetShape(kShapes[edit.shapeIndex], edit.sizeVoxels, scene_.dim, edit.extent / edit.sizeVoxels);
     body.source = nullptr;
+  }
+
+  // The panel's shape index of a loaded body: a preset when it is one primitive filling its grid
+  // as presetShape makes it, else kAsLoaded.
+  int presetIndex(const BodySettings& b) const {
+    if (b.source || b.shape.primitives.size() != 1) return kAsLoaded;
+    const ShapeSpec& s = b.shape;
+    const int n = s.dims[0];
+    if (s.dims[1] != n || (s.dim == 3 && s.dims[2] != n)) return kAsLoaded;
+    for (int i : {0, 1, 2})
+      if (i < (s.dim == 3 ? 3 : 2)) {
+        const ShapeSpec preset = presetShape(kShapes[i], n, s.dim, s.voxelSize);
+        const Primitive &a = preset.primitives.front(), &c = s.primitives.front();
+        if (a.kind == c.kind && a.min == c.min && a.max == c.max && a.center == c.center && a.radius == c.radius &&
+            a.halfLength == c.halfLength && a.axis == c.axis && a.label == c.label)
+          return i;
+      }
+    return kAsLoaded;
   }
 
   static bool finite(const World& w) {
@@ -469,9 +513,22 @@ class Viewer {
       edits_.clear();
       for (size_t i = 0; i < built_.numBodies(); ++i) {
         const VoxelVolume& v = built_.body(i).volume;
+        const BodySettings& settings = scene_.bodyAt(i);
         BodyEdit e;
         e.extent = v.voxelSize() * std::max(v.nx(), v.ny());
-        e.sizeVoxels = std::clamp(std::max(v.nx(), v.ny()), kMinBodySize, kMaxBodySize);
+        e.sizeVoxels = std::clamp(std::max({v.nx(), v.ny(), v.nz()}), kMinBodySize, kMaxBodySize);
+        e.loadedShape = settings.shape, e.loadedSource = settings.source;
+        e.shapeIndex = presetIndex(settings);
+        if (settings.source) {
+          e.origin = "from " + settings.source->describe();
+        } else if (e.shapeIndex == kAsLoaded) {
+          e.origin = "a union of " + std::to_string(settings.shape.primitives.size()) + " primitives";
+        } else {
+          e.origin = "a preset shape";
+        }
+        char dims[64];
+        std::snprintf(dims, sizeof dims, ", %dx%dx%d voxels", v.nx(), v.ny(), v.nz());
+        e.origin += dims;
         edits_.push_back(e);
       }
       editBody_ = 0;
@@ -640,9 +697,22 @@ class Viewer {
     }
     BodySettings& body = scene_.bodyAt(size_t(editBody_));
     BodyEdit& edit = edits_.at(size_t(editBody_));
-    if (ImGui::Combo("shape", &edit.shapeIndex, kShapes, scene_.dim == 3 ? 3 : 2)) changed = reshaped = true;
+    // The presets, and the body as loaded (a file's volume, a scene's union of primitives).
+    const char* shapeItems[] = {kShapes[0], kShapes[1], kShapes[2], kShapes[kAsLoaded]};
+    if (scene_.dim == 2) shapeItems[2] = kShapes[kAsLoaded];  // no cylinder in 2D
+    int shapeItem = scene_.dim == 2 && edit.shapeIndex == kAsLoaded ? 2 : edit.shapeIndex;
+    if (ImGui::Combo("shape", &shapeItem, shapeItems, scene_.dim == 3 ? 4 : 3)) {
+      edit.shapeIndex = scene_.dim == 2 && shapeItem == 2 ? kAsLoaded : shapeItem;
+      changed = reshaped = true;
+    }
+    ImGui::TextDisabled("%s", edit.origin.substr(0, 52).c_str());
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("loaded: %s", edit.origin.c_str());
     // The size applies when the slider is released or a typed size is entered (Ctrl+click types).
+    // A volume from a file keeps the file's size.
+    const bool fixedSize = edit.shapeIndex == kAsLoaded && edit.loadedSource;
+    ImGui::BeginDisabled(fixedSize);
     ImGui::SliderInt("size [voxels]", &sizeDraft_, kMinBodySize, kMaxBodySize);
+    ImGui::EndDisabled();
     sizeDraft_ = std::clamp(sizeDraft_, kMinBodySize, kMaxBodySize);
     const bool sizeEntered = ImGui::IsItemDeactivatedAfterEdit();
     const std::optional<SizeEstimate> est = sizeEstimate(sizeDraft_);
@@ -684,7 +754,7 @@ class Viewer {
     if (ImGui::SliderFloat("density", &rho, 100.f, 5000.f, "%.0f kg/m3")) body.material.density = rho;
     if (ImGui::IsItemDeactivatedAfterEdit()) changed = true;
     if (!body.material.regions.empty())
-      ImGui::TextWrapped("this body has %zu materials per region: E and density above are the default for other labels",
+      ImGui::TextWrapped("materials per region: %zu labels have their own; E and density above are the default's",
                          body.material.regions.size());
     float damping = float(scene_.simulation.damping);
     if (ImGui::SliderFloat("damping [1/s]", &damping, 0.f, 20.f, "%.2f")) scene_.simulation.damping = damping;
@@ -728,9 +798,8 @@ class Viewer {
 
     if (changed) {
       std::string what = "settings";
-      if (reshaped) {  // a preset shape of the same physical size replaces the body's volume
-        body.shape = presetShape(kShapes[edit.shapeIndex], edit.sizeVoxels, scene_.dim, edit.extent / edit.sizeVoxels);
-        body.source = nullptr;
+      if (reshaped) {  // the chosen shape at the chosen size, the same physical extent
+        applyShape(size_t(editBody_));
         what = std::string(kShapes[edit.shapeIndex]) + " " + std::to_string(edit.sizeVoxels);
       }
       requestRebuild(scene_, false, false, what);
@@ -789,8 +858,11 @@ class Viewer {
   double worldHeldSeconds_ = 0;
   /// The panel's shape settings of one body (the scene holds the rest).
   struct BodyEdit {
-    int shapeIndex = 0, sizeVoxels = 12;
-    Real extent = 0.12;  ///< [m] kept when the resolution changes.
+    int shapeIndex = 0, sizeVoxels = 12;  ///< kShapes index (kAsLoaded: the loaded volume)
+    Real extent = 0.12;                   ///< [m] kept when the resolution changes.
+    ShapeSpec loadedShape;                ///< As loaded: scaled for other sizes.
+    std::shared_ptr<const VolumeSource> loadedSource;  ///< As loaded from a file (null: a shape).
+    std::string origin;                                ///< "from <file>", "a preset shape", ... and the grid.
   };
   std::vector<BodyEdit> edits_;  ///< Per body.
   int editBody_ = 0;             ///< The body the "Body" settings edit.
