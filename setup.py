@@ -15,7 +15,8 @@ Environment:
   CMAKE_BUILD_PARALLEL_LEVEL  jobs (default: CMake's).
 
 Progress: the build prints "gradel: ..." lines and CMake's "[done/total]" steps; pip shows them
-with `pip install -v .` (without -v pip shows only its spinner).
+with `pip install -v .`. Without -v pip hides them, so on an interactive terminal (/dev/tty) the
+"gradel: ..." lines and a "[done/total]" counter are written there too.
 """
 import os
 import shlex
@@ -40,8 +41,39 @@ def host_has_v3():
     return "avx2" in flags and "fma" in flags
 
 
+def open_terminal():
+    """The user's terminal when pip hides our output (stderr is not one), else None."""
+    if sys.stderr.isatty():
+        return None
+    try:
+        return open("/dev/tty", "w")
+    except OSError:
+        return None
+
+
+TERMINAL = open_terminal()
+
+
 def say(text):
     print(f"gradel: {text}", file=sys.stderr, flush=True)
+    if TERMINAL:
+        TERMINAL.write(f"\rgradel: {text}\033[K\n")
+        TERMINAL.flush()
+
+
+def build_with_progress(command):
+    """Runs CMake's build, its lines to stderr (pip -v shows them); without -v, on a terminal, its
+    "[done/total]" counter on one line."""
+    with subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True) as proc:
+        for line in proc.stdout:
+            sys.stderr.write(line)
+            if TERMINAL and line.startswith("["):
+                TERMINAL.write(f"\rgradel: {line.split(' ', 1)[0]} compiling\033[K")
+                TERMINAL.flush()
+        if TERMINAL:
+            TERMINAL.write("\n")
+    if proc.returncode != 0:
+        raise subprocess.CalledProcessError(proc.returncode, command)
 
 
 def cached_option(tree, name):
@@ -95,7 +127,7 @@ class CMakeBuild(build_ext):
                 say(f"configuring {tree}")
                 subprocess.run(args, check=True, stdout=sys.stderr)
         say("compiling the engine and its Python module (a few minutes on 2 cores; [done/total] below)")
-        subprocess.run(["cmake", "--build", str(tree), "--target", "gradel_python"], check=True, stdout=sys.stderr)
+        build_with_progress(["cmake", "--build", str(tree), "--target", "gradel_python"])
         say("module built")
         built = sorted((tree / "python" / "gradel").glob("gradel.*.so"))
         suffix = self.get_ext_filename("x")[1:]  # e.g. .cpython-311-x86_64-linux-gnu.so
