@@ -99,21 +99,6 @@ struct FrameTimes {
   double longest() const { return all.empty() ? 0 : *std::max_element(all.begin(), all.end()); }
 };
 
-// `spec` at `size` voxels along its longest side, the same physical extent: the grid, the
-// primitives and the voxel size scaled together (a scene's union of primitives keeps its shape).
-ShapeSpec scaledShape(const ShapeSpec& spec, int size) {
-  const int longest = *std::max_element(spec.dims.begin(), spec.dims.begin() + spec.dim);
-  const Real f = Real(size) / Real(longest);
-  ShapeSpec out = spec;
-  for (int i = 0; i < spec.dim; ++i) out.dims[size_t(i)] = std::max(1, int(std::lround(spec.dims[size_t(i)] * f)));
-  out.voxelSize = spec.voxelSize / f;
-  for (Primitive& p : out.primitives) {  // in 2D the z extent (one layer) stays
-    for (int i = 0; i < spec.dim; ++i) p.min[i] *= f, p.max[i] *= f, p.center[i] *= f;
-    p.radius *= f, p.halfLength *= f;
-  }
-  return out;
-}
-
 // A titled separator (ImGui 1.86 has no SeparatorText).
 void section(const char* title) {
   ImGui::Separator();
@@ -349,7 +334,7 @@ class Viewer {
     const BodyEdit& edit = edits_.at(b);
     if (edit.shapeIndex == kAsLoaded) {
       body.source = edit.loadedSource;
-      body.shape = edit.loadedSource ? edit.loadedShape : scaledShape(edit.loadedShape, edit.sizeVoxels);
+      body.shape = edit.loadedSource ? edit.loadedShape : scaleShape(edit.loadedShape, edit.sizeVoxels);
       return;
     }
     body.shape = presetShape(kShapes[edit.shapeIndex], edit.sizeVoxels, scene_.dim, edit.extent / edit.sizeVoxels);

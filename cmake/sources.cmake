@@ -119,5 +119,6 @@ set(GRADEL_TEST_SOURCES
   tests/test_scene_io.cpp
   tests/test_scenes.cpp
   tests/test_settings_check.cpp
+  tests/test_shapes.cpp
   tests/test_step_pacer.cpp
   tests/test_surface.cpp)
