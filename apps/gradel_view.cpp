@@ -3,14 +3,18 @@
 // Mouse: left-drag a manipulator to move it in the plane facing the camera (wheel or
 // Shift+drag: towards / away from the camera); left-drag elsewhere orbits, right- or
 // middle-drag pans, the wheel zooms. 2D scenes are shown flat.
-// The simulation runs as many steps per frame as real time needs, within a time budget, and says
-// so on screen when it cannot keep up.
+// The simulation steps on its own thread, paced to real time (shared/step_pacer.h) in short
+// batches, so drawing and the panel never wait for it; it says so on screen when it cannot keep
+// up. A rebuild (a new size, shape, material ...) runs on a background thread with its progress
+// shown; a size estimated below 0.1x real time is flagged before it is built (shared/realtime_size.h).
+// Frames are capped at 60 per second; no multisampling on a software OpenGL (llvmpipe).
 #include <GLFW/glfw3.h>
 #include <backends/imgui_impl_glfw.h>
 #include <backends/imgui_impl_opengl3.h>
 #include <imgui.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -18,8 +22,10 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <CLI/CLI.hpp>
@@ -31,6 +37,9 @@
 #include "gradel/render/render_command.h"
 #include "gradel/render/renderer.h"
 #include "gradel/scene.h"
+#include "gradel/shared/rate_window.h"
+#include "gradel/shared/realtime_size.h"
+#include "gradel/shared/step_pacer.h"
 
 namespace {
 
@@ -40,21 +49,25 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 // The default scene: the paper's 12^3 sphere on the floor and one free sphere manipulator
-// beside it, ready to be grabbed.
+// beside it, ready to be grabbed. Symplectic Euler, not "auto": the viewer does not let a cost
+// estimate switch its sphere to the large step (at sizes 32 and up "auto" took the large step
+// at 0.002-0.07x real time where the explicit step runs several times faster; issue 25). The
+// integrator box offers "auto" and the others.
 constexpr const char* kPlayScene = R"({
   "name": "play",
   "dim": 3,
   "body": { "shape": "sphere", "size": 12, "voxel_size": 0.01, "layout": "gradational", "position": [0, 0, 0] },
   "material": { "scaling": "consistent", "youngs_modulus": 1e5, "density": 1000 },
-  "simulation": { "integrator": "auto", "dt": "auto", "damping": 1.0, "gravity": [0, -9.81, 0] },
+  "simulation": { "integrator": "symplectic", "dt": "auto", "damping": 1.0, "gravity": [0, -9.81, 0] },
   "domain": { "min": [-0.3, 0.0, -0.3], "max": [0.4, 0.5, 0.4], "restitution": 0.3, "friction": 0.5 },
   "manipulators": [ { "type": "sphere", "radius": 0.03, "restitution": 0.5, "friction": 0.5,
                       "path": [ { "t": 0, "position": [-0.1, 0.06, 0.06] } ] } ]
 })";
 
-constexpr double kStepBudgetSeconds = 0.030;  // wall time per frame the simulation may use
-constexpr double kMaxFrameSeconds = 0.1;      // longer frames (window moves, stalls) are not caught up
-constexpr float kPanelWidth = 330;            // [pixels] the settings panel at the left
+constexpr double kFrameSeconds = 1.0 / 60;  // [s] the frame cap
+constexpr double kSlowFactor = 0.1;         // sizes estimated below this real-time factor are flagged
+constexpr int kMinBodySize = 4, kMaxBodySize = 256;
+constexpr float kPanelWidth = 330;  // [pixels] the settings panel at the left
 
 fs::path scenesDir() {
   for (const fs::path& p : {fs::path("scenes"), fs::path(GRADEL_SOURCE_DIR) / "scenes"})
@@ -68,26 +81,22 @@ struct Options {
   std::string screenshot;
   double runFor = 0;             // [s] wall; 0 = until the window closes
   double screenshotTime = 0.15;  // [s] simulated before the screenshot
+  int bodySize = 0;              // the first body's size [voxels] as the panel sets it (0 = the scene's)
+  int rebuildSize = 0;           // with --run-for: ask for this size as the panel would ...
+  double rebuildAt = 1.0;        // ... at this wall time [s]
 };
 
-// Moving averages of the live figures over the last second.
-struct Rates {
-  std::deque<std::pair<double, long>> frames;  // (wall time, steps in that frame)
-  double simPerWall = 0;
-  void add(double now, long steps) {
-    frames.push_back({now, steps});
-    while (frames.size() > 2 && now - frames.front().first > 1.0) frames.pop_front();
+// Frame times [s] of a timing run (--run-for): their median and maximum, and the longest frame
+// while a rebuild ran.
+struct FrameTimes {
+  std::vector<double> all, work, worldHeld;  // frame to frame; a frame's own work (events, panel, drawing), cap excluded
+  double longestDuringRebuild = 0;
+  static double median(std::vector<double> v) {
+    if (v.empty()) return 0;
+    std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+    return v[v.size() / 2];
   }
-  double fps() const {
-    if (frames.size() < 2) return 0;
-    return double(frames.size() - 1) / (frames.back().first - frames.front().first);
-  }
-  double stepsPerSecond() const {
-    if (frames.size() < 2) return 0;
-    long n = 0;
-    for (size_t i = 1; i < frames.size(); ++i) n += frames[i].second;
-    return double(n) / (frames.back().first - frames.front().first);
-  }
+  double longest() const { return all.empty() ? 0 : *std::max_element(all.begin(), all.end()); }
 };
 
 // A titled separator (ImGui 1.86 has no SeparatorText).
@@ -96,36 +105,429 @@ void section(const char* title) {
   ImGui::TextDisabled("%s", title);
 }
 
+// The figures the panel shows, copied from the world once a frame (the stepping thread owns it
+// between frames).
+struct Figures {
+  double time = 0, dt = 0, maxStress = 0;
+  std::string integrator, choice;
+  size_t elements = 0, vertices = 0, pairs = 0;
+  std::vector<BodyRow> bodies;
+  std::vector<std::pair<Vec3, Vec3>> bounds;  // per body: lowest and highest vertex
+};
+
+// A world being built on a background thread, and what the panel asked for.
+struct Rebuild {
+  Scene scene;
+  bool load = false;     // a new scene: camera, surface mode and body edits start afresh
+  bool reframe = false;  // frame the camera on it
+  std::string what;      // shown while it builds, e.g. "size 128"
+  double start = 0;      // [s] wall
+  std::atomic<int> phase{0};  // 0 volume + layout + model + world, 1 display surfaces, 2 done
+  std::optional<BuiltScene> built;
+  std::optional<BodyView> view;
+  std::string error;
+  std::thread thread;
+};
+
 class Viewer {
  public:
-  Viewer(GLFWwindow* window, Scene scene) : window_(window) { load(std::move(scene)); }
-
-  void load(Scene scene) {
-    scene_ = std::move(scene);
-    original_ = scene_;
-    rebuild(true);
-    // A body from a mesh file shows that mesh (embedded) first; other bodies the smooth surface.
-    view_.surface = built_.embedded ? SurfaceMode::Embedded : SurfaceMode::Smooth;
-    view_.forces = true;  // the contact force arrows on the tools
-    // Each body keeps its physical size when its resolution changes.
-    edits_.clear();
-    for (size_t i = 0; i < built_.numBodies(); ++i) {
-      const VoxelVolume& v = built_.body(i).volume;
-      BodyEdit e;
-      e.extent = v.voxelSize() * std::max(v.nx(), v.ny());
-      e.sizeVoxels = std::clamp(std::max(v.nx(), v.ny()), 4, 48);
-      edits_.push_back(e);
+  /// `threaded`: the simulation steps on its own thread paced to real time; otherwise each
+  /// frame advances a fixed 1/60 s (screenshots: the picture does not depend on the machine).
+  /// `bodySize` > 0: body 0 at that size, as the panel's slider sets it.
+  Viewer(GLFWwindow* window, Scene scene, bool threaded, Clock::time_point start, int bodySize)
+      : window_(window), start_(start) {
+    BuiltScene built = buildScene(scene);
+    BodyView view = makeBodyView(built);
+    install(std::move(scene), std::move(built), std::move(view), true, true);
+    if (bodySize > 0) {
+      resizeBody(0, bodySize);
+      built = buildScene(scene_);
+      view = makeBodyView(built);
+      install(scene_, std::move(built), std::move(view), false, true);
     }
-    editBody_ = 0;
+    if (threaded) stepper_ = std::thread([this] { stepLoop(); });
   }
 
-  // Rebuilds the world from scene_ (settings changed); reframes the camera on a new scene.
-  void rebuild(bool reframe) {
-    built_ = buildScene(scene_);
-    body_ = makeBodyView(built_);
+  ~Viewer() {
+    quit_ = true;
+    if (stepper_.joinable()) stepper_.join();
+    if (rebuild_ && rebuild_->thread.joinable()) rebuild_->thread.join();
+  }
+
+  double wallNow() const { return std::chrono::duration<double>(Clock::now() - start_).count(); }
+
+  // The viewer's state (everything but the world): held briefly by the stepping thread.
+  std::unique_lock<std::mutex> lockState() { return std::unique_lock<std::mutex>(stateMutex_); }
+
+  // The world, for the drawing thread (with the state lock held): the stepping thread lets it in
+  // at its next batch (within its 4 ms budget, or one step when a step takes longer); when that
+  // is more than 40 ms away (one long step: the large step, a large body) this gives up and the
+  // frame shows the last picture instead of waiting.
+  std::unique_lock<std::timed_mutex> tryWorld() {
+    const double wait = std::clamp(1.5 * pacer_.secondsPerStep(), 0.008, 0.040);
+    ++drawWaiting_;
+    std::unique_lock<std::timed_mutex> lock(worldMutex_, std::defer_lock);
+    (void)lock.try_lock_for(std::chrono::duration<double>(wait));
+    --drawWaiting_;
+    return lock;
+  }
+
+  // One frame's work, under the state lock: a finished rebuild is swapped in; when the world is
+  // free the figures and the draw list are taken from it (else the last ones are shown); the
+  // panel runs. Drawing happens after, without the locks.
+  void frame(int width, int height) {
+    const double now = wallNow();
+    std::unique_lock<std::mutex> state = lockState();
+    finishRebuild(now);
+    if (diverged_) {
+      diverged_ = false;
+      status_ = "simulation diverged; reset";
+      requestRebuild(builtScene_, false, false, "reset");
+    }
+    std::unique_lock<std::timed_mutex> world = tryWorld();
+    if (world.owns_lock()) {
+      advanceByFrame();
+      refresh(now, width, height);
+      world.unlock();
+      worldHeldSeconds_ = wallNow() - now;
+    } else {
+      worldHeldSeconds_ = 0;
+    }
+    rates_.add(now, simTime_, steps_);  // every frame, also when the world was busy
+    panel(now);
+  }
+
+  // Without the stepping thread (screenshots) a fixed 1/60 s of simulated time a frame; the
+  // Step button's single step (both locks held).
+  void advanceByFrame() {
+    World& w = *built_.world;
+    if (!stepper_.joinable() && !paused_ && !rebuild_) {  // fixed 1/60 s of simulated time a frame
+      const long n = std::max(1L, std::lround(kFrameSeconds * speed_ / w.dt()));
+      for (long k = 0; k < n && finite(w); ++k) w.step();
+      steps_ += n;
+    }
+    if (stepOnce_ && !rebuild_) {
+      w.step();
+      ++steps_;
+      stepOnce_ = false;
+    }
+  }
+
+  // The figures and the draw list from the world (both locks held).
+  void refresh(double now, int width, int height) {
+    World& w = *built_.world;
+    figures_.time = w.time(), figures_.dt = w.dt();
+    figures_.integrator = integratorKindName(w.settings().integrator);
+    figures_.choice = w.integratorChoice();
+    figures_.elements = w.model().numElements(), figures_.vertices = w.model().numVertices();
+    figures_.pairs = w.model().numPairs();
+    const std::vector<Real> es = w.elementStress();
+    figures_.maxStress = es.empty() ? 0.0 : *std::max_element(es.begin(), es.end());
+    figures_.bodies = built_.numBodies() > 1 ? bodyTable(built_) : std::vector<BodyRow>{};
+    figures_.bounds.clear();
+    for (size_t b = 0; b < built_.numBodies(); ++b) {
+      const BodyRange& range = built_.range(b);
+      const std::vector<Vec3>& x = w.state().positions;
+      Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
+      if (range.vertexEnd > range.vertexBegin) lo = hi = x[range.vertexBegin];
+      for (uint32_t i = range.vertexBegin; i < range.vertexEnd; ++i) lo = lo.cwiseMin(x[i]), hi = hi.cwiseMax(x[i]);
+      figures_.bounds.push_back({lo, hi});
+    }
+    simTime_ = w.time();
+    list_ = buildDrawList(body_, w, view_, width, height);
+    w.restartForceAverage();  // the force arrows: averaged over the steps between two frames
+  }
+
+  // Draws the last draw list (no lock: only the drawing thread touches it and the camera).
+  void draw(int width, int height, Renderer& renderer) { renderer.draw(list_, camera_, width, height); }
+
+  // ---- mouse (GLFW callbacks on the drawing thread) ----
+  void mouseButton(int button, int action, int mods) {
+    if (ImGui::GetIO().WantCaptureMouse && action == GLFW_PRESS) return;
+    double x, y;
+    glfwGetCursorPos(window_, &x, &y);
+    std::unique_lock<std::mutex> state = lockState();
+    if (action == GLFW_RELEASE) {
+      drag_.reset();
+      mode_ = Mode::None;
+      return;
+    }
+    lastX_ = x, lastY_ = y;
+    shift_ = (mods & GLFW_MOD_SHIFT) != 0;
+    if (button == GLFW_MOUSE_BUTTON_LEFT) {
+      int width, height;
+      glfwGetWindowSize(window_, &width, &height);
+      // Picking needs the world; during one long step the press orbits instead.
+      std::unique_lock<std::timed_mutex> world = tryWorld();
+      const std::optional<size_t> m =
+          world.owns_lock() && !rebuild_ ? pickManipulator(camera_, *built_.world, x, y, width, height) : std::nullopt;
+      if (m) {
+        drag_ = grabManipulator(camera_, *built_.world, *m, x, y, width, height);
+        mode_ = Mode::Drag;
+      } else {
+        mode_ = Mode::Orbit;
+      }
+    } else {
+      mode_ = Mode::Pan;
+    }
+  }
+
+  void cursor(double x, double y) {
+    std::unique_lock<std::mutex> state = lockState();
+    const double dx = x - lastX_, dy = y - lastY_;
+    lastX_ = x, lastY_ = y;
+    int width, height;
+    glfwGetWindowSize(window_, &width, &height);
+    if (mode_ == Mode::Orbit) camera_.orbit(dx, dy);
+    if (mode_ == Mode::Pan) camera_.pan(dx, dy, height);
+    if (mode_ == Mode::Drag && drag_) {
+      if (shift_ && !camera_.flat) return dragInDepth(camera_, *drag_, -dy * pixelSize(camera_, height));
+      dragInPlane(camera_, *drag_, x, y, width, height);
+    }
+  }
+
+  void scroll(double dy) {
+    if (ImGui::GetIO().WantCaptureMouse) return;
+    std::unique_lock<std::mutex> state = lockState();
+    if (mode_ == Mode::Drag && drag_ && !camera_.flat) {
+      int width, height;
+      glfwGetWindowSize(window_, &width, &height);
+      dragInDepth(camera_, *drag_, dy * 10 * pixelSize(camera_, height));
+      return;
+    }
+    camera_.zoom(dy);
+  }
+
+  // ---- for main()'s timing runs and screenshots (call with lockState()) ----
+  const Figures& figures() const { return figures_; }
+  long totalSteps() const { return steps_; }
+  /// [s] how long the last frame held the world (figures + draw list); 0 when it was busy.
+  double worldHeldSeconds() const { return worldHeldSeconds_; }
+  size_t drawTriangles() const { return list_.triangles.size() / 3; }
+  const RateWindow& rates() const { return rates_; }
+  bool rebuilding() const { return rebuild_ != nullptr; }
+  double lastRebuildSeconds() const { return lastRebuildSeconds_; }
+  const ViewOptions& view() const { return view_; }
+  void setView(const ViewOptions& v) { view_ = v; }
+  /// Body 0's size as the panel's slider sets it, rebuilt in the background.
+  void setBodySize(int size) {
+    resizeBody(0, size);
+    requestRebuild(scene_, false, false, "size " + std::to_string(edits_.at(0).sizeVoxels));
+  }
+
+ private:
+  enum class Mode { None, Orbit, Pan, Drag };
+  static constexpr const char* kShapes[] = {"sphere", "box", "cylinder", "as loaded"};
+  static constexpr int kAsLoaded = 3;
+
+  // Body b of scene_ at `size` voxels and the same physical extent: its panel shape (a preset),
+  // or as loaded (a scene's union of primitives scaled; a volume from a file keeps the file's size).
+  void resizeBody(size_t b, int size) {
+    BodyEdit& edit = edits_.at(b);
+    edit.sizeVoxels = std::clamp(size, kMinBodySize, kMaxBodySize);
+    if (int(b) == editBody_) sizeDraft_ = edit.sizeVoxels;
+    applyShape(b);
+  }
+
+  void applyShape(size_t b) {
+    BodySettings& body = scene_.bodyAt(b);
+    const BodyEdit& edit = edits_.at(b);
+    if (edit.shapeIndex == kAsLoaded) {
+      body.source = edit.loadedSource;
+      body.shape = edit.loadedSource ? edit.loadedShape : scaleShape(edit.loadedShape, edit.sizeVoxels);
+      return;
+    }
+    body.shape = presetShape(kShapes[edit.shapeIndex], edit.sizeVoxels, scene_.dim, edit.extent / edit.sizeVoxels);
+    body.source = nullptr;
+  }
+
+  // The panel's shape index of a loaded body: a preset when it is one primitive filling its grid
+  // as presetShape makes it, else kAsLoaded.
+  int presetIndex(const BodySettings& b) const {
+    if (b.source || b.shape.primitives.size() != 1) return kAsLoaded;
+    const ShapeSpec& s = b.shape;
+    const int n = s.dims[0];
+    if (s.dims[1] != n || (s.dim == 3 && s.dims[2] != n)) return kAsLoaded;
+    for (int i : {0, 1, 2})
+      if (i < (s.dim == 3 ? 3 : 2)) {
+        const ShapeSpec preset = presetShape(kShapes[i], n, s.dim, s.voxelSize);
+        const Primitive &a = preset.primitives.front(), &c = s.primitives.front();
+        if (a.kind == c.kind && a.min == c.min && a.max == c.max && a.center == c.center && a.radius == c.radius &&
+            a.halfLength == c.halfLength && a.axis == c.axis && a.label == c.label)
+          return i;
+      }
+    return kAsLoaded;
+  }
+
+  static bool finite(const World& w) {
+    for (const Vec3& p : w.state().positions)
+      if (!p.allFinite()) return false;
+    return true;
+  }
+
+  // ---- stepping (its own thread) ----
+  // Each batch: what to do, from the state (brief); the steps, holding only the world; the
+  // result, into the state (brief). Never both locks at once.
+  void stepLoop() {
+    using namespace std::chrono_literals;
+    while (!quit_) {
+      if (drawWaiting_ > 0) {  // the drawing thread wants the world: let it in
+        std::this_thread::sleep_for(50us);
+        continue;
+      }
+      long n = 0, generation = 0;
+      double wait = 2e-3;
+      std::optional<ManipulatorDrag> drag;
+      {
+        std::unique_lock<std::mutex> state = lockState();
+        const double now = wallNow();
+        if (paused_ || rebuild_ || diverged_) {
+          pacer_.restart(now);  // a pause is not owed
+        } else {
+          if (pacer_.speed() != double(speed_)) pacer_.setSpeed(speed_, now);
+          n = pacer_.due(now);
+          wait = pacer_.waitSeconds(now);
+          behind_ = pacer_.behind(now);
+        }
+        drag = drag_, generation = generation_;
+      }
+      if (n == 0) {
+        std::this_thread::sleep_for(std::chrono::duration<double>(std::clamp(wait, 50e-6, 2e-3)));
+        continue;
+      }
+      std::unique_lock<std::timed_mutex> world(worldMutex_);
+      if (generation != generation_) continue;  // a rebuilt world came in meanwhile
+      World& w = *built_.world;
+      const auto t0 = Clock::now();
+      const double batchSim = double(n) * w.dt();
+      for (long k = 0; k < n; ++k) {
+        if (drag) feedDrag(w, *drag, double(k + 1) / double(n), batchSim);
+        w.step();
+      }
+      const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+      const bool ok = finite(w);
+      const double simTime = w.time();
+      world.unlock();
+      std::unique_lock<std::mutex> state = lockState();
+      if (generation != generation_) continue;
+      if (drag && drag_ && drag_->index == drag->index) drag_->from = drag->to;  // reached
+      pacer_.stepped(n, seconds);
+      steps_ += n;
+      simTime_ = simTime;
+      if (!ok) diverged_ = true;
+    }
+  }
+
+  // ---- rebuilding (a background thread) ----
+  // Builds `scene` in the background; stepping stops until it is swapped in. A request while one
+  // builds replaces any waiting one (the latest settings win).
+  void requestRebuild(const Scene& scene, bool load, bool reframe, const std::string& what) {
+    auto r = std::make_unique<Rebuild>();
+    r->scene = scene, r->load = load, r->reframe = reframe, r->what = what;
+    if (rebuild_) {
+      waiting_ = std::move(r);
+      return;
+    }
+    startRebuild(std::move(r));
+  }
+
+  void startRebuild(std::unique_ptr<Rebuild> r) {
+    r->start = wallNow();
+    Rebuild* p = r.get();
+    rebuild_ = std::move(r);
+    World* running = built_.world.get();  // not replaced while a rebuild is pending
+    rebuild_->thread = std::thread([this, p, running] {
+      try {
+        if (!p->load) {  // new settings: manipulators the user moved keep their place (waits for the batch)
+          std::unique_lock<std::timed_mutex> world(worldMutex_);
+          keepManipulatorPoses(*running, p->scene);
+        }
+        p->built = buildScene(p->scene);
+        p->phase = 1;
+        p->view = makeBodyView(*p->built);
+      } catch (const InputError& e) {
+        p->error = e.what();
+      } catch (const std::exception& e) {
+        p->error = std::string("internal error: ") + e.what();
+      }
+      p->phase = 2;
+    });
+  }
+
+  void finishRebuild(double now) {
+    if (!rebuild_ || rebuild_->phase != 2) return;
+    std::unique_lock<std::timed_mutex> world = tryWorld();  // free: no batch starts during a rebuild
+    if (!world.owns_lock()) return;
+    rebuild_->thread.join();
+    std::unique_ptr<Rebuild> r = std::move(rebuild_);
+    lastRebuildSeconds_ = now - r->start;
+    if (r->error.empty()) {
+      install(std::move(r->scene), std::move(*r->built), std::move(*r->view), r->load, r->reframe);
+      if (status_ != "simulation diverged; reset") status_.clear();
+    } else {
+      status_ = r->error;
+      scene_ = builtScene_;  // the panel shows what runs
+      syncEdits();
+    }
+    if (waiting_) startRebuild(std::move(waiting_));
+  }
+
+  // A built world replaces the one running (called with both locks, or before stepping starts).
+  void install(Scene scene, BuiltScene built, BodyView view, bool load, bool reframe) {
+    ++generation_;
+    scene_ = std::move(scene);
+    builtScene_ = scene_;
+    built_ = std::move(built);
+    // One core is left to drawing (software GL draws on the CPU): with both cores stepping, on
+    // 2 loaded cores the frames took longer and the real-time factor did not rise beyond the
+    // noise (docs/viewer.md).
+    built_.world->setThreads(std::max(1, int(std::thread::hardware_concurrency()) - 1));
+    body_ = std::move(view);
     drag_.reset();
     steps_ = 0;
+    rates_.reset();
+    pacer_ = StepPacer(built_.world->dt(), speed_);
+    pacer_.restart(wallNow());
+    behind_ = false;
+    if (load) {
+      original_ = scene_;
+      // A body from a mesh file shows that mesh (embedded) first; other bodies the smooth surface.
+      view_.surface = built_.embedded ? SurfaceMode::Embedded : SurfaceMode::Smooth;
+      view_.forces = true;  // the contact force arrows on the tools
+      // Each body keeps its physical size when its resolution changes.
+      edits_.clear();
+      for (size_t i = 0; i < built_.numBodies(); ++i) {
+        const VoxelVolume& v = built_.body(i).volume;
+        const BodySettings& settings = scene_.bodyAt(i);
+        BodyEdit e;
+        e.extent = v.voxelSize() * std::max(v.nx(), v.ny());
+        e.sizeVoxels = std::clamp(std::max({v.nx(), v.ny(), v.nz()}), kMinBodySize, kMaxBodySize);
+        e.loadedShape = settings.shape, e.loadedSource = settings.source;
+        e.shapeIndex = presetIndex(settings);
+        if (settings.source) {
+          e.origin = "from " + settings.source->describe();
+        } else if (e.shapeIndex == kAsLoaded) {
+          e.origin = "a union of " + std::to_string(settings.shape.primitives.size()) + " primitives";
+        } else {
+          e.origin = "a preset shape";
+        }
+        char dims[64];
+        std::snprintf(dims, sizeof dims, ", %dx%dx%d voxels", v.nx(), v.ny(), v.nz());
+        e.origin += dims;
+        edits_.push_back(e);
+      }
+      editBody_ = 0;
+    }
+    syncEdits();
     if (reframe) reframeCamera();
+    int width, height;
+    glfwGetFramebufferSize(window_, &width, &height);
+    refresh(wallNow(), width, height);
+  }
+
+  void syncEdits() {
+    if (editBody_ < int(edits_.size())) sizeDraft_ = edits_[size_t(editBody_)].sizeVoxels;
+    confirmSize_ = 0;
   }
 
   // Frames the scene in the part of the window right of the panel.
@@ -138,62 +540,68 @@ class Viewer {
     camera_.pan(kPanelWidth / 2, 0, height);
   }
 
-  void frame(double wallNow, double frameSeconds) {
-    World& w = *built_.world;
-    long steps = 0;
-    behind_ = false;
-    if (!paused_ || stepOnce_) {
-      const double want = stepOnce_ ? w.dt() : std::min(frameSeconds, kMaxFrameSeconds) * speed_;
-      const long n = std::max(1L, std::lround(want / w.dt()));
-      const auto start = Clock::now();
-      w.restartForceAverage();  // the force arrows: averaged over this frame's steps
-      for (long k = 0; k < n; ++k) {
-        if (drag_) feedDrag(*built_.world, *drag_, double(k + 1) / double(n), want);
-        w.step();
-        ++steps;
-        if (std::chrono::duration<double>(Clock::now() - start).count() > kStepBudgetSeconds && k + 1 < n) {
-          behind_ = true;  // drop the rest: the simulation runs slower than real time
-          if (drag_) feedDrag(*built_.world, *drag_, 1.0, want);
-          break;
-        }
-      }
-      if (drag_) drag_->from = drag_->to;
-      stepOnce_ = false;
-      if (!finite(w)) {
-        status_ = "simulation diverged; reset";
-        rebuild(false);
-      }
+  void openScene(const std::string& path) {
+    try {
+      Scene s = loadScene(path);
+      const std::string name = fs::path(path).filename().string();
+      requestRebuild(s, true, true, name);
+    } catch (const InputError& e) {
+      status_ = e.what();
     }
-    steps_ += steps;
-    rates_.add(wallNow, steps);
-    if (steps > 0) realTime_ = 0.9 * realTime_ + 0.1 * (double(steps) * w.dt() / std::max(frameSeconds, 1e-6));
   }
 
-  void draw(int width, int height, Renderer& renderer) {
-    renderer.draw(buildDrawList(body_, *built_.world, view_, width, height), camera_, width, height);
+  // One line of text whether or not there is anything to say: the widgets below never move.
+  static void reservedLine(bool show, const ImVec4& colour, const std::string& text) {
+    if (show && !text.empty())
+      ImGui::TextColored(colour, "%s", text.c_str());
+    else
+      ImGui::TextUnformatted(" ");
   }
 
-  void panel() {
-    World& w = *built_.world;
+  // The size slider's estimate: real-time factor at `size` from what this body measures now.
+  std::optional<SizeEstimate> sizeEstimate(int size) const {
+    const BodyEdit& edit = edits_.at(size_t(editBody_));
+    if (pacer_.capacity() <= 0 || steps_ < 20) return std::nullopt;
+    const LayoutKind layout = scene_.bodyAt(size_t(editBody_)).layout;
+    return estimateSize(edit.sizeVoxels, pacer_.capacity(), size, vertexExponent(layout), kMinBodySize, kMaxBodySize);
+  }
+
+  void panel(double now) {
+    const Figures& f = figures_;
+    const ImVec4 red(0.85f, 0.1f, 0.1f, 1), orange(0.8f, 0.3f, 0.0f, 1);
     ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
     ImGui::SetNextWindowSize(ImVec2(kPanelWidth, 0), ImGuiCond_FirstUseEver);
     ImGui::Begin("gradel");
-    // ---- live figures ----
-    ImGui::Text("%.0f fps   %.0f steps/s   real time x%.2f", rates_.fps(), rates_.stepsPerSecond(), realTime_);
-    if (behind_) ImGui::TextColored(ImVec4(0.9f, 0.1f, 0.1f, 1), "cannot keep up: simulation slower than real time");
-    ImGui::Text("t = %.3f s  dt = %.3g s  %s", w.time(), w.dt(), integratorKindName(w.settings().integrator));
-    if (!w.integratorChoice().empty()) ImGui::TextWrapped("auto: %s", w.integratorChoice().c_str());
-    ImGui::Text("%zu elements  %zu vertices  %zu pairs", w.model().numElements(), w.model().numVertices(),
-                w.model().numPairs());
-    const std::vector<Real> es = w.elementStress();
-    ImGui::Text("max stress %.4f", es.empty() ? 0.0 : *std::max_element(es.begin(), es.end()));
+    // ---- live figures: a fixed number of lines, so that the buttons below never move ----
+    ImGui::Text("%.0f fps   %.0f steps/s   real time x%.3g", rates_.samplesPerSecond(), rates_.stepsPerSecond(),
+                rates_.realTimeFactor());
+    if (rebuild_) {
+      const double t = now - rebuild_->start;
+      char text[160];
+      std::snprintf(text, sizeof text, "building %s: %s  %.1f s", rebuild_->what.c_str(),
+                    rebuild_->phase == 0 ? "volume, layout, model" : "display surfaces", t);
+      ImGui::TextColored(orange, "%s", text);
+      ImGui::ProgressBar(rebuild_->phase == 0 ? 0.33f : 0.8f, ImVec2(-1, 0), rebuild_->phase == 0 ? "1/2" : "2/2");
+    } else {
+      reservedLine(behind_, red, "cannot keep up: simulation slower than real time");
+      char cap[120];
+      std::snprintf(cap, sizeof cap, "this machine: up to x%.3g real time at this size", pacer_.capacity());
+      reservedLine(pacer_.capacity() > 0 && steps_ >= 20, ImGui::GetStyleColorVec4(ImGuiCol_TextDisabled), cap);
+    }
+    ImGui::Text("t = %.3f s  dt = %.3g s  %s", f.time, f.dt, f.integrator.c_str());
+    // The auto choice's reason: one line (the full text as a tooltip).
+    reservedLine(!f.choice.empty(), ImGui::GetStyleColorVec4(ImGuiCol_Text), "auto: " + f.choice.substr(0, 44) +
+                                                                           (f.choice.size() > 44 ? "..." : ""));
+    if (!f.choice.empty() && ImGui::IsItemHovered()) ImGui::SetTooltip("auto: %s", f.choice.c_str());
+    ImGui::Text("%zu elements  %zu vertices  %zu pairs", f.elements, f.vertices, f.pairs);
+    ImGui::Text("max stress %.4f", f.maxStress);
     // Several bodies: a row of figures per body (render/body_table.h); the lines above are all of them.
-    if (built_.numBodies() > 1 &&
+    if (f.bodies.size() > 1 &&
         ImGui::BeginTable("bodies", 5,
                           ImGuiTableFlags_Borders | ImGuiTableFlags_RowBg | ImGuiTableFlags_SizingFixedFit)) {
       for (const char* h : {"body", "vertices", "kinetic [J]", "elastic [J]", "max stress"}) ImGui::TableSetupColumn(h);
       ImGui::TableHeadersRow();
-      for (const BodyRow& r : bodyTable(built_)) {
+      for (const BodyRow& r : f.bodies) {
         ImGui::TableNextRow();
         ImGui::TableNextColumn(), ImGui::TextUnformatted(r.name.c_str());
         ImGui::TableNextColumn(), ImGui::Text("%zu", r.vertices);
@@ -203,15 +611,17 @@ class Viewer {
       }
       ImGui::EndTable();
     }
-    if (!status_.empty()) ImGui::TextColored(ImVec4(0.8f, 0.3f, 0.0f, 1), "%s", status_.c_str());
+    reservedLine(!status_.empty(), orange, status_.substr(0, 48) + (status_.size() > 48 ? "..." : ""));
+    if (!status_.empty() && ImGui::IsItemHovered()) ImGui::SetTooltip("%s", status_.c_str());
 
     // ---- run ----
-    if (ImGui::Button(paused_ ? "Run" : "Pause")) paused_ = !paused_;
+    if (ImGui::Button(paused_ ? "Run" : "Pause")) paused_ = !paused_, rates_.reset();
     ImGui::SameLine();
     if (ImGui::Button("Step")) paused_ = true, stepOnce_ = true;
     ImGui::SameLine();
-    if (ImGui::Button("Reset")) scene_ = original_, rebuild(false);
-    ImGui::SliderFloat("speed", &speed_, 0.05f, 2.0f, "x%.2f");
+    if (ImGui::Button("Reset")) requestRebuild(original_, true, false, "reset");
+    float speed = speed_;
+    if (ImGui::SliderFloat("speed", &speed, 0.05f, 2.0f, "x%.2f")) speed_ = speed;
 
     // ---- the paper's interactions, one click each ----
     section("Scenes");
@@ -223,7 +633,7 @@ class Viewer {
     sceneButton("Grasp vs wall", "grasp-wall.json");
     ImGui::SameLine();
     sceneButton("Grasp two", "grasp-two.json");
-    if (ImGui::Button("Play (free manipulator)")) load(parseScene(kPlayScene, "play"));
+    if (ImGui::Button("Play (free manipulator)")) requestRebuild(parseScene(kPlayScene, "play"), true, true, "play");
     ImGui::SameLine();
     sceneButton("2D strike", "strike-2d.json");
     // Several bodies and materials (issue 12).
@@ -250,63 +660,114 @@ class Viewer {
     ImGui::SameLine();
     ImGui::Checkbox("vertices", &view_.vertices);
     ImGui::Checkbox("stress colour", &view_.stress);
+    ImGui::SameLine();
     ImGui::Checkbox("tool forces", &view_.forces);
     float scale = float(view_.stressScale);
-    if (view_.stress && ImGui::SliderFloat("stress scale", &scale, 0.005f, 0.3f, "%.3f", ImGuiSliderFlags_Logarithmic))
+    ImGui::BeginDisabled(!view_.stress);  // always there: the widgets below do not move
+    if (ImGui::SliderFloat("stress scale", &scale, 0.005f, 0.3f, "%.3f", ImGuiSliderFlags_Logarithmic))
       view_.stressScale = scale;
+    ImGui::EndDisabled();
     if (ImGui::Button("Reframe camera")) reframeCamera();
 
-    // ---- body and settings: any change rebuilds the world ----
+    // ---- body and settings: any change rebuilds the world (in the background) ----
     section("Body (changes restart)");
     bool changed = false, reshaped = false;
-    static const char* shapes[] = {"sphere", "box", "cylinder"};
     static const char* layouts[] = {"gradational", "uniform", "voxel"};
     // With several bodies the settings below are those of the body picked here.
     editBody_ = std::min(editBody_, int(scene_.numBodies()) - 1);
     if (scene_.numBodies() > 1 && ImGui::BeginCombo("edit body", scene_.bodyAt(size_t(editBody_)).name.c_str())) {
       for (size_t i = 0; i < scene_.numBodies(); ++i)
-        if (ImGui::Selectable(scene_.bodyAt(i).name.c_str(), int(i) == editBody_)) editBody_ = int(i);
+        if (ImGui::Selectable(scene_.bodyAt(i).name.c_str(), int(i) == editBody_)) editBody_ = int(i), syncEdits();
       ImGui::EndCombo();
     }
     BodySettings& body = scene_.bodyAt(size_t(editBody_));
     BodyEdit& edit = edits_.at(size_t(editBody_));
-    if (ImGui::Combo("shape", &edit.shapeIndex, shapes, scene_.dim == 3 ? 3 : 2)) changed = reshaped = true;
-    if (ImGui::SliderInt("size [voxels]", &edit.sizeVoxels, 4, 48)) changed = reshaped = true;
+    // The presets, and the body as loaded (a file's volume, a scene's union of primitives).
+    const char* shapeItems[] = {kShapes[0], kShapes[1], kShapes[2], kShapes[kAsLoaded]};
+    if (scene_.dim == 2) shapeItems[2] = kShapes[kAsLoaded];  // no cylinder in 2D
+    int shapeItem = scene_.dim == 2 && edit.shapeIndex == kAsLoaded ? 2 : edit.shapeIndex;
+    if (ImGui::Combo("shape", &shapeItem, shapeItems, scene_.dim == 3 ? 4 : 3)) {
+      edit.shapeIndex = scene_.dim == 2 && shapeItem == 2 ? kAsLoaded : shapeItem;
+      changed = reshaped = true;
+    }
+    ImGui::TextDisabled("%s", edit.origin.substr(0, 52).c_str());
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("loaded: %s", edit.origin.c_str());
+    // The size applies when the slider is released or a typed size is entered (Ctrl+click types).
+    // A volume from a file keeps the file's size.
+    const bool fixedSize = edit.shapeIndex == kAsLoaded && edit.loadedSource;
+    ImGui::BeginDisabled(fixedSize);
+    ImGui::SliderInt("size [voxels]", &sizeDraft_, kMinBodySize, kMaxBodySize);
+    ImGui::EndDisabled();
+    sizeDraft_ = std::clamp(sizeDraft_, kMinBodySize, kMaxBodySize);
+    const bool sizeEntered = ImGui::IsItemDeactivatedAfterEdit();
+    const std::optional<SizeEstimate> est = sizeEstimate(sizeDraft_);
+    const bool slow = est && est->realTimeFactor < kSlowFactor;
+    if (sizeEntered && sizeDraft_ != edit.sizeVoxels) {
+      if (slow)
+        confirmSize_ = sizeDraft_;  // flagged: built only when confirmed below
+      else
+        edit.sizeVoxels = sizeDraft_, confirmSize_ = 0, changed = reshaped = true;
+    }
+    {  // the estimate line and the confirmation row, reserved
+      char text[160] = "";
+      if (est && sizeDraft_ != edit.sizeVoxels)
+        std::snprintf(text, sizeof text, "size %d: about x%.2g real time%s; real time up to %d", sizeDraft_,
+                      est->realTimeFactor, slow ? " (below x0.1)" : "", est->largestRealTime);
+      else if (est)
+        std::snprintf(text, sizeof text, "real time up to size %d (estimate)", est->largestRealTime);
+      reservedLine(true, slow ? red : ImGui::GetStyleColorVec4(ImGuiCol_TextDisabled), text);
+      if (confirmSize_ > 0 && est) {
+        char label[64];
+        std::snprintf(label, sizeof label, "Build %d anyway", confirmSize_);
+        if (ImGui::SmallButton(label)) edit.sizeVoxels = confirmSize_, confirmSize_ = 0, changed = reshaped = true;
+        ImGui::SameLine();
+        std::snprintf(label, sizeof label, "Build %d (real time)", est->largestRealTime);
+        if (ImGui::SmallButton(label))
+          edit.sizeVoxels = sizeDraft_ = est->largestRealTime, confirmSize_ = 0, changed = reshaped = true;
+        ImGui::SameLine();
+        if (ImGui::SmallButton("Cancel")) sizeDraft_ = edit.sizeVoxels, confirmSize_ = 0;
+      } else {
+        ImGui::Dummy(ImVec2(1, ImGui::GetTextLineHeight()));  // a SmallButton row's height
+      }
+    }
     int layout = int(body.layout);
     if (ImGui::Combo("layout", &layout, layouts, 3)) body.layout = LayoutKind(layout), changed = true;
     float E = float(body.material.youngsModulus), rho = float(body.material.density);
     if (ImGui::SliderFloat("E [Pa]", &E, 1e3f, 1e7f, "%.3g", ImGuiSliderFlags_Logarithmic))
-      body.material.youngsModulus = E, changed = true;
-    if (ImGui::SliderFloat("density", &rho, 100.f, 5000.f, "%.0f kg/m3")) body.material.density = rho, changed = true;
+      body.material.youngsModulus = E;
+    if (ImGui::IsItemDeactivatedAfterEdit()) changed = true;
+    if (ImGui::SliderFloat("density", &rho, 100.f, 5000.f, "%.0f kg/m3")) body.material.density = rho;
+    if (ImGui::IsItemDeactivatedAfterEdit()) changed = true;
     if (!body.material.regions.empty())
-      ImGui::TextWrapped("this body has %zu materials per region: E and density above are the default for other labels",
+      ImGui::TextWrapped("materials per region: %zu labels have their own; E and density above are the default's",
                          body.material.regions.size());
     float damping = float(scene_.simulation.damping);
-    if (ImGui::SliderFloat("damping [1/s]", &damping, 0.f, 20.f, "%.2f"))
-      scene_.simulation.damping = damping, changed = true;
+    if (ImGui::SliderFloat("damping [1/s]", &damping, 0.f, 20.f, "%.2f")) scene_.simulation.damping = damping;
+    if (ImGui::IsItemDeactivatedAfterEdit()) changed = true;
     float friction = float(scene_.domain.friction);
     if (ImGui::SliderFloat("friction", &friction, 0.f, 2.f, "%.2f")) {
       scene_.domain.friction = friction;
       for (ManipulatorSettings& m : scene_.manipulators) m.friction = friction;
-      changed = true;
     }
+    if (ImGui::IsItemDeactivatedAfterEdit()) changed = true;
     int integrator = int(scene_.simulation.integrator);
     static const char* integrators[] = {"symplectic", "forward_euler", "implicit", "large_step",
                                         "auto"};  // IntegratorKind order
     if (ImGui::Combo("integrator", &integrator, integrators, 5))
       scene_.simulation.integrator = IntegratorKind(integrator), changed = true;
     bool autoDt = scene_.simulation.dt == 0;
-    if (ImGui::Checkbox("dt auto", &autoDt)) scene_.simulation.dt = autoDt ? 0 : w.dt(), changed = true;
+    if (ImGui::Checkbox("dt auto", &autoDt)) scene_.simulation.dt = autoDt ? 0 : f.dt, changed = true;
     if (!autoDt) {
       float dt = float(scene_.simulation.dt * 1e3);
       ImGui::SameLine();
       ImGui::SetNextItemWidth(140);
       if (ImGui::SliderFloat("dt [ms]", &dt, 0.005f, 2.0f, "%.3f", ImGuiSliderFlags_Logarithmic))
-        scene_.simulation.dt = dt * 1e-3, changed = true;
+        scene_.simulation.dt = dt * 1e-3;
+      if (ImGui::IsItemDeactivatedAfterEdit()) changed = true;
     }
     float g = float(-scene_.simulation.gravity.y());
-    if (ImGui::SliderFloat("gravity [m/s2]", &g, 0.f, 20.f, "%.2f"))
-      scene_.simulation.gravity = Vec3(0, -g, 0), changed = true;
+    if (ImGui::SliderFloat("gravity [m/s2]", &g, 0.f, 20.f, "%.2f")) scene_.simulation.gravity = Vec3(0, -g, 0);
+    if (ImGui::IsItemDeactivatedAfterEdit()) changed = true;
 
     // ---- manipulators ----
     section("Manipulators");
@@ -321,97 +782,14 @@ class Viewer {
     ImGui::TextWrapped("Drag a manipulator with the left button; wheel or Shift+drag moves it in depth.");
 
     if (changed) {
-      if (reshaped) {  // a preset shape of the same physical size replaces the body's volume
-        body.shape = presetShape(shapes[edit.shapeIndex], edit.sizeVoxels, scene_.dim, edit.extent / edit.sizeVoxels);
-        body.source = nullptr;
+      std::string what = "settings";
+      if (reshaped) {  // the chosen shape at the chosen size, the same physical extent
+        applyShape(size_t(editBody_));
+        what = std::string(kShapes[edit.shapeIndex]) + " " + std::to_string(edit.sizeVoxels);
       }
-      keepManipulatorPoses(*built_.world, scene_);
-      try {
-        rebuild(false);
-        status_.clear();
-      } catch (const InputError& e) {
-        status_ = e.what();
-        scene_ = original_;
-        rebuild(false);
-      }
+      requestRebuild(scene_, false, false, what);
     }
     ImGui::End();
-  }
-
-  // ---- mouse ----
-  void mouseButton(int button, int action, int mods) {
-    if (ImGui::GetIO().WantCaptureMouse && action == GLFW_PRESS) return;
-    double x, y;
-    glfwGetCursorPos(window_, &x, &y);
-    if (action == GLFW_RELEASE) {
-      drag_.reset();
-      mode_ = Mode::None;
-      return;
-    }
-    lastX_ = x, lastY_ = y;
-    shift_ = (mods & GLFW_MOD_SHIFT) != 0;
-    if (button == GLFW_MOUSE_BUTTON_LEFT) {
-      int width, height;
-      glfwGetWindowSize(window_, &width, &height);
-      if (const std::optional<size_t> m = pickManipulator(camera_, *built_.world, x, y, width, height)) {
-        drag_ = grabManipulator(camera_, *built_.world, *m, x, y, width, height);
-        mode_ = Mode::Drag;
-      } else {
-        mode_ = Mode::Orbit;
-      }
-    } else {
-      mode_ = Mode::Pan;
-    }
-  }
-
-  void cursor(double x, double y) {
-    const double dx = x - lastX_, dy = y - lastY_;
-    lastX_ = x, lastY_ = y;
-    int width, height;
-    glfwGetWindowSize(window_, &width, &height);
-    if (mode_ == Mode::Orbit) camera_.orbit(dx, dy);
-    if (mode_ == Mode::Pan) camera_.pan(dx, dy, height);
-    if (mode_ == Mode::Drag && drag_) {
-      if (shift_ && !camera_.flat) return dragInDepth(camera_, *drag_, -dy * pixelSize(camera_, height));
-      dragInPlane(camera_, *drag_, x, y, width, height);
-    }
-  }
-
-  void scroll(double dy) {
-    if (ImGui::GetIO().WantCaptureMouse) return;
-    if (mode_ == Mode::Drag && drag_ && !camera_.flat) {
-      int width, height;
-      glfwGetWindowSize(window_, &width, &height);
-      dragInDepth(camera_, *drag_, dy * 10 * pixelSize(camera_, height));
-      return;
-    }
-    camera_.zoom(dy);
-  }
-
-  const Camera& camera() const { return camera_; }
-  World& world() { return *built_.world; }
-  long totalSteps() const { return steps_; }
-  const Rates& rates() const { return rates_; }
-  double realTime() const { return realTime_; }
-  bool behind() const { return behind_; }
-  const ViewOptions& view() const { return view_; }
-  void setView(const ViewOptions& v) { view_ = v; }
-
-  void openScene(const std::string& path) {
-    try {
-      load(loadScene(path));
-      status_.clear();
-    } catch (const InputError& e) {
-      status_ = e.what();
-    }
-  }
-
- private:
-  enum class Mode { None, Orbit, Pan, Drag };
-  static bool finite(const World& w) {
-    for (const Vec3& p : w.state().positions)
-      if (!p.allFinite()) return false;
-    return true;
   }
 
   void addManipulator(ManipulatorShape shape) {
@@ -423,42 +801,58 @@ class Viewer {
     m.axis = Vec3(0, 1, 0);
     m.restitution = 0.3;
     m.friction = scene_.domain.friction;
-    // Beside the body being edited, on the side away from the other manipulators.
-    const std::vector<Vec3>& x = built_.world->state().positions;
-    const BodyRange& range = built_.range(size_t(editBody_));
-    Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
-    if (range.vertexEnd > range.vertexBegin) lo = hi = x[range.vertexBegin];
-    for (uint32_t i = range.vertexBegin; i < range.vertexEnd; ++i) lo = lo.cwiseMin(x[i]), hi = hi.cwiseMax(x[i]);
+    // Beside the body being edited (where the last figures saw it), on the side away from the
+    // other manipulators.
+    const auto& [lo, hi] = figures_.bounds.at(size_t(editBody_));
     const Vec3 c = (lo + hi) / 2;
     const Real side = scene_.manipulators.size() % 2 == 0 ? -1 : 1;
     Vec3 p = c + Vec3(side * (0.5 * extent + m.radius + 0.05), 0, 0);
     if (scene_.dim == 2) p.z() = 0;
     m.path.keys = {Keyframe{0, p, std::nullopt}};
-    keepManipulatorPoses(*built_.world, scene_);
     scene_.manipulators.push_back(m);
   }
 
   GLFWwindow* window_;
-  Scene scene_, original_;
+  Clock::time_point start_;
+  // The world (built_.world) is guarded by worldMutex_, held by the stepping thread for each batch;
+  // everything else below by stateMutex_. built_ is replaced only with both held.
+  std::mutex stateMutex_;
+  std::timed_mutex worldMutex_;
+  std::atomic<int> drawWaiting_{0};
+  std::atomic<long> generation_{0};  // counts installed worlds
+  DrawList list_;                    // the last picture's draw list
+  std::atomic<bool> quit_{false};
+  std::thread stepper_;
+  Scene scene_, original_, builtScene_;  // as edited / as loaded / as running
   BuiltScene built_;
   BodyView body_;
+  std::unique_ptr<Rebuild> rebuild_, waiting_;
+  double lastRebuildSeconds_ = 0;
+  StepPacer pacer_{1.0};
+  RateWindow rates_;
+  Figures figures_;
   Camera camera_;
   ViewOptions view_;
-  Rates rates_;
   std::optional<ManipulatorDrag> drag_;
   Mode mode_ = Mode::None;
   double lastX_ = 0, lastY_ = 0;
-  bool shift_ = false, paused_ = false, stepOnce_ = false, behind_ = false;
+  bool shift_ = false, paused_ = false, stepOnce_ = false, behind_ = false, diverged_ = false;
   float speed_ = 1.0f;
-  double realTime_ = 0;
   long steps_ = 0;
+  double simTime_ = 0;  ///< [s] the world's time after the last batch
+  double worldHeldSeconds_ = 0;
   /// The panel's shape settings of one body (the scene holds the rest).
   struct BodyEdit {
-    int shapeIndex = 0, sizeVoxels = 12;
-    Real extent = 0.12;  ///< [m] kept when the resolution changes.
+    int shapeIndex = 0, sizeVoxels = 12;  ///< kShapes index (kAsLoaded: the loaded volume)
+    Real extent = 0.12;                   ///< [m] kept when the resolution changes.
+    ShapeSpec loadedShape;                ///< As loaded: scaled for other sizes.
+    std::shared_ptr<const VolumeSource> loadedSource;  ///< As loaded from a file (null: a shape).
+    std::string origin;                                ///< "from <file>", "a preset shape", ... and the grid.
   };
   std::vector<BodyEdit> edits_;  ///< Per body.
   int editBody_ = 0;             ///< The body the "Body" settings edit.
+  int sizeDraft_ = 12;           ///< The size slider's value, applied on release / Enter.
+  int confirmSize_ = 0;          ///< A size flagged as slow, waiting for the user's choice (0 = none).
   std::string status_;
 };
 
@@ -474,11 +868,37 @@ void onScroll(GLFWwindow* w, double dx, double dy) {
   gViewer->scroll(dy);
 }
 
+// True for a software OpenGL (Mesa's llvmpipe / softpipe, e.g. under xvfb): multisampling there
+// costs every frame on the CPU the simulation needs.
+bool softwareGl() {
+  const std::string r = Renderer::glRenderer();
+  for (const char* name : {"llvmpipe", "softpipe", "Software", "swrast"})
+    if (r.find(name) != std::string::npos) return true;
+  return false;
+}
+
+GLFWwindow* openWindow(int width, int height, int samples) {
+  glfwDefaultWindowHints();
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+  glfwWindowHint(GLFW_SAMPLES, samples);
+  GLFWwindow* window = glfwCreateWindow(width, height, "gradel", nullptr, nullptr);
+  if (window) glfwMakeContextCurrent(window);
+  return window;
+}
+
 int run(const Options& o) {
   int width = 0, height = 0;
   parseSize(o.size, &width, &height);
   Scene scene = o.scene.empty() ? parseScene(kPlayScene, "play") : loadScene(o.scene);
   if (!(o.runFor >= 0) || !std::isfinite(o.runFor)) throw InputError("--run-for: must be >= 0 seconds");
+  if (o.bodySize != 0 && (o.bodySize < kMinBodySize || o.bodySize > kMaxBodySize))
+    throw InputError("--body-size: must be " + std::to_string(kMinBodySize) + " ... " + std::to_string(kMaxBodySize));
+  if (o.rebuildSize != 0 && (o.rebuildSize < kMinBodySize || o.rebuildSize > kMaxBodySize))
+    throw InputError("--rebuild-size: must be " + std::to_string(kMinBodySize) + " ... " +
+                     std::to_string(kMaxBodySize));
 
   glfwSetErrorCallback(
       [](int code, const char* text) { std::cerr << "gradel-view: GLFW error " << code << ": " << text << "\n"; });
@@ -486,20 +906,18 @@ int run(const Options& o) {
     std::cerr << "gradel-view: cannot open a window (no display? set DISPLAY, or use `gradel render` headless)\n";
     return 4;
   }
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
-  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
-  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
-  glfwWindowHint(GLFW_SAMPLES, 4);
-  GLFWwindow* window = glfwCreateWindow(width, height, "gradel", nullptr, nullptr);
+  GLFWwindow* window = openWindow(width, height, 4);
+  if (window && softwareGl()) {  // no multisampling on a software renderer: reopen without
+    glfwDestroyWindow(window);
+    window = openWindow(width, height, 0);
+  }
   if (!window) {
     glfwTerminate();
     std::cerr << "gradel-view: cannot create an OpenGL 3.3 core window\n";
     return 4;
   }
-  glfwMakeContextCurrent(window);
-  // Screenshots and timing runs measure the simulation, not the monitor's refresh.
-  glfwSwapInterval(o.screenshot.empty() && o.runFor == 0 ? 1 : 0);
+  // The frame cap is ours (60 per second, below); no waiting for the monitor on top of it.
+  glfwSwapInterval(0);
 
   IMGUI_CHECKVERSION();
   ImGui::CreateContext();
@@ -511,7 +929,9 @@ int run(const Options& o) {
   int code = 0;
   {
     Renderer renderer;
-    Viewer viewer(window, std::move(scene));
+    const auto start = Clock::now();
+    const bool fixedSteps = !o.screenshot.empty();  // a screenshot: fixed simulated time per frame
+    Viewer viewer(window, std::move(scene), !fixedSteps, start, o.bodySize);
     gViewer = &viewer;
     glfwSetMouseButtonCallback(window, onMouseButton);
     glfwSetCursorPosCallback(window, onCursor);
@@ -527,46 +947,81 @@ int run(const Options& o) {
       viewer.setView(v);
     }
 
-    const auto start = Clock::now();
-    double last = 0;
+    FrameTimes times;
+    double last = viewer.wallNow(), runStart = last;
+    bool rebuildAsked = false, rebuildSeen = false;
+    double rebuildSeconds = 0;
     long frames = 0;
     while (!glfwWindowShouldClose(window)) {
+      const double frameStart = viewer.wallNow();
       glfwPollEvents();
-      const double now = std::chrono::duration<double>(Clock::now() - start).count();
-      // A screenshot advances fixed simulated time per frame so the picture does not depend on
-      // the machine's speed.
-      const double frameSeconds = o.screenshot.empty() ? now - last : 1.0 / 60;
-      last = now;
-      viewer.frame(now, frameSeconds);
-
       int fbw, fbh;
       glfwGetFramebufferSize(window, &fbw, &fbh);
       ImGui_ImplOpenGL3_NewFrame();
       ImGui_ImplGlfw_NewFrame();
       ImGui::NewFrame();
-      viewer.panel();
+      viewer.frame(fbw, fbh);
       ImGui::Render();
       viewer.draw(fbw, fbh, renderer);
       ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
       ++frames;
 
-      if (!o.screenshot.empty() && viewer.world().time() >= o.screenshotTime) {
-        writePng(o.screenshot, readPixels(fbw, fbh));
-        std::cout
-            << nlohmann::json{{"screenshot", o.screenshot}, {"size", {fbw, fbh}}, {"t", viewer.world().time()}}.dump()
-            << "\n";
-        break;
+      if (!o.screenshot.empty()) {
+        std::unique_lock<std::mutex> lock = viewer.lockState();
+        if (viewer.figures().time >= o.screenshotTime) {
+          writePng(o.screenshot, readPixels(fbw, fbh));
+          std::cout << nlohmann::json{{"screenshot", o.screenshot}, {"size", {fbw, fbh}}, {"t", viewer.figures().time}}
+                           .dump()
+                    << "\n";
+          break;
+        }
       }
       glfwSwapBuffers(window);
-      if (o.runFor > 0 && now >= o.runFor) {
-        const World& w = viewer.world();
+      // The frame cap: the rest of the 1/60 s goes to the stepping thread.
+      const double work = viewer.wallNow() - frameStart;
+      if (o.screenshot.empty()) {
+        const double rest = kFrameSeconds - work;
+        if (rest > 0) std::this_thread::sleep_for(std::chrono::duration<double>(rest));
+      }
+      const double now = viewer.wallNow();
+      if (o.runFor > 0) {  // a timing run: frame times, a rebuild asked for as the panel would
+        std::unique_lock<std::mutex> lock = viewer.lockState();
+        times.all.push_back(now - last);
+        times.work.push_back(work);
+        times.worldHeld.push_back(viewer.worldHeldSeconds());
+        if (viewer.rebuilding()) times.longestDuringRebuild = std::max(times.longestDuringRebuild, now - last);
+        if (rebuildAsked && !viewer.rebuilding() && !rebuildSeen) rebuildSeen = true, rebuildSeconds = viewer.lastRebuildSeconds();
+        if (o.rebuildSize > 0 && !rebuildAsked && now - runStart >= o.rebuildAt) {
+          viewer.setBodySize(o.rebuildSize);
+          rebuildAsked = true;
+        }
+      }
+      last = now;
+      if (o.runFor > 0 && now - runStart >= o.runFor) {
+        std::unique_lock<std::mutex> lock = viewer.lockState();
+        const Figures& f = viewer.figures();
+        const double wall = now - runStart;
         nlohmann::json j;
-        j["frames_per_second"] = double(frames) / now;
-        j["steps_per_second"] = double(viewer.totalSteps()) / now;
-        j["real_time_factor"] = w.time() / now;
-        j["dt"] = w.dt();
-        j["elements"] = w.model().numElements();
-        j["vertices"] = w.model().numVertices();
+        j["frames_per_second"] = double(frames) / wall;
+        j["frame_ms_median"] = 1e3 * FrameTimes::median(times.all);
+        j["frame_work_ms_median"] = 1e3 * FrameTimes::median(times.work);
+        j["world_held_ms_median"] = 1e3 * FrameTimes::median(times.worldHeld);
+        j["frame_ms_max"] = 1e3 * times.longest();
+        j["steps_per_second_last_s"] = viewer.rates().stepsPerSecond();
+        j["real_time_factor_last_s"] = viewer.rates().realTimeFactor();
+        j["steps"] = viewer.totalSteps();
+        j["sim_time"] = f.time;
+        j["integrator"] = f.integrator;
+        j["integrator_choice"] = f.choice;
+        j["dt"] = f.dt;
+        j["elements"] = f.elements;
+        j["vertices"] = f.vertices;
+        if (o.rebuildSize > 0) {
+          j["rebuild_size"] = o.rebuildSize;
+          j["rebuild_seconds"] = rebuildSeen ? rebuildSeconds : -1.0;  // -1: still building at the end
+          j["frame_ms_max_during_rebuild"] = 1e3 * times.longestDuringRebuild;
+        }
+        j["draw_triangles"] = viewer.drawTriangles();
         j["gl_renderer"] = Renderer::glRenderer();
         std::cout << j.dump(2) << "\n";
         break;
@@ -593,6 +1048,11 @@ int main(int argc, char** argv) {
   app.add_option("--screenshot-time", o.screenshotTime, "Simulated time [s] before the screenshot")
       ->capture_default_str();
   app.add_option("--run-for", o.runFor, "Run for S wall seconds, print frame and simulation rates (JSON), exit");
+  app.add_option("--body-size", o.bodySize, "Start with the first body at this size [voxels], as the panel sets it");
+  app.add_option("--rebuild-size", o.rebuildSize,
+                 "With --run-for: ask for this body size (as the panel would) at --rebuild-at; the JSON gives "
+                 "the rebuild's time and the longest frame during it");
+  app.add_option("--rebuild-at", o.rebuildAt, "[s] wall time of --rebuild-size")->capture_default_str();
   try {
     app.parse(argc, argv);
     return run(o);

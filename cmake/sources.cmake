@@ -43,7 +43,10 @@ set(GRADEL_CORE_SOURCES
 set(GRADEL_SHARED_SOURCES
   src/shared/frame_loop.cpp      # the frame loop of `gradel run` and `gradel render`
   src/shared/run_budget.cpp      # how long a run will take, refused beyond a budget
+  src/shared/rate_window.cpp     # the viewer's rates over the last second
+  src/shared/realtime_size.cpp   # which body sizes run in real time, estimated before building
   src/shared/scene_presets.cpp   # scenes built in code (the benchmark's)
+  src/shared/step_pacer.cpp      # how many steps the viewer's stepping thread takes next
   src/shared/validation.cpp)     # the cantilever / stretch experiments behind gradel-validate and the tests
 
 # The volume and mesh readers (docs/io.md), part of gradel_core: zlib for gzip-encoded NRRD and
@@ -117,5 +120,7 @@ set(GRADEL_TEST_SOURCES
   tests/test_scene_io.cpp
   tests/test_scenes.cpp
   tests/test_settings_check.cpp
+  tests/test_shapes.cpp
   tests/test_stability.cpp
+  tests/test_step_pacer.cpp
   tests/test_surface.cpp)

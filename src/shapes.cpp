@@ -52,6 +52,20 @@ VoxelVolume rasterize(const ShapeSpec& spec) {
   return vol;
 }
 
+ShapeSpec scaleShape(const ShapeSpec& spec, int size) {
+  if (size < 1) throw InputError("size: must be >= 1 voxel (got " + std::to_string(size) + ")");
+  const int longest = *std::max_element(spec.dims.begin(), spec.dims.begin() + spec.dim);
+  const Real f = Real(size) / Real(longest);
+  ShapeSpec out = spec;
+  for (int i = 0; i < spec.dim; ++i) out.dims[size_t(i)] = std::max(1, int(std::lround(spec.dims[size_t(i)] * f)));
+  out.voxelSize = spec.voxelSize / f;
+  for (Primitive& p : out.primitives) {
+    for (int i = 0; i < spec.dim; ++i) p.min[i] *= f, p.max[i] *= f, p.center[i] *= f;
+    p.radius *= f, p.halfLength *= f;
+  }
+  return out;
+}
+
 ShapeSpec presetShape(const std::string& name, int size, int dim, Real voxelSize) {
   if (dim != 2 && dim != 3) throw InputError("dim: must be 2 or 3 (got " + std::to_string(dim) + ")");
   if (size < 1 || size > 4096)

@@ -45,6 +45,11 @@ VoxelVolume rasterize(const ShapeSpec& spec);
 /// unknown name or a size < 1.
 ShapeSpec presetShape(const std::string& name, int size, int dim, Real voxelSize = 0.01);
 
+/// `spec` at `size` voxels along its longest side with the same physical extent: the grid, the
+/// primitives and the voxel size scaled together (in 2D the one z layer stays). A preset of size
+/// n scaled to m is the preset of size m. Throws InputError for a size < 1.
+ShapeSpec scaleShape(const ShapeSpec& spec, int size);
+
 class ShapeSource : public VolumeSource {
  public:
   explicit ShapeSource(ShapeSpec spec) : spec_(std::move(spec)) {}
