@@ -31,6 +31,7 @@
 #include "gradel/divergence.h"
 #include "gradel/layout.h"
 #include "gradel/output.h"
+#include "gradel/overlaps.h"
 #include "gradel/scene.h"
 #include "gradel/shapes.h"
 #include "gradel/shared/frame_loop.h"
@@ -199,27 +200,6 @@ bool finiteState(const gradel::State& s) {
   return true;
 }
 
-// What to change when a run diverges, for the message.
-std::string likelyCause(const gradel::Scene& scene, double dt) {
-  char buf[256];
-  const gradel::SimulationSettings& s = scene.simulation;
-  if (s.integrator == gradel::IntegratorKind::ForwardEuler)
-    return "the likely cause is the forward_euler integrator, which gains energy at any dt (use \"symplectic\" or "
-           "\"implicit\", or a much smaller dt)";
-  if (s.dt > 0) {
-    std::snprintf(buf, sizeof buf,
-                  "the likely cause is simulation.dt = %.3g s, too large for this body: try a smaller dt or \"auto\"",
-                  dt);
-  } else {
-    std::snprintf(
-        buf, sizeof buf,
-        "the likely cause is simulation.dt_fraction = %.3g (dt = %.3g s), too large: try a smaller dt_fraction "
-        "(stable up to 0.3; the default is 0.1)",
-        s.dtFraction, dt);
-  }
-  return buf;
-}
-
 std::string hex64(uint64_t h) {
   char buf[20];
   std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
@@ -267,6 +247,14 @@ int runScene(const RunOptions& o) {
   } catch (const InputError& e) {
     throw InputError(o.scene + ": simulation." + e.what());
   }
+  // Bodies placed overlapping each other, a manipulator or a wall: told, then separated at a
+  // capped speed by the world (overlaps.h).
+  {
+    std::vector<std::string> names;
+    for (size_t i = 0; i < built.numBodies(); ++i) names.push_back(built.body(i).name);
+    for (const gradel::StartOverlap& ov : gradel::findStartOverlaps(world))
+      std::fprintf(stderr, "gradel: %s: %s\n", o.scene.c_str(), gradel::describeStartOverlap(ov, world, names).c_str());
+  }
   if (schedule.intervalRaisedToDt)
     std::fprintf(
         stderr,
@@ -301,14 +289,17 @@ int runScene(const RunOptions& o) {
   gradel::Metrics last;
 
   gradel::DivergenceGuard guard(gradel::energyBudget(world, duration));
-  const std::string cause = likelyCause(scene, dt);
+  const gradel::DivergenceFacts facts = gradel::divergenceFacts(world, duration);
   auto writeFrame = [&](size_t index) {
     std::vector<gradel::Real> elementStress;
     // One pass over the elements per frame.
     const std::vector<gradel::Metrics> each = world.bodyMetrics(&elementStress);
     gradel::Metrics m = gradel::combineMetrics(each);
     m.contactForces = world.averageContactForces();  // what the bodies exert together (World::metrics)
-    if (auto diverged = guard.check(m, cause)) throw Diverged(*diverged);
+    std::string warning;
+    if (auto diverged = guard.check(m, world.contactWork(), gradel::likelyCause(facts, m), &warning))
+      throw Diverged(*diverged);
+    if (!warning.empty()) std::fprintf(stderr, "gradel: %s: %s\n", o.scene.c_str(), warning.c_str());
     if (several) {
       for (size_t i = 0; i < each.size(); ++i) csv.append(built.body(i).name, each[i], /*forces=*/false);
       csv.append("all", m);
@@ -334,7 +325,7 @@ int runScene(const RunOptions& o) {
       char msg[160];
       std::snprintf(msg, sizeof msg, "simulation diverged at t=%.6g s (dt = %.3g s): non-finite numbers; ",
                     world.time(), dt);
-      throw Diverged(msg + cause);
+      throw Diverged(msg + gradel::likelyCause(facts, last));
     }
     if (const int sig = gSignal)
       throw Interrupted(sig, std::string("interrupted by ") +

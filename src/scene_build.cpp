@@ -1,4 +1,6 @@
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 
 #include "gradel/bodies.h"
 #include "gradel/scene.h"
@@ -6,6 +8,8 @@
 namespace gradel {
 
 namespace {
+
+constexpr Real kMinVoxelMass = 1e-200;  // [kg]
 
 // One body: volume, layout, rest model and embedded source mesh.
 void buildBody(const BodySettings& settings, int dim, const SizeLimits& limits, BuiltBody& b) {
@@ -25,6 +29,24 @@ void buildBody(const BodySettings& settings, int dim, const SizeLimits& limits, 
     b.volume = rasterize(shape);
   }
   checkLayoutSize(b.volume, settings.layout, limits, settings.sizeKey);
+  // A voxel's mass must be a normal number: density x voxel_size^dim below it underflows (and
+  // 1 / mass overflows).
+  {
+    const Real h = b.volume.voxelSize();
+    auto check = [&](Real density, const std::string& key) {
+      const Real voxelMass = density * std::pow(h, dim);
+      if (!(voxelMass >= kMinVoxelMass) || !std::isfinite(voxelMass)) {
+        char buf[320];
+        std::snprintf(buf, sizeof buf,
+                      "%s x voxel_size^%d = %.3g kg per voxel (density %.3g kg/m^3, voxel_size %.3g m) is out of range "
+                      "(expected %.0e to 1e300 kg: a mass that small underflows)",
+                      key.c_str(), dim, voxelMass, density, h, kMinVoxelMass);
+        throw InputError(settings.name + ": " + buf);
+      }
+    };
+    check(settings.material.density, "material.density");
+    for (const auto& r : settings.material.regions) check(r.density, "material.regions.density");
+  }
   b.layout = buildLayout(b.volume, settings.layout);
   std::shared_ptr<RestModel> model;
   try {
