@@ -4,15 +4,9 @@
 
 namespace gradel {
 
-Real contactVertexWork(Real m, Real k, const Vec3& x0, const Vec3& v0, const Vec3& xFree, const Vec3& vFree,
-                       const Vec3& x, const Vec3& v, Real dt) {
-  const Vec3 dx = x - xFree;
-  if (dx == Vec3::Zero() && v == vFree) return 0;
-  const Vec3 a = (vFree - v0) / dt;
-  const Real kinetic = 0.5 * m * (v.squaredNorm() - vFree.squaredNorm());
-  const Real pressed = -m * a.dot(dx);
-  const Real unexplained = std::max(Real(0), dx.norm() - (xFree - x0).norm());
-  return kinetic + pressed + 0.5 * k * unexplained * unexplained;
+Real displacementWork(Real k, const Vec3& x0, const Vec3& xFree, const Vec3& x, Real surfaceTravel) {
+  const Real d = std::max(Real(0), (x - xFree).norm() - (xFree - x0).norm() - surfaceTravel);
+  return 0.5 * k * d * d;
 }
 
 std::vector<Real> vertexStiffness(const RestModel& model) {

@@ -346,32 +346,48 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
 Real World::resolveVertexContacts(const Vec3& previous, const Vec3& previousVelocity, Vec3& x, Vec3& v, Real mass,
                                   Real stiffness, ContactForce* impulse, Real* work, int* surface) const {
   const int dim = model_->dim;
-  const Vec3 xFree = x, vFree = v;
+  const Vec3 xFree = x;
   const StepStart start{previousVelocity, dt_, sim_.integrator == IntegratorKind::SymplecticEuler};
   const size_t surfaces = manipulators_.size() + (domain_.enabled ? 1 : 0);
   const size_t K = manipulators_.size();
   Real depth = 0;
+  // The contacts' work (contact_work.h): J . u per surface, and how far the surfaces that moved
+  // the vertex moved themselves.
+  Real w = 0, travel = 0;
   for (int pass = 0; pass < 4; ++pass) {
     const bool bounce = pass == 0;
     Real passDepth = 0;
     for (size_t k = 0; k < K; ++k) {
       const Vec3 before = v;
-      const Real d = resolveManipulator(manipulators_[k], previous, x, v, dim, bounce, &start).depth;
-      if (d > 0 || v != before) addImpulse(impulse[k], mass * (v - before), x, manipulators_[k].position, dim);
+      const Manipulator& mp = manipulators_[k];
+      const Real d = resolveManipulator(mp, previous, x, v, dim, bounce, &start).depth;
+      if (d > 0 || v != before) {
+        addImpulse(impulse[k], mass * (v - before), x, mp.position, dim);
+        // A manipulator growing back from a start overlap (overlaps.h) moves its surface outwards too.
+        Vec3 u = mp.velocity;
+        const Real growth = k < manipulatorGrowth_.size() ? manipulatorGrowth_[k] : 0;
+        if (growth > 0 && (x - mp.position).norm() > 0) u += growth * (x - mp.position).normalized();
+        w += mass * (v - before).dot(u), travel = std::max(travel, u.norm() * dt_);
+      }
       if (d > 0 && surface) *surface = int(k);
       passDepth = std::max(passDepth, d);
     }
     Vec3 wallDv[kWalls] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
     const ContactResult r = resolveDomain(domain_, previous, x, v, dim, bounce, &start, wallDv);
     const Real d = r.depth;
-    for (int w = 0; w < kWalls; ++w)
-      if (wallDv[w] != Vec3::Zero()) addImpulse(impulse[K + size_t(w)], mass * wallDv[w], x, Vec3::Zero(), dim);
+    for (int wall = 0; wall < kWalls; ++wall)
+      if (wallDv[wall] != Vec3::Zero()) {
+        addImpulse(impulse[K + size_t(wall)], mass * wallDv[wall], x, Vec3::Zero(), dim);
+        w += mass * wallDv[wall].dot(wallVelocity_[size_t(wall)]);
+        travel = std::max(travel, wallVelocity_[size_t(wall)].norm() * dt_);
+      }
     if (d > 0 && surface) *surface = int(K) + r.wall;
     passDepth = std::max(passDepth, d);
     depth = std::max(depth, passDepth);
     if (passDepth == 0 || surfaces < 2) break;
   }
-  if (work) *work += contactVertexWork(mass, stiffness, previous, previousVelocity, xFree, vFree, x, v, dt_);
+  if (work && depth > 0) w += displacementWork(stiffness, previous, xFree, x, travel);
+  if (work) *work += w;
   return depth;
 }
 
@@ -525,7 +541,12 @@ void World::prepareTeam(int members) {
 
 void World::step() {
   if (!startChecked_) beginStartOverlapRelease();
-  if (separatingStartOverlaps()) advanceStartOverlapRelease();
+  if (separatingStartOverlaps()) {
+    advanceStartOverlapRelease();
+  } else {
+    wallVelocity_.fill(Vec3::Zero());
+    manipulatorGrowth_.clear();
+  }
   // (The explicit integrators keep the start in their vertex pass, stageVertices.)
   const bool frameStep = sim_.integrator == IntegratorKind::Implicit || sim_.integrator == IntegratorKind::LargeStep;
   if (bodyContactsOn() && frameStep) saveBodyContactStart();
@@ -585,17 +606,23 @@ void World::beginStartOverlapRelease() {
 
 void World::advanceStartOverlapRelease() {
   const Real step = kStartSeparationSpeed * dt_;
+  wallVelocity_.fill(Vec3::Zero());
   if (wallsReleasing_) {
     wallsReleasing_ = false;
     for (int a = 0; a < 3; ++a) {
-      domain_.min[a] = std::min(domainSet_.min[a], domain_.min[a] + step);
-      domain_.max[a] = std::max(domainSet_.max[a], domain_.max[a] - step);
+      const Real lo = std::min(domainSet_.min[a], domain_.min[a] + step);
+      const Real hi = std::max(domainSet_.max[a], domain_.max[a] - step);
+      wallVelocity_[size_t(2 * a)][a] = (lo - domain_.min[a]) / dt_;
+      wallVelocity_[size_t(2 * a + 1)][a] = (hi - domain_.max[a]) / dt_;
+      domain_.min[a] = lo, domain_.max[a] = hi;
       wallsReleasing_ = wallsReleasing_ || domain_.min[a] != domainSet_.min[a] || domain_.max[a] != domainSet_.max[a];
     }
   }
+  manipulatorGrowth_.assign(manipulators_.size(), 0.0);
   for (size_t k = 0; k < manipulatorScale_.size() && k < manipulators_.size(); ++k) {
     Real& scale = manipulatorScale_[k];
     if (scale >= 1) continue;
+    manipulatorGrowth_[k] = kStartSeparationSpeed;
     const auto& size = manipulatorSize_[k];
     const Real reach = manipulators_[k].settings.shape == ManipulatorShape::Cylinder ? std::max(size[0], size[1]) : size[0];
     scale = std::min(Real(1), scale + step / reach);
@@ -1102,8 +1129,7 @@ void World::sweepManipulatorPaths(Real t0) {
       // Contact forces: the velocity the sweep gave the vertex, against the one it ended the solve with.
       addImpulse(scratch_->impulse[size_t(&mp - manipulators_.data())], m.mass[i] * (v - state_.velocities[i]), x,
                  mp.position, m.dim);
-      scratch_->work += contactVertexWork(m.mass[i], vertexStiffness_[i], xs, scratch_->previousVelocities[i], xe,
-                                          state_.velocities[i], x, v, dt_);
+      scratch_->work += m.mass[i] * (v - state_.velocities[i]).dot((mp.position - mp.previousPosition) / dt_);
       state_.positions[i] = x, state_.velocities[i] = v;
       scratch_->previousPositions[i] = x - (mp.position - mp.previousPosition);
       scratch_->contactDepth[i] = std::max(scratch_->contactDepth[i], depth);

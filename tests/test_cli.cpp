@@ -247,7 +247,8 @@ TEST_F(CliTest, RunDivergenceExit3NothingWritten) {
   const Result r = run("run unstable.json --out res");
   EXPECT_EQ(r.code, 3) << r.err << r.out;
   EXPECT_NE(r.err.find("simulation diverged at t="), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("try a smaller dt"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("simulation.dt = 0.05 s"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("stability limit"), std::string::npos) << r.err;
   EXPECT_TRUE(r.out.empty());
   EXPECT_FALSE(fs::exists(dir_ / "res"));
   for (const auto& e : fs::directory_iterator(dir_))

@@ -1,19 +1,18 @@
 // The energy contacts put into the bodies (the divergence guard's "supplied by the contacts",
-// divergence.h). A wall or a kinematic manipulator moves a vertex (the projection out of the
-// surface) and changes its velocity (the bounce, friction); both can add energy that no
-// numerical error made: a tool placed inside a body, or driven through it at 1000 m/s, stores
-// elastic energy by pushing the material aside. Per vertex and contact resolution, from the
-// vertex before (xFree, vFree: where the step's forces took it) and after the contacts (x, v):
-//   W = 1/2 m (|v|^2 - |vFree|^2)           kinetic energy the contact gave (signed)
-//     - m a . (x - xFree)                   work against the force that pressed the vertex in,
-//                                           a = (vFree - v0) / dt (first order; signed)
-//     + 1/2 k_i max(0, |x - xFree| - |xFree - x0|)^2
-// The last term is the elastic energy of a displacement the vertex's own motion does not
-// explain (a surface that moved into it or started inside it), with k_i the sum of the
-// stiffnesses of the vertex's elements (all other vertices held: an upper bound of what moving
-// it alone stores). A vertex that flew into a static surface is put back along at most its own
-// step and adds nothing there. The world sums W over the step's vertices (in a fixed order)
-// and keeps the running sum of the steps' positive totals (World::contactWork()).
+// divergence.h). A contact never adds energy in the frame of the surface it resolves (contacts.h),
+// so in the world frame it adds at most the work of the surface's motion: with J = m dv the
+// impulse it gave a vertex and u the surface's velocity there,
+//   W = J . u                                        (a static wall: 0)
+// A manipulator driven through a body at 1000 m/s, two cylinders crushing it, a wall or a tool
+// pushing a start overlap out (overlaps.h: they move at 1 m/s) all supply W. A surface that
+// appears inside a body without moving there (a tool posed inside it from outside, a pose jump)
+// moves vertices farther than their own step and the surface's motion explain; that displacement
+// d stores elastic energy, counted as
+//   + 1/2 k_i d^2,  d = max(0, |x - xFree| - |xFree - x0| - |u| dt)
+// with k_i the sum of the stiffnesses of the vertex's elements (all other vertices held: an
+// upper bound of what moving it alone stores). The world sums W over the step's vertices (in a
+// fixed order) and keeps the running sum of the steps' positive totals (World::contactWork()).
+// A body that diverges on a static floor gets nothing from it: exit 3 still means divergence.
 #pragma once
 
 #include <vector>
@@ -23,10 +22,10 @@
 
 namespace gradel {
 
-/// W above [J] for one vertex: mass m [kg], stiffness k [N/m], x0 / v0 its start of the step,
-/// (xFree, vFree) its state before the contacts, (x, v) after them, dt [s] > 0.
-Real contactVertexWork(Real m, Real k, const Vec3& x0, const Vec3& v0, const Vec3& xFree, const Vec3& vFree,
-                       const Vec3& x, const Vec3& v, Real dt);
+/// 1/2 k d^2 above [J]: stiffness k [N/m], x0 the vertex's start of the step, xFree where the
+/// step's forces took it, x where the contacts put it, surfaceTravel [m] how far the surface
+/// that moved it moved within the step (|u| dt).
+Real displacementWork(Real k, const Vec3& x0, const Vec3& xFree, const Vec3& x, Real surfaceTravel);
 
 /// k_i per vertex [N/m]: the sum of k_e over the elements the vertex belongs to.
 std::vector<Real> vertexStiffness(const RestModel& model);

@@ -257,6 +257,8 @@ class World {
     Real weightA = 0.5, weightB = 0.5;  ///< Shares of each move (mass-weighted; 0 for a pinned body).
   };
   std::vector<Separation> separations_;
+  std::array<Vec3, kWalls> wallVelocity_{};  ///< [m/s] per wall, this step (moving only while released).
+  std::vector<Real> manipulatorGrowth_;     ///< [m/s] per manipulator: its surface's growth speed this step.
 };
 
 }  // namespace gradel
