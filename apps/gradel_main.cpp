@@ -37,6 +37,7 @@
 #include "gradel/shared/frame_loop.h"
 #include "gradel/shared/run_budget.h"
 #include "gradel/size_limits.h"
+#include "gradel/slow_stage.h"
 #ifdef GRADEL_WITH_RENDER
 #include "render_cli.h"
 #endif
@@ -94,9 +95,18 @@ int runLayout(const LayoutOptions& o) {
   // Sizes are checked before anything big is allocated (size_limits.h).
   const gradel::SizeLimits limits;
   gradel::checkVolumeSize(spec.dims, spec.dim, limits, "--size");
-  const gradel::VoxelVolume volume = gradel::rasterize(spec);
+  gradel::VoxelVolume volume;
+  {
+    gradel::SlowStage stage("voxelising the " + o.shape);
+    volume = gradel::rasterize(spec);
+  }
   gradel::checkLayoutSize(volume, kind, limits, "--size");
-  const gradel::Layout layout = gradel::buildLayout(volume, kind);
+  gradel::Layout layout;
+  {
+    gradel::SlowStage stage("building the " + o.layout + " layout of " + std::to_string(volume.countFilled()) +
+                            " voxels");
+    layout = gradel::buildLayout(volume, kind);
+  }
   const gradel::LayoutStats s = gradel::layoutStats(layout, volume);
   // The voxel layout (one element per voxel) is the baseline the paper's savings refer to;
   // counted, not built.
@@ -425,6 +435,7 @@ int main(int argc, char** argv) {
   CLI::App* render = gradel::render::addRenderCommand(app, rendo);
 #endif
 
+  gradel::setSlowStageReports(true);  // a line on stderr for a layout or build that takes over a second
   try {
     app.parse(argc, argv);
     if (layout->parsed()) return runLayout(lo);

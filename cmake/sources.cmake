@@ -31,6 +31,7 @@ set(GRADEL_CORE_SOURCES
   src/settings_check.cpp
   src/shapes.cpp
   src/size_limits.cpp
+  src/slow_stage.cpp
   src/surface.cpp
   src/thread_team.cpp
   src/volume.cpp

@@ -4,6 +4,7 @@
 
 #include "gradel/bodies.h"
 #include "gradel/scene.h"
+#include "gradel/slow_stage.h"
 
 namespace gradel {
 
@@ -14,8 +15,10 @@ constexpr Real kMinVoxelMass = 1e-200;  // [kg]
 // One body: volume, layout, rest model and embedded source mesh.
 void buildBody(const BodySettings& settings, int dim, const SizeLimits& limits, BuiltBody& b) {
   b.name = settings.name;
+  const std::string label = "body" + (settings.name.empty() ? std::string() : " '" + settings.name + "'");
   TriangleMesh latticeMesh;  // a mesh source's mesh, in lattice units
   if (settings.source) {
+    SlowStage stage(label + ": reading " + settings.source->describe());
     b.volume = settings.source->loadWithMesh(&latticeMesh);
     if (b.volume.dim() != dim)
       throw InputError(settings.source->describe() + ": a " + std::to_string(b.volume.dim()) + "D volume in a " +
@@ -26,6 +29,7 @@ void buildBody(const BodySettings& settings, int dim, const SizeLimits& limits, 
     const bool labelled =
         std::any_of(shape.primitives.begin(), shape.primitives.end(), [](const Primitive& p) { return p.label != 1; });
     checkVolumeSize(shape.dims, shape.dim, limits, settings.sizeKey, labelled);
+    SlowStage stage(label + ": voxelising the shape");
     b.volume = rasterize(shape);
   }
   checkLayoutSize(b.volume, settings.layout, limits, settings.sizeKey);
@@ -47,7 +51,12 @@ void buildBody(const BodySettings& settings, int dim, const SizeLimits& limits, 
     check(settings.material.density, "material.density");
     for (const auto& r : settings.material.regions) check(r.density, "material.regions.density");
   }
-  b.layout = buildLayout(b.volume, settings.layout);
+  {
+    SlowStage stage(label + ": building the " + layoutKindName(settings.layout) + " layout of " +
+                    std::to_string(b.volume.countFilled()) + " voxels");
+    b.layout = buildLayout(b.volume, settings.layout);
+  }
+  SlowStage stage(label + ": building the rest model of " + std::to_string(b.layout.numElements()) + " elements");
   std::shared_ptr<RestModel> model;
   try {
     model = std::make_shared<RestModel>(buildRestModel(b.layout, b.volume, settings.material, settings.position));
@@ -96,6 +105,7 @@ BuiltScene buildScene(const Scene& scene, const SizeLimits& limits) {
     used += estimateModelBytes({l.numElements(), l.numVertices(), l.numPairs()}, scene.dim);
     models.push_back(body.model);
   }
+  SlowStage stage("preparing the world: element stages, pins and contact surfaces");
   auto worldModel = models.size() == 1 ? models[0] : std::make_shared<const RestModel>(combineRestModels(models));
   b.world = std::make_unique<World>(worldModel, scene.simulation, scene.domain, scene.manipulators);
   if (!scene.pins.empty()) {
