@@ -262,7 +262,7 @@ int runScene(const RunOptions& o) {
   {
     std::vector<std::string> names;
     for (size_t i = 0; i < built.numBodies(); ++i) names.push_back(built.body(i).name);
-    for (const gradel::StartOverlap& ov : gradel::findStartOverlaps(world))
+    for (const gradel::StartOverlap& ov : world.startOverlaps())
       std::fprintf(stderr, "gradel: %s: %s\n", o.scene.c_str(), gradel::describeStartOverlap(ov, world, names).c_str());
   }
   if (schedule.intervalRaisedToDt)

@@ -124,7 +124,12 @@ std::vector<StartOverlap> findStartOverlaps(const World& world) {
         const Real sd = m.signedDistance(q, nullptr);
         if (sd < 0) o.depth = std::max(o.depth, -sd), ++o.vertices;
       }
-      if (o.vertices) r.push_back(o);
+      if (o.vertices) {
+        o.scale = freeManipulatorScale(m, s.positions.data(), s.positions.size(), dim);
+        const ManipulatorSettings& ms = m.settings;
+        o.reach = ms.shape == ManipulatorShape::Cylinder ? std::max(ms.radius, ms.halfLength) : ms.radius;
+        r.push_back(o);
+      }
     }
   }
   if (dim != 3 || !world.bodyContacts()) return r;
@@ -183,10 +188,7 @@ std::string describeStartOverlap(const StartOverlap& o, const World& world, cons
                   name(o.body).c_str(), o.depth, o.depth / h, wallName(int(o.other)), o.vertices,
                   kStartSeparationSpeed, seconds);
   } else if (o.with == StartOverlap::With::Manipulator) {
-    const ManipulatorSettings& m = world.manipulators()[o.other].settings;
-    const Real size = m.shape == ManipulatorShape::Cylinder ? std::max(m.radius, m.halfLength) : m.radius;
-    const Real free = freeManipulatorScale(world.manipulators()[o.other], world.state().positions.data(),
-                                           world.state().positions.size(), world.model().dim);
+    const Real size = o.reach, free = o.scale;
     std::snprintf(buf, sizeof buf,
                   "warning: %s starts with %zu vertices inside manipulator %zu, up to %.3g m (%.3g voxels) deep: the "
                   "manipulator starts at %.3g of its size and grows back at %g m/s, within %.3g s",

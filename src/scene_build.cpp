@@ -105,7 +105,7 @@ BuiltScene buildScene(const Scene& scene, const SizeLimits& limits) {
     used += estimateModelBytes({l.numElements(), l.numVertices(), l.numPairs()}, scene.dim);
     models.push_back(body.model);
   }
-  SlowStage stage("preparing the world: element stages, pins and contact surfaces");
+  SlowStage stage("preparing the world: element stages, pins, contact surfaces and start overlaps");
   auto worldModel = models.size() == 1 ? models[0] : std::make_shared<const RestModel>(combineRestModels(models));
   b.world = std::make_unique<World>(worldModel, scene.simulation, scene.domain, scene.manipulators);
   if (!scene.pins.empty()) {
@@ -119,6 +119,9 @@ BuiltScene buildScene(const Scene& scene, const SizeLimits& limits) {
     for (size_t i = 0; i < scene.numBodies(); ++i) layouts.push_back(&b.body(i).layout), volumes.push_back(&b.body(i).volume);
     b.world->setBodyContacts(buildContactBodies(b.world->model(), layouts, volumes), scene.bodyContact);
   }
+  // Bodies placed overlapping each other, a manipulator or a wall: separated at 1 m/s (overlaps.h).
+  b.world->releaseStartOverlaps();
+
   for (size_t i = 0; i < scene.numBodies(); ++i) {
     Vec3 v0 = scene.bodyAt(i).velocity;
     if (scene.dim == 2) v0.z() = 0;

@@ -540,7 +540,6 @@ void World::prepareTeam(int members) {
 }
 
 void World::step() {
-  if (!startChecked_) beginStartOverlapRelease();
   if (separatingStartOverlaps()) {
     advanceStartOverlapRelease();
   } else {
@@ -559,16 +558,21 @@ void World::step() {
   if (bodyContactsOn()) stageBodyContacts();
 }
 
-// Start overlaps (overlaps.h): at the first step, the walls are moved out to the bodies, the
-// manipulators shrunk until no vertex is inside, and the overlapping pairs of bodies listed;
-// every step then takes each back by at most kStartSeparationSpeed dt.
-void World::beginStartOverlapRelease() {
-  startChecked_ = true;
+// Start overlaps (overlaps.h): the walls are moved out to the bodies, the manipulators shrunk
+// until no vertex is inside, and the overlapping pairs of bodies listed; every step then takes
+// each back by at most kStartSeparationSpeed dt.
+void World::releaseStartOverlaps() {
+  domain_ = domainSet_ = separatingStartOverlaps() ? domainSet_ : domain_;
+  wallsReleasing_ = false;
+  separations_.clear();
+  for (size_t k = 0; k < manipulatorScale_.size() && k < manipulators_.size(); ++k)
+    manipulators_[k].settings.radius = manipulatorSize_[k][0], manipulators_[k].settings.halfLength = manipulatorSize_[k][1];
   domainSet_ = domain_;
   manipulatorScale_.assign(manipulators_.size(), 1.0);
   manipulatorSize_.clear();
   for (const Manipulator& m : manipulators_) manipulatorSize_.push_back({m.settings.radius, m.settings.halfLength});
-  const std::vector<StartOverlap> overlaps = findStartOverlaps(*this);
+  startOverlaps_ = findStartOverlaps(*this);
+  const std::vector<StartOverlap>& overlaps = startOverlaps_;
   if (overlaps.empty()) return;
   const RestModel& rm = *model_;
   std::vector<uint8_t> pinnedBody(rm.bodies.size(), 0);

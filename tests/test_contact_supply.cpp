@@ -142,5 +142,46 @@ TEST(ContactSupply, TwoCylindersCrushingABall) {
   expectRecovered(o, 0.05);
 }
 
+// A tool posed from outside (the viewer, Python) straight into the middle of a resting ball at
+// t = 0.05 s, without a velocity: the displacement it forces stores 1/2 k d^2, counted as supplied.
+TEST(ContactSupply, ToolPosedIntoABallFromOutsideIsNoDivergence) {
+  Scene scene = parseScene(R"({
+    "body": {"shape": "sphere", "size": 12, "voxel_size": 0.01, "position": [-0.06, -0.06, -0.06]},
+    "simulation": {"damping": 2, "gravity": [0, 0, 0]}})",
+                           "test.json");
+  BuiltScene built = buildScene(scene);
+  World& w = *built.world;
+  ManipulatorSettings tool;
+  tool.radius = 0.03;
+  const size_t k = w.addManipulator(tool, Vec3(1, 0, 0));
+  DivergenceGuard guard(energyBudget(w, 1.0));
+  Real peak = 0;
+  for (Real t = 0.01; t <= 0.5 + 1e-9; t += 0.01) {
+    if (std::abs(t - 0.05) < 1e-9) w.setManipulatorPose(k, Vec3(0, 0, 0), Vec3::Zero());
+    if (std::abs(t - 0.2) < 1e-9) w.setManipulatorPose(k, Vec3(1, 0, 0), Vec3::Zero());
+    w.advanceTo(t);
+    const Metrics m = w.metrics();
+    peak = std::max(peak, m.kineticEnergy + m.elasticEnergy);
+    EXPECT_FALSE(guard.check(m, w.contactWork(), "c")) << "t = " << t << ", work " << w.contactWork();
+  }
+  std::printf("[ measured ] tool posed inside: peak kinetic + elastic %.4g J, contact work %.4g J\n", peak,
+              w.contactWork());
+  for (const Vec3& x : w.state().positions) EXPECT_TRUE(x.allFinite());
+}
+
+// A sphere presses a ball against a wall to half its width and withdraws.
+TEST(ContactSupply, BallCrushedAgainstAWallBySphere) {
+  const Outcome o = runGuarded(R"({
+    "body": {"shape": "sphere", "size": 12, "voxel_size": 0.01, "position": [-0.06, 0, -0.06]},
+    "material": {"youngs_modulus": 1e5, "density": 1000},
+    "simulation": {"damping": 2, "gravity": [0, 0, 0]},
+    "domain": {"min": [-0.5, 0, -0.5], "max": [0.5, 1, 0.5], "restitution": 0.3},
+    "manipulators": [{"type": "sphere", "radius": 0.03,
+                      "path": [{"t": 0, "position": [0, 0.2, 0]}, {"t": 0.1, "position": [0, 0.09, 0]},
+                               {"t": 0.3, "position": [0, 0.09, 0]}, {"t": 0.4, "position": [0, 0.3, 0]}]}]})",
+                               2.0);
+  expectRecovered(o, 0.1);
+}
+
 }  // namespace
 }  // namespace gradel

@@ -36,9 +36,12 @@ struct StartOverlap {
   Real depth = 0;       ///< [m] Body: overlap along the line of centres; else the deepest vertex inside.
   size_t vertices = 0;  ///< Vertices of `body` inside (Body: boundary vertices inside the other).
   Vec3 direction{1, 0, 0};  ///< Body: the unit direction `other` moves away from `body`.
+  Real scale = 1;           ///< Manipulator: the share of its size with no vertex of any body inside.
+  Real reach = 0;           ///< [m] Manipulator: its radius, or a cylinder's larger of radius and half length.
 };
 
-/// The overlaps of the world's bodies at its current state (meant for t = 0, the rest pose):
+/// The overlaps of the world's bodies at its current state (meant for t = 0, the rest pose; the
+/// world keeps what it found when it released them: World::startOverlaps()):
 /// with the walls, the manipulators at their pose now, and, for 3D worlds with contacts
 /// between bodies, each other (a vertex strictly inside another body's voxels).
 std::vector<StartOverlap> findStartOverlaps(const World& world);

@@ -17,6 +17,7 @@
 #include "gradel/integrator.h"
 #include "gradel/large_step.h"
 #include "gradel/model.h"
+#include "gradel/overlaps.h"
 #include "gradel/pins.h"
 #include "gradel/projective.h"
 
@@ -79,9 +80,16 @@ class World {
   World(World&&) noexcept;
   World& operator=(World&&) noexcept;
 
-  /// Advances one time step dt(). The first step finds the start overlaps (overlaps.h) and
-  /// from then on separates them at kStartSeparationSpeed.
+  /// Advances one time step dt().
   void step();
+  /// Finds the overlaps of the bodies with each other, the manipulators and the walls now
+  /// (overlaps.h) and separates them at kStartSeparationSpeed from the next step on, instead of
+  /// the contacts' instant push. buildScene calls it for every scene (at t = 0, after the pins
+  /// and the contacts between bodies are set); a world made by hand keeps the instant push
+  /// unless its owner calls it.
+  void releaseStartOverlaps();
+  /// What the last releaseStartOverlaps() found (the warnings of `gradel run`).
+  const std::vector<StartOverlap>& startOverlaps() const { return startOverlaps_; }
   /// True while start overlaps are being separated (walls or manipulators on their way back to
   /// their settings, bodies moving apart; contacts between bodies wait for the bodies).
   bool separatingStartOverlaps() const {
@@ -192,7 +200,6 @@ class World {
   void finishFrameStep(Real tNext);
   void sweepManipulatorPaths(Real t0);
   void chooseIntegrator(Real period);
-  void beginStartOverlapRelease();
   void advanceStartOverlapRelease();
   bool bodyContactsOn() const { return bodyContacts_ && separations_.empty(); }
   void applyPins(Real t);
@@ -245,7 +252,6 @@ class World {
   std::vector<Real> vertexStiffness_;  ///< [N/m] per vertex: sum of its elements' k_e (contact_work.h).
   Real contactWork_ = 0;               ///< [J] World::contactWork().
   // Start overlaps (overlaps.h), released from the first step on at kStartSeparationSpeed.
-  bool startChecked_ = false;
   DomainSettings domainSet_;             ///< The walls as set (domain_: where they are while released).
   bool wallsReleasing_ = false;
   std::vector<Real> manipulatorScale_;   ///< Per manipulator: its size now over its set size (1: set).
@@ -257,6 +263,7 @@ class World {
     Real weightA = 0.5, weightB = 0.5;  ///< Shares of each move (mass-weighted; 0 for a pinned body).
   };
   std::vector<Separation> separations_;
+  std::vector<StartOverlap> startOverlaps_;
   std::array<Vec3, kWalls> wallVelocity_{};  ///< [m/s] per wall, this step (moving only while released).
   std::vector<Real> manipulatorGrowth_;     ///< [m/s] per manipulator: its surface's growth speed this step.
 };
