@@ -4,7 +4,8 @@
 //   gradel render SCENE.json [--out DIR] [--frames N] [--size WxH] ...   (render_command.h)
 //   gradel --version
 // Exit codes: 0 ok, 1 internal error, 2 bad input (one line on stderr, nothing written),
-// 3 simulation diverged (nothing written), 4 no OpenGL for `render`, 5 writing the result failed
+// 3 simulation diverged numerically (energy over 10x what was supplied, contacts' work included, or
+// non-finite numbers; nothing written), 4 no OpenGL for `render`, 5 writing the result failed
 // (disk full, read-only; nothing written), 128 + signal when interrupted by SIGINT (130),
 // SIGTERM (143) or SIGHUP (129) (nothing written).
 #include <unistd.h>
