@@ -4,7 +4,8 @@
 //   gradel render SCENE.json [--out DIR] [--frames N] [--size WxH] ...   (render_command.h)
 //   gradel --version
 // Exit codes: 0 ok, 1 internal error, 2 bad input (one line on stderr, nothing written),
-// 3 simulation diverged (nothing written), 4 no OpenGL for `render`, 5 writing the result failed
+// 3 simulation diverged numerically (energy over 10x what was supplied, contacts' work included, or
+// non-finite numbers; nothing written), 4 no OpenGL for `render`, 5 writing the result failed
 // (disk full, read-only; nothing written), 128 + signal when interrupted by SIGINT (130),
 // SIGTERM (143) or SIGHUP (129) (nothing written).
 #include <unistd.h>
@@ -31,11 +32,13 @@
 #include "gradel/divergence.h"
 #include "gradel/layout.h"
 #include "gradel/output.h"
+#include "gradel/overlaps.h"
 #include "gradel/scene.h"
 #include "gradel/shapes.h"
 #include "gradel/shared/frame_loop.h"
 #include "gradel/shared/run_budget.h"
 #include "gradel/size_limits.h"
+#include "gradel/slow_stage.h"
 #ifdef GRADEL_WITH_RENDER
 #include "render_cli.h"
 #endif
@@ -93,9 +96,18 @@ int runLayout(const LayoutOptions& o) {
   // Sizes are checked before anything big is allocated (size_limits.h).
   const gradel::SizeLimits limits;
   gradel::checkVolumeSize(spec.dims, spec.dim, limits, "--size");
-  const gradel::VoxelVolume volume = gradel::rasterize(spec);
+  gradel::VoxelVolume volume;
+  {
+    gradel::SlowStage stage("voxelising the " + o.shape);
+    volume = gradel::rasterize(spec);
+  }
   gradel::checkLayoutSize(volume, kind, limits, "--size");
-  const gradel::Layout layout = gradel::buildLayout(volume, kind);
+  gradel::Layout layout;
+  {
+    gradel::SlowStage stage("building the " + o.layout + " layout of " + std::to_string(volume.countFilled()) +
+                            " voxels");
+    layout = gradel::buildLayout(volume, kind);
+  }
   const gradel::LayoutStats s = gradel::layoutStats(layout, volume);
   // The voxel layout (one element per voxel) is the baseline the paper's savings refer to;
   // counted, not built.
@@ -199,28 +211,6 @@ bool finiteState(const gradel::State& s) {
   return true;
 }
 
-// What to change when a run diverges, for the message.
-std::string likelyCause(const gradel::Scene& scene, double dt) {
-  char buf[256];
-  const gradel::SimulationSettings& s = scene.simulation;
-  if (s.integrator == gradel::IntegratorKind::ForwardEuler)
-    return "the likely cause is the forward_euler integrator, which gains energy at any dt (use \"symplectic\" or "
-           "\"implicit\", or a much smaller dt)";
-  if (s.dt > 0) {
-    std::snprintf(buf, sizeof buf,
-                  "the likely cause is simulation.dt = %.3g s, too large for this body: try a smaller dt or \"auto\"",
-                  dt);
-  } else {
-    std::snprintf(
-        buf, sizeof buf,
-        "the likely cause is simulation.dt_fraction = %.3g (dt = %.3g s), too large: try a smaller dt_fraction "
-        "(with dt_period \"%s\" the default is %.2g and the largest accepted %.2g)",
-        s.dtFraction > 0 ? s.dtFraction : gradel::defaultDtFraction(s.dtPeriod), dt, gradel::periodRuleName(s.dtPeriod),
-        gradel::defaultDtFraction(s.dtPeriod), gradel::maxDtFraction(s.dtPeriod));
-  }
-  return buf;
-}
-
 std::string hex64(uint64_t h) {
   char buf[20];
   std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
@@ -268,6 +258,14 @@ int runScene(const RunOptions& o) {
   } catch (const InputError& e) {
     throw InputError(o.scene + ": simulation." + e.what());
   }
+  // Bodies placed overlapping each other, a manipulator or a wall: told, then separated at a
+  // capped speed by the world (overlaps.h).
+  {
+    std::vector<std::string> names;
+    for (size_t i = 0; i < built.numBodies(); ++i) names.push_back(built.body(i).name);
+    for (const gradel::StartOverlap& ov : world.startOverlaps())
+      std::fprintf(stderr, "gradel: %s: %s\n", o.scene.c_str(), gradel::describeStartOverlap(ov, world, names).c_str());
+  }
   if (schedule.intervalRaisedToDt)
     std::fprintf(
         stderr,
@@ -302,14 +300,17 @@ int runScene(const RunOptions& o) {
   gradel::Metrics last;
 
   gradel::DivergenceGuard guard(gradel::energyBudget(world, duration));
-  const std::string cause = likelyCause(scene, dt);
+  const gradel::DivergenceFacts facts = gradel::divergenceFacts(world, duration);
   auto writeFrame = [&](size_t index) {
     std::vector<gradel::Real> elementStress;
     // One pass over the elements per frame.
     const std::vector<gradel::Metrics> each = world.bodyMetrics(&elementStress);
     gradel::Metrics m = gradel::combineMetrics(each);
     m.contactForces = world.averageContactForces();  // what the bodies exert together (World::metrics)
-    if (auto diverged = guard.check(m, cause)) throw Diverged(*diverged);
+    std::string warning;
+    if (auto diverged = guard.check(m, world.contactWork(), gradel::likelyCause(facts, m), &warning))
+      throw Diverged(*diverged);
+    if (!warning.empty()) std::fprintf(stderr, "gradel: %s: %s\n", o.scene.c_str(), warning.c_str());
     if (several) {
       for (size_t i = 0; i < each.size(); ++i) csv.append(built.body(i).name, each[i], /*forces=*/false);
       csv.append("all", m);
@@ -335,7 +336,7 @@ int runScene(const RunOptions& o) {
       char msg[160];
       std::snprintf(msg, sizeof msg, "simulation diverged at t=%.6g s (dt = %.3g s): non-finite numbers; ",
                     world.time(), dt);
-      throw Diverged(msg + cause);
+      throw Diverged(msg + gradel::likelyCause(facts, last));
     }
     if (const int sig = gSignal)
       throw Interrupted(sig, std::string("interrupted by ") +
@@ -437,6 +438,7 @@ int main(int argc, char** argv) {
   CLI::App* render = gradel::render::addRenderCommand(app, rendo);
 #endif
 
+  gradel::setSlowStageReports(true);  // a line on stderr for a layout or build that takes over a second
   try {
     app.parse(argc, argv);
     if (layout->parsed()) return runLayout(lo);

@@ -8,6 +8,7 @@ set(GRADEL_CORE_SOURCES
   src/bodies.cpp
   src/body_contacts.cpp
   src/contacts.cpp
+  src/contact_work.cpp
   src/divergence.cpp
   src/element.cpp
   src/coarse_space.cpp
@@ -21,6 +22,7 @@ set(GRADEL_CORE_SOURCES
   src/mesh.cpp
   src/model.cpp
   src/output.cpp
+  src/overlaps.cpp
   src/pins.cpp
   src/factor_solve.cpp
   src/projective.cpp
@@ -29,6 +31,7 @@ set(GRADEL_CORE_SOURCES
   src/settings_check.cpp
   src/shapes.cpp
   src/size_limits.cpp
+  src/slow_stage.cpp
   src/stability.cpp
   src/surface.cpp
   src/thread_team.cpp
@@ -92,6 +95,8 @@ set(GRADEL_TEST_SOURCES
   tests/test_contacts.cpp
   tests/test_contact_forces.cpp
   tests/test_divergence.cpp
+  tests/test_contact_supply.cpp
+  tests/test_start_overlap.cpp
   tests/test_dynamics.cpp
   tests/test_element.cpp
   tests/test_element_stiffness.cpp

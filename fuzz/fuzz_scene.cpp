@@ -34,7 +34,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     DivergenceGuard guard(energyBudget(world, scene.output.duration));
     for (int i = 0; i < 4; ++i) {
       world.step();
-      (void)guard.check(world.metrics(), "fuzz");
+      (void)guard.check(world.metrics(), world.contactWork(), "fuzz");
     }
   } catch (const InputError&) {
   }

@@ -1,17 +1,24 @@
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 
 #include "gradel/bodies.h"
 #include "gradel/scene.h"
+#include "gradel/slow_stage.h"
 
 namespace gradel {
 
 namespace {
 
+constexpr Real kMinVoxelMass = 1e-200;  // [kg]
+
 // One body: volume, layout, rest model and embedded source mesh.
 void buildBody(const BodySettings& settings, int dim, const SizeLimits& limits, BuiltBody& b) {
   b.name = settings.name;
+  const std::string label = "body" + (settings.name.empty() ? std::string() : " '" + settings.name + "'");
   TriangleMesh latticeMesh;  // a mesh source's mesh, in lattice units
   if (settings.source) {
+    SlowStage stage(label + ": reading " + settings.source->describe());
     b.volume = settings.source->loadWithMesh(&latticeMesh);
     if (b.volume.dim() != dim)
       throw InputError(settings.source->describe() + ": a " + std::to_string(b.volume.dim()) + "D volume in a " +
@@ -22,10 +29,34 @@ void buildBody(const BodySettings& settings, int dim, const SizeLimits& limits, 
     const bool labelled =
         std::any_of(shape.primitives.begin(), shape.primitives.end(), [](const Primitive& p) { return p.label != 1; });
     checkVolumeSize(shape.dims, shape.dim, limits, settings.sizeKey, labelled);
+    SlowStage stage(label + ": voxelising the shape");
     b.volume = rasterize(shape);
   }
   checkLayoutSize(b.volume, settings.layout, limits, settings.sizeKey);
-  b.layout = buildLayout(b.volume, settings.layout);
+  // A voxel's mass must be a normal number: density x voxel_size^dim below it underflows (and
+  // 1 / mass overflows).
+  {
+    const Real h = b.volume.voxelSize();
+    auto check = [&](Real density, const std::string& key) {
+      const Real voxelMass = density * std::pow(h, dim);
+      if (!(voxelMass >= kMinVoxelMass) || !std::isfinite(voxelMass)) {
+        char buf[320];
+        std::snprintf(buf, sizeof buf,
+                      "%s x voxel_size^%d = %.3g kg per voxel (density %.3g kg/m^3, voxel_size %.3g m) is out of range "
+                      "(expected %.0e to 1e300 kg: a mass that small underflows)",
+                      key.c_str(), dim, voxelMass, density, h, kMinVoxelMass);
+        throw InputError(settings.name + ": " + buf);
+      }
+    };
+    check(settings.material.density, "material.density");
+    for (const auto& r : settings.material.regions) check(r.density, "material.regions.density");
+  }
+  {
+    SlowStage stage(label + ": building the " + layoutKindName(settings.layout) + " layout of " +
+                    std::to_string(b.volume.countFilled()) + " voxels");
+    b.layout = buildLayout(b.volume, settings.layout);
+  }
+  SlowStage stage(label + ": building the rest model of " + std::to_string(b.layout.numElements()) + " elements");
   std::shared_ptr<RestModel> model;
   try {
     model = std::make_shared<RestModel>(buildRestModel(b.layout, b.volume, settings.material, settings.position));
@@ -74,6 +105,7 @@ BuiltScene buildScene(const Scene& scene, const SizeLimits& limits) {
     used += estimateModelBytes({l.numElements(), l.numVertices(), l.numPairs()}, scene.dim);
     models.push_back(body.model);
   }
+  SlowStage stage("preparing the world: element stages, pins, contact surfaces and start overlaps");
   auto worldModel = models.size() == 1 ? models[0] : std::make_shared<const RestModel>(combineRestModels(models));
   b.world = std::make_unique<World>(worldModel, scene.simulation, scene.domain, scene.manipulators);
   if (!scene.pins.empty()) {
@@ -87,6 +119,9 @@ BuiltScene buildScene(const Scene& scene, const SizeLimits& limits) {
     for (size_t i = 0; i < scene.numBodies(); ++i) layouts.push_back(&b.body(i).layout), volumes.push_back(&b.body(i).volume);
     b.world->setBodyContacts(buildContactBodies(b.world->model(), layouts, volumes), scene.bodyContact);
   }
+  // Bodies placed overlapping each other, a manipulator or a wall: separated at 1 m/s (overlaps.h).
+  b.world->releaseStartOverlaps();
+
   for (size_t i = 0; i < scene.numBodies(); ++i) {
     Vec3 v0 = scene.bodyAt(i).velocity;
     if (scene.dim == 2) v0.z() = 0;

@@ -128,6 +128,12 @@ struct Bound {
 
 const Bound kAny{};
 const Bound kPositive{0, std::numeric_limits<Real>::infinity(), true, false};
+// A voxel edge from a nanometre to a kilometre: outside it the rest lattice (positions = origin +
+// lattice x voxel_size) and the masses (density x voxel_size^3) lose their precision or underflow.
+const Bound kVoxelSize{1e-9, 1e3, false, false};
+// A body's position within 1e9 voxels of the origin: beyond it a voxel is below the rounding of
+// the coordinates (the rest positions would leave the voxel lattice).
+constexpr Real kMaxPositionVoxels = 1e9;
 const Bound kNonNegative{0, std::numeric_limits<Real>::infinity(), false, false};
 const Bound kUnit{0, 1, false, false};  // [0, 1]
 
@@ -627,12 +633,12 @@ void readBody(Fields& f, int dim, BodySettings& body) {
   if (auto source = f.optObject("source")) {
     for (const char* key : {"shape", "size", "grid", "primitives"})
       f.forbid(key, "a body with \"source\" takes its volume from the file");
-    body.shape.voxelSize = f.number("voxel_size", body.shape.voxelSize, kPositive, "m");
+    body.shape.voxelSize = f.number("voxel_size", body.shape.voxelSize, kVoxelSize, "m");
     body.source = readSource(*source, dim, body.shape.voxelSize);
     body.sizeKey = f.keyPath("source");
   } else {
     const int shape = f.choice("shape", {"box", "sphere", "cylinder", "union"});
-    const Real voxelSize = f.number("voxel_size", body.shape.voxelSize, kPositive, "m");
+    const Real voxelSize = f.number("voxel_size", body.shape.voxelSize, kVoxelSize, "m");
     if (shape == 3) {
       f.forbid("size", "\"size\" is for the presets box, sphere and cylinder; a union takes \"grid\"");
       ShapeSpec spec;
@@ -660,7 +666,10 @@ void readBody(Fields& f, int dim, BodySettings& body) {
     }
   }
   body.layout = f.enumeration("layout", body.layout, &parseLayoutKind);
-  body.position = f.vec("position", body.position, "m");
+  {
+    const Real reach = kMaxPositionVoxels * body.shape.voxelSize;
+    body.position = f.optVec("position", Bound{-reach, reach, false, false}, "m").value_or(body.position);
+  }
   body.velocity = f.vec("velocity", body.velocity, "m/s");
   if (dim == 2) body.position.z() = 0, body.velocity.z() = 0;
 }

@@ -13,6 +13,8 @@
 #endif
 
 #include "element_stage.h"
+#include "gradel/contact_work.h"
+#include "gradel/overlaps.h"
 #include "gradel/element.h"
 #include "gradel/integration.h"
 #include "gradel/rotation_fit.h"
@@ -41,6 +43,10 @@ struct World::StepScratch {
   std::vector<ContactForce> blockImpulse;
   std::vector<uint8_t> blockTouched;
   std::vector<int> contactSurface;  ///< Per vertex, implicit step: the surface that moved it last (-1: none).
+  // The energy the contacts gave the bodies this step (contact_work.h): per block of the explicit
+  // stage (added in block order by finishContactImpulses, with the impulses), and the step's sum.
+  std::vector<Real> blockWork;
+  Real work = 0;
 };
 
 namespace {
@@ -158,6 +164,7 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   adviseHugePages(stageRest_->vertexElements), adviseHugePages(stageRest_->vertexStart);
   adviseHugePages(stageRest_->elements), adviseHugePages(stageRest_->pairs);
 
+  vertexStiffness_ = vertexStiffness(m);  // the contacts' work (contact_work.h)
   for (ManipulatorSettings& s : manipulators) addManipulator(std::move(s));
 }
 
@@ -318,11 +325,13 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
           ContactForce* impulse = &scratch_->blockImpulse[b / kBlock * surfaces];
           std::fill(impulse, impulse + surfaces, ContactForce{});
           scratch_->blockTouched[b / kBlock] = 1;
+          Real& work = scratch_->blockWork[b / kBlock];
+          work = 0;
           for (size_t i = b; i < be; ++i) {
             Vec3 previous, previousVelocity;
             storeVec3(previous, start[i - b]), storeVec3(previousVelocity, startVelocity[i - b]);
             depth = std::max(depth, resolveVertexContacts(previous, previousVelocity, positions[i], velocities[i],
-                                                          m.mass[i], impulse));
+                                                          m.mass[i], vertexStiffness_[i], impulse, &work));
           }
         }
       }
@@ -359,32 +368,50 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
 // `impulse` (one entry per manipulator, then the walls) gets the vertex's impulse m dv from each
 // surface and its moment (contact forces); `surface`, when given, the last surface that moved it.
 Real World::resolveVertexContacts(const Vec3& previous, const Vec3& previousVelocity, Vec3& x, Vec3& v, Real mass,
-                                  ContactForce* impulse, int* surface) const {
+                                  Real stiffness, ContactForce* impulse, Real* work, int* surface) const {
   const int dim = model_->dim;
+  const Vec3 xFree = x;
   const StepStart start{previousVelocity, dt_, sim_.integrator == IntegratorKind::SymplecticEuler};
   const size_t surfaces = manipulators_.size() + (domain_.enabled ? 1 : 0);
   const size_t K = manipulators_.size();
   Real depth = 0;
+  // The contacts' work (contact_work.h): J . u per surface, and how far the surfaces that moved
+  // the vertex moved themselves.
+  Real w = 0, travel = 0;
   for (int pass = 0; pass < 4; ++pass) {
     const bool bounce = pass == 0;
     Real passDepth = 0;
     for (size_t k = 0; k < K; ++k) {
       const Vec3 before = v;
-      const Real d = resolveManipulator(manipulators_[k], previous, x, v, dim, bounce, &start).depth;
-      if (d > 0 || v != before) addImpulse(impulse[k], mass * (v - before), x, manipulators_[k].position, dim);
+      const Manipulator& mp = manipulators_[k];
+      const Real d = resolveManipulator(mp, previous, x, v, dim, bounce, &start).depth;
+      if (d > 0 || v != before) {
+        addImpulse(impulse[k], mass * (v - before), x, mp.position, dim);
+        // A manipulator growing back from a start overlap (overlaps.h) moves its surface outwards too.
+        Vec3 u = mp.velocity;
+        const Real growth = k < manipulatorGrowth_.size() ? manipulatorGrowth_[k] : 0;
+        if (growth > 0 && (x - mp.position).norm() > 0) u += growth * (x - mp.position).normalized();
+        w += mass * (v - before).dot(u), travel = std::max(travel, u.norm() * dt_);
+      }
       if (d > 0 && surface) *surface = int(k);
       passDepth = std::max(passDepth, d);
     }
     Vec3 wallDv[kWalls] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
     const ContactResult r = resolveDomain(domain_, previous, x, v, dim, bounce, &start, wallDv);
     const Real d = r.depth;
-    for (int w = 0; w < kWalls; ++w)
-      if (wallDv[w] != Vec3::Zero()) addImpulse(impulse[K + size_t(w)], mass * wallDv[w], x, Vec3::Zero(), dim);
+    for (int wall = 0; wall < kWalls; ++wall)
+      if (wallDv[wall] != Vec3::Zero()) {
+        addImpulse(impulse[K + size_t(wall)], mass * wallDv[wall], x, Vec3::Zero(), dim);
+        w += mass * wallDv[wall].dot(wallVelocity_[size_t(wall)]);
+        travel = std::max(travel, wallVelocity_[size_t(wall)].norm() * dt_);
+      }
     if (d > 0 && surface) *surface = int(K) + r.wall;
     passDepth = std::max(passDepth, d);
     depth = std::max(depth, passDepth);
     if (passDepth == 0 || surfaces < 2) break;
   }
+  if (work && depth > 0) w += displacementWork(stiffness, previous, xFree, x, travel);
+  if (work) *work += w;
   return depth;
 }
 
@@ -395,7 +422,8 @@ void World::stageContacts(size_t begin, size_t end) {
     scratch_->contactSurface[i] = -1;
     scratch_->contactDepth[i] = resolveVertexContacts(scratch_->previousPositions[i], scratch_->previousVelocities[i],
                                                       state_.positions[i], state_.velocities[i], model_->mass[i],
-                                                      scratch_->impulse.data(), &scratch_->contactSurface[i]);
+                                                      vertexStiffness_[i], scratch_->impulse.data(), &scratch_->work,
+                                                      &scratch_->contactSurface[i]);
   }
 }
 
@@ -407,7 +435,9 @@ void World::beginContactImpulses() {
   if (scratch_->blockImpulse.size() != blocks * surfaces) {
     scratch_->blockImpulse.assign(blocks * surfaces, ContactForce{});
     scratch_->blockTouched.assign(blocks, 0);
+    scratch_->blockWork.assign(blocks, 0.0);
   }
+  scratch_->work = 0;
 }
 
 // ... and ends with the explicit stage's blocks added in block order (the same sums at any
@@ -418,6 +448,7 @@ void World::finishContactImpulses() {
   for (size_t b = 0; b < scratch_->blockTouched.size(); ++b) {
     if (!scratch_->blockTouched[b]) continue;
     scratch_->blockTouched[b] = 0;
+    scratch_->work += scratch_->blockWork[b];
     for (size_t s = 0; s < surfaces; ++s)
       J[s].force += scratch_->blockImpulse[b * surfaces + s].force,
           J[s].torque += scratch_->blockImpulse[b * surfaces + s].torque;
@@ -437,6 +468,9 @@ void World::finishContactImpulses() {
     a.force -= j.force, a.torque -= j.torque;
   }
   averageTime_ += dt_;
+  // The steps' positive totals: a step whose contacts took energy out gives none back to the
+  // budget (the walls' restitution would otherwise hide what a later step supplies).
+  if (std::isfinite(scratch_->work)) contactWork_ += std::max(Real(0), scratch_->work);
 }
 
 ContactForces World::averageContactForces() const {
@@ -530,16 +564,126 @@ void World::prepareTeam(int members) {
 }
 
 void World::step() {
+  if (separatingStartOverlaps()) {
+    advanceStartOverlapRelease();
+  } else {
+    wallVelocity_.fill(Vec3::Zero());
+    manipulatorGrowth_.clear();
+  }
   // (The explicit integrators keep the start in their vertex pass, stageVertices.)
   const bool frameStep = sim_.integrator == IntegratorKind::Implicit || sim_.integrator == IntegratorKind::LargeStep;
-  if (bodyContacts_ && frameStep) saveBodyContactStart();
+  if (bodyContactsOn() && frameStep) saveBodyContactStart();
   if (sim_.integrator == IntegratorKind::Implicit)
     stepImplicit(false);
   else if (sim_.integrator == IntegratorKind::LargeStep)
     stepLargeStep();
   else
     stepExplicit();
-  if (bodyContacts_) stageBodyContacts();
+  if (bodyContactsOn()) stageBodyContacts();
+}
+
+// Start overlaps (overlaps.h): the walls are moved out to the bodies, the manipulators shrunk
+// until no vertex is inside, and the overlapping pairs of bodies listed; every step then takes
+// each back by at most kStartSeparationSpeed dt.
+void World::releaseStartOverlaps() {
+  domain_ = domainSet_ = separatingStartOverlaps() ? domainSet_ : domain_;
+  wallsReleasing_ = false;
+  separations_.clear();
+  for (size_t k = 0; k < manipulatorScale_.size() && k < manipulators_.size(); ++k)
+    manipulators_[k].settings.radius = manipulatorSize_[k][0], manipulators_[k].settings.halfLength = manipulatorSize_[k][1];
+  domainSet_ = domain_;
+  manipulatorScale_.assign(manipulators_.size(), 1.0);
+  manipulatorSize_.clear();
+  for (const Manipulator& m : manipulators_) manipulatorSize_.push_back({m.settings.radius, m.settings.halfLength});
+  startOverlaps_ = findStartOverlaps(*this);
+  const std::vector<StartOverlap>& overlaps = startOverlaps_;
+  if (overlaps.empty()) return;
+  const RestModel& rm = *model_;
+  std::vector<uint8_t> pinnedBody(rm.bodies.size(), 0);
+  for (uint32_t u : pinSet_.vertices)
+    for (size_t b = 0; b < rm.bodies.size(); ++b)
+      if (u >= rm.bodies[b].vertexBegin && u < rm.bodies[b].vertexEnd) pinnedBody[b] = 1;
+  for (const StartOverlap& o : overlaps) {
+    if (o.with == StartOverlap::With::Wall) {
+      const int a = int(o.other) / 2;
+      if (o.other % 2 == 0)
+        domain_.min[a] = std::min(domain_.min[a], domainSet_.min[a] - o.depth);
+      else
+        domain_.max[a] = std::max(domain_.max[a], domainSet_.max[a] + o.depth);
+      wallsReleasing_ = true;
+    } else if (o.with == StartOverlap::With::Manipulator) {
+      Real& scale = manipulatorScale_[o.other];
+      if (scale < 1) continue;  // (found for all bodies' vertices at once)
+      Manipulator& m = manipulators_[o.other];
+      scale = freeManipulatorScale(m, state_.positions.data(), state_.positions.size(), rm.dim);
+      m.settings.radius = scale * manipulatorSize_[o.other][0];
+      m.settings.halfLength = scale * manipulatorSize_[o.other][1];
+    } else if (!pinnedBody[o.body] || !pinnedBody[o.other]) {
+      Separation sep;
+      sep.a = uint32_t(o.body), sep.b = uint32_t(o.other), sep.direction = o.direction, sep.remaining = o.depth;
+      Real ma = 0, mb = 0;
+      for (uint32_t u = rm.bodies[o.body].vertexBegin; u < rm.bodies[o.body].vertexEnd; ++u) ma += rm.mass[u];
+      for (uint32_t u = rm.bodies[o.other].vertexBegin; u < rm.bodies[o.other].vertexEnd; ++u) mb += rm.mass[u];
+      // The centre of mass stays: a moves mb / (ma + mb) of the way, b the rest; a pinned body stays.
+      sep.weightA = pinnedBody[o.body] ? 0 : pinnedBody[o.other] ? 1 : mb / (ma + mb);
+      sep.weightB = 1 - sep.weightA;
+      separations_.push_back(sep);
+    }
+  }
+}
+
+void World::advanceStartOverlapRelease() {
+  const Real step = kStartSeparationSpeed * dt_;
+  wallVelocity_.fill(Vec3::Zero());
+  if (wallsReleasing_) {
+    wallsReleasing_ = false;
+    for (int a = 0; a < 3; ++a) {
+      const Real lo = std::min(domainSet_.min[a], domain_.min[a] + step);
+      const Real hi = std::max(domainSet_.max[a], domain_.max[a] - step);
+      wallVelocity_[size_t(2 * a)][a] = (lo - domain_.min[a]) / dt_;
+      wallVelocity_[size_t(2 * a + 1)][a] = (hi - domain_.max[a]) / dt_;
+      domain_.min[a] = lo, domain_.max[a] = hi;
+      wallsReleasing_ = wallsReleasing_ || domain_.min[a] != domainSet_.min[a] || domain_.max[a] != domainSet_.max[a];
+    }
+  }
+  manipulatorGrowth_.assign(manipulators_.size(), 0.0);
+  for (size_t k = 0; k < manipulatorScale_.size() && k < manipulators_.size(); ++k) {
+    Real& scale = manipulatorScale_[k];
+    if (scale >= 1) continue;
+    manipulatorGrowth_[k] = kStartSeparationSpeed;
+    const auto& size = manipulatorSize_[k];
+    const Real reach = manipulators_[k].settings.shape == ManipulatorShape::Cylinder ? std::max(size[0], size[1]) : size[0];
+    scale = std::min(Real(1), scale + step / reach);
+    manipulators_[k].settings.radius = scale < 1 ? scale * size[0] : size[0];
+    manipulators_[k].settings.halfLength = scale < 1 ? scale * size[1] : size[1];
+  }
+  const RestModel& rm = *model_;
+  // Each pair's overlap along its direction is measured again every step (the bodies move
+  // meanwhile): they are moved apart by at most kStartSeparationSpeed dt plus the speed at
+  // which they close, until the extents no longer overlap.
+  for (Separation& sep : separations_) {
+    const BodyRange &A = rm.bodies[sep.a], &B = rm.bodies[sep.b];
+    Real top = -std::numeric_limits<Real>::infinity(), bottom = std::numeric_limits<Real>::infinity();
+    Vec3 va = Vec3::Zero(), vb = Vec3::Zero();
+    Real ma = 0, mb = 0;
+    for (uint32_t u = A.vertexBegin; u < A.vertexEnd; ++u)
+      top = std::max(top, state_.positions[u].dot(sep.direction)), va += rm.mass[u] * state_.velocities[u],
+      ma += rm.mass[u];
+    for (uint32_t u = B.vertexBegin; u < B.vertexEnd; ++u)
+      bottom = std::min(bottom, state_.positions[u].dot(sep.direction)), vb += rm.mass[u] * state_.velocities[u],
+      mb += rm.mass[u];
+    const Real closing = std::max(Real(0), (va / ma - vb / mb).dot(sep.direction));
+    sep.remaining = std::isfinite(top - bottom) ? top - bottom : 0;
+    const Real d = std::min(step + closing * dt_, sep.remaining);
+    if (d <= 0) continue;
+    sep.remaining -= d;
+    const Vec3 da = -sep.weightA * d * sep.direction, db = sep.weightB * d * sep.direction;
+    for (uint32_t u = A.vertexBegin; u < A.vertexEnd; ++u) state_.positions[u] += da;
+    for (uint32_t u = B.vertexBegin; u < B.vertexEnd; ++u) state_.positions[u] += db;
+  }
+  separations_.erase(std::remove_if(separations_.begin(), separations_.end(),
+                                    [](const Separation& s) { return s.remaining <= 0; }),
+                     separations_.end());
 }
 
 // Soft-soft contact (body_contacts.h): the bodies' vertices at the start of the step, what the
@@ -642,7 +786,7 @@ void World::keepBodyPairLambdas(const std::vector<PairConstraint>& pairs, const 
 // The large step's broad phase for the bodies: the boxes of their boundary vertices over the
 // step (start and free-flight end), grown by the bodies' voxel size, overlap.
 bool World::bodyContactsMayTouch() const {
-  if (!bodyContacts_) return false;
+  if (!bodyContactsOn()) return false;
   std::vector<Vec3> end(state_.positions.size());
   for (const ContactBody& b : bodyContacts_->bodies())
     for (uint32_t u : b.vertices)
@@ -819,7 +963,7 @@ void World::stepImplicit(bool largeStep) {
   projective_->step(state_.positions, state_.velocities, state_.rotations, g, sim_.damping, sim_.implicitIterations,
                     targets, sim_.rotationIterations);
   moveManipulators(tNext);
-  if (contacts || bodyContacts_) {
+  if (contacts || bodyContactsOn()) {
     // The contact pass finds the vertices that ended inside a surface; the step is solved again
     // with them held at their projected positions, so that the support reaches the whole body
     // within the step (projecting only those vertices afterwards lets a body sink and crush at
@@ -847,7 +991,7 @@ void World::stepImplicit(bool largeStep) {
     // body within the step. (Found at the end of the first solve, within the voxel size, a vertex
     // that moved deeper than that into the other body had no constraint: two balls closing at
     // 1 m/s ended steps a voxel inside each other, and at 10 m/s passed through each other.)
-    if (bodyContacts_) {
+    if (bodyContactsOn()) {
       Real first = 0, second = 0;
       for (const ContactBody& b : bodyContacts_->bodies()) {
         Real moved = 0;
@@ -866,6 +1010,7 @@ void World::stepImplicit(bool largeStep) {
       std::vector<int> heldSurface(held.size());
       for (size_t j = 0; j < held.size(); ++j) heldSurface[j] = scratch_->contactSurface[held[j]];
       scratch_->impulse.assign(manipulators_.size() + kWalls, ContactForce{});
+      scratch_->work = 0;
       state_.positions = x0, state_.velocities = v0, state_.rotations = q0;
       std::vector<Vec3> heldForces;
       projective_->step(state_.positions, state_.velocities, state_.rotations, g, sim_.damping, sim_.implicitIterations,
@@ -1012,6 +1157,7 @@ void World::sweepManipulatorPaths(Real t0) {
       // Contact forces: the velocity the sweep gave the vertex, against the one it ended the solve with.
       addImpulse(scratch_->impulse[size_t(&mp - manipulators_.data())], m.mass[i] * (v - state_.velocities[i]), x,
                  mp.position, m.dim);
+      scratch_->work += m.mass[i] * (v - state_.velocities[i]).dot((mp.position - mp.previousPosition) / dt_);
       state_.positions[i] = x, state_.velocities[i] = v;
       scratch_->previousPositions[i] = x - (mp.position - mp.previousPosition);
       scratch_->contactDepth[i] = std::max(scratch_->contactDepth[i], depth);

@@ -247,7 +247,8 @@ TEST_F(CliTest, RunDivergenceExit3NothingWritten) {
   const Result r = run("run unstable.json --out res");
   EXPECT_EQ(r.code, 3) << r.err << r.out;
   EXPECT_NE(r.err.find("simulation diverged at t="), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("try a smaller dt"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("simulation.dt = 0.05 s"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("stability limit"), std::string::npos) << r.err;
   EXPECT_TRUE(r.out.empty());
   EXPECT_FALSE(fs::exists(dir_ / "res"));
   for (const auto& e : fs::directory_iterator(dir_))
@@ -428,6 +429,57 @@ TEST_F(CliTest, RunEnergyBlowUpInsideWallsExit3NamingTheCause) {
   write("drop.json", drop);
   r = run("run drop.json --out res --duration 0.5");
   EXPECT_EQ(r.code, 0) << r.err;
+}
+
+// ---- issue 26: exit 2 for what the input caused, start overlaps, tools inside, progress -----------
+
+TEST_F(CliTest, RunOutOfRangeVoxelSizePositionAndMassExit2NamingTheKey) {
+  // What the fuzzer reached as internal errors (exit 1): a voxel size of 5e-324 (a vertex without
+  // mass) and a body at 1e15 m (rest positions off the voxel lattice).
+  expectRejected("tiny.json", R"({"body": {"shape": "sphere", "size": 4, "voxel_size": 5e-324}})", "body.voxel_size");
+  expectRejected("huge.json", R"({"body": {"shape": "sphere", "size": 4, "voxel_size": 1e4}})", "body.voxel_size");
+  expectRejected("far.json", R"({"body": {"shape": "sphere", "size": 4, "voxel_size": 0.01, "position": [1e15, 0, 0]}})",
+                 "body.position");
+  expectRejected("light.json",
+                 R"({"body": {"shape": "sphere", "size": 4, "voxel_size": 1e-9}, "material": {"density": 1e-300}})",
+                 "material.density");
+}
+
+TEST_F(CliTest, RunStartOverlapsWarnAndRun) {
+  write("overlap.json", R"({
+    "bodies": [
+      {"name": "a", "shape": "sphere", "size": 6, "voxel_size": 0.01, "position": [-0.06, 0.01, -0.03]},
+      {"name": "b", "shape": "sphere", "size": 6, "voxel_size": 0.01, "position": [-0.03, 0.01, -0.03]}],
+    "simulation": {"duration": 0.05, "frame_interval": 0.01},
+    "domain": {"min": [-0.2, 0.02, -0.2], "max": [0.2, 0.5, 0.2]},
+    "manipulators": [{"type": "sphere", "radius": 0.01, "path": [{"t": 0, "position": [-0.03, 0.04, 0]}]}]})");
+  const Result r = run("run overlap.json --out res");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("gradel: overlap.json: warning: body 'a' and body 'b' start overlapping"), std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("beyond the wall ymin of the domain"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("inside manipulator 0"), std::string::npos) << r.err;
+}
+
+TEST_F(CliTest, RunToolInsideABodyIsNoDivergence) {
+  // Issue 26: a 5 cm tool at the centre of a 12^3 ball exited 3 at t = 0.005 s.
+  write("tool.json", R"({
+    "body": {"shape": "sphere", "size": 12, "voxel_size": 0.01, "position": [-0.06, -0.06, -0.06]},
+    "simulation": {"damping": 2, "gravity": [0, 0, 0], "duration": 0.1, "frame_interval": 0.01},
+    "manipulators": [{"type": "sphere", "radius": 0.05, "path": [{"t": 0, "position": [0, 0, 0]}]}]})");
+  const Result r = run("run tool.json --out res");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("inside manipulator 0"), std::string::npos) << r.err;
+}
+
+TEST_F(CliTest, SlowLayoutShowsProgressOnStderr) {
+  Result r = run("layout --shape sphere --size 8", "GRADEL_PROGRESS_AFTER=0");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("gradel: building the gradational layout of"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("done in"), std::string::npos) << r.err;
+  r = run("layout --shape sphere --size 8");  // fast: nothing
+  EXPECT_EQ(r.code, 0);
+  EXPECT_TRUE(r.err.empty()) << r.err;
 }
 
 }  // namespace

@@ -206,7 +206,7 @@ TEST(SceneIo, ParseSceneWrongTypeIsError) {
   expectError(scene3(R"("shape": "sphere", "size": 8.5)"), "body.size", "expected an integer");
   expectError(scene3(R"("shape": 3, "size": 8)"), "body.shape", "got number");
   expectError(scene3(R"("shape": "sphere", "size": 8, "voxel_size": "1cm")"), "body.voxel_size",
-              "expected a number > 0");
+              "expected a number in [1e-09, 1000]");
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": [])"), "simulation", "expected an object");
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("manipulators": {"type": "sphere"})"), "manipulators",
               "expected an array");
@@ -219,7 +219,7 @@ TEST(SceneIo, ParseSceneWrongTypeIsError) {
 
 TEST(SceneIo, ParseSceneOutOfRangeIsError) {
   expectError(scene3(R"("shape": "sphere", "size": 0)"), "body.size", "out of range");
-  expectError(scene3(R"("shape": "sphere", "size": 8, "voxel_size": 0)"), "body.voxel_size", "> 0");
+  expectError(scene3(R"("shape": "sphere", "size": 8, "voxel_size": 0)"), "body.voxel_size", "0 is out of range (expected a number in [1e-09, 1000] [m])");
   expectError(scene3(R"("shape": "sphere", "size": 8, "voxel_size": -0.01)"), "body.voxel_size", "out of range");
   expectError(scene3(R"("shape": "sphere", "size": 8)", R"("material": {"youngs_modulus": -1})"),
               "material.youngs_modulus");

@@ -6,6 +6,7 @@
 // order), so results are identical at any thread count.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <memory>
 #include <string>
@@ -16,6 +17,7 @@
 #include "gradel/integrator.h"
 #include "gradel/large_step.h"
 #include "gradel/model.h"
+#include "gradel/overlaps.h"
 #include "gradel/pins.h"
 #include "gradel/projective.h"
 #include "gradel/stability.h"
@@ -81,6 +83,20 @@ class World {
 
   /// Advances one time step dt().
   void step();
+  /// Finds the overlaps of the bodies with each other, the manipulators and the walls now
+  /// (overlaps.h) and separates them at kStartSeparationSpeed from the next step on, instead of
+  /// the contacts' instant push. buildScene calls it for every scene (at t = 0, after the pins
+  /// and the contacts between bodies are set); a world made by hand keeps the instant push
+  /// unless its owner calls it.
+  void releaseStartOverlaps();
+  /// What the last releaseStartOverlaps() found (the warnings of `gradel run`).
+  const std::vector<StartOverlap>& startOverlaps() const { return startOverlaps_; }
+  /// True while start overlaps are being separated (walls or manipulators on their way back to
+  /// their settings, bodies moving apart; contacts between bodies wait for the bodies).
+  bool separatingStartOverlaps() const {
+    return wallsReleasing_ || !separations_.empty() ||
+           std::any_of(manipulatorScale_.begin(), manipulatorScale_.end(), [](Real s) { return s < 1; });
+  }
   /// Advances by whole steps until time() >= t (within half a step).
   void advanceTo(Real t);
 
@@ -117,6 +133,9 @@ class World {
   ContactForces averageContactForces() const;
   /// The time [s] the average covers.
   Real forceAverageTime() const { return averageTime_; }
+  /// The energy [J] the walls and manipulators gave the bodies since t = 0 (contact_work.h): the
+  /// sum of each step's positive total; what the divergence guard counts as supplied by contacts.
+  Real contactWork() const { return contactWork_; }
   void restartForceAverage();
 
   /// Soft-soft contact between the bodies and, if set, of a body with itself (body_contacts.h):
@@ -168,7 +187,7 @@ class World {
   ThreadTeam* frameStepTeam();
   void stageContacts(size_t begin, size_t end);
   Real resolveVertexContacts(const Vec3& previous, const Vec3& previousVelocity, Vec3& x, Vec3& v, Real mass,
-                             ContactForce* impulse, int* surface = nullptr) const;
+                             Real stiffness, ContactForce* impulse, Real* work, int* surface = nullptr) const;
   void beginContactImpulses();
   void finishContactImpulses();
   void moveManipulators(Real tNext);
@@ -185,6 +204,8 @@ class World {
   void finishFrameStep(Real tNext);
   void sweepManipulatorPaths(Real t0);
   void chooseIntegrator(Real period);
+  void advanceStartOverlapRelease();
+  bool bodyContactsOn() const { return bodyContacts_ && separations_.empty(); }
   void applyPins(Real t);
   std::vector<Vec3> pinTargets(Real t) const;
 
@@ -233,6 +254,23 @@ class World {
   ContactForces stepForces_;      ///< The last step's contact forces.
   ContactForces averageImpulse_;  ///< [N s], [N m s] summed since restartForceAverage().
   Real averageTime_ = 0;          ///< [s] since restartForceAverage().
+  std::vector<Real> vertexStiffness_;  ///< [N/m] per vertex: sum of its elements' k_e (contact_work.h).
+  Real contactWork_ = 0;               ///< [J] World::contactWork().
+  // Start overlaps (overlaps.h), released from the first step on at kStartSeparationSpeed.
+  DomainSettings domainSet_;             ///< The walls as set (domain_: where they are while released).
+  bool wallsReleasing_ = false;
+  std::vector<Real> manipulatorScale_;   ///< Per manipulator: its size now over its set size (1: set).
+  std::vector<std::array<Real, 2>> manipulatorSize_;  ///< Per manipulator: set radius and half length.
+  struct Separation {
+    uint32_t a = 0, b = 0;        ///< Bodies (RestModel::bodies).
+    Vec3 direction{1, 0, 0};      ///< b moves along it, a against it.
+    Real remaining = 0;           ///< [m] still to go.
+    Real weightA = 0.5, weightB = 0.5;  ///< Shares of each move (mass-weighted; 0 for a pinned body).
+  };
+  std::vector<Separation> separations_;
+  std::vector<StartOverlap> startOverlaps_;
+  std::array<Vec3, kWalls> wallVelocity_{};  ///< [m/s] per wall, this step (moving only while released).
+  std::vector<Real> manipulatorGrowth_;     ///< [m/s] per manipulator: its surface's growth speed this step.
 };
 
 }  // namespace gradel
