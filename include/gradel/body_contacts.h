@@ -247,6 +247,8 @@ struct BodyContactState {
   const Real* invMass = nullptr;             ///< [1/kg] 0 = immovable (pinned).
   /// Per body (bodies() order), measured by the caller at these positions, or nullptr: the stage measures it.
   const BodyMotion* motion = nullptr;
+  Real dt = 0;            ///< [s] the step (0: unknown; the response then stores no projection energy).
+  bool leapfrog = false;  ///< Velocities half a step behind the positions (symplectic Euler; contacts.h StepStart).
 };
 
 /// What one call found.
@@ -302,6 +304,8 @@ class BodyContacts {
   static constexpr int kMaxIterations = 32;  ///< ... and at most (while a sweep finds one inside along its normal).
   /// The last resort halves the taken-back bodies' motion down to this fraction, then takes it all back.
   static constexpr Real kTakeBackLeast = 1.0 / 16;
+  /// ... while a vertex is inside deeper than this (times the voxel size of the face's body).
+  static constexpr Real kTakeBackDepth = 0.1;
 
   struct Contact {
     uint32_t vertex;               ///< World id of the vertex.
@@ -493,6 +497,7 @@ class BodyContacts {
   };
   std::vector<Patches> patches_;
   std::vector<Contact> contacts_, round_;
+  std::vector<Vec3> entry_;  ///< Per contact: its relative velocity when the velocity response began.
   // The warm start (header): the last stage's body-body contacts and where their vertex and face
   // corners ended it (4 per contact); used only where the step started there (previousPositions).
   bool warmStart_ = true;
