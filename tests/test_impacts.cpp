@@ -255,6 +255,7 @@ TEST(Impacts, DISABLED_Measure) {
   if (std::getenv("GRADEL_IMPACT_SHAPE_B")) c.shapeB = std::getenv("GRADEL_IMPACT_SHAPE_B");
   if (env("GRADEL_IMPACT_LARGE_STEP", 0) > 0) c.integrator = IntegratorKind::LargeStep;
   c.duration = env("GRADEL_IMPACT_DURATION", 0);
+  c.maxDuration = env("GRADEL_IMPACT_MAX_DURATION", 0.25);
   const ImpactResult r = runImpact(c, int(env("GRADEL_IMPACT_TRACE", 0)));
   std::printf("%s\n", describe(r).c_str());
 }
