@@ -316,7 +316,7 @@ class BodyContacts {
   /// The last resort halves the taken-back bodies' motion down to this fraction, then takes it all back.
   static constexpr Real kTakeBackLeast = 1.0 / 16;
   /// ... while a vertex is inside deeper than this (times the voxel size of the face's body).
-  static constexpr Real kTakeBackDepth = 0.5;
+  static constexpr Real kTakeBackDepth = 0.1;
 
   struct Contact {
     uint32_t vertex;               ///< World id of the vertex.
