@@ -105,6 +105,7 @@ set(GRADEL_TEST_SOURCES
   tests/test_factor_solve.cpp
   tests/test_frame_loop.cpp
   tests/test_golden.cpp
+  tests/test_impacts.cpp
   tests/test_implicit.cpp
   tests/test_integration.cpp
   tests/test_coarse_space.cpp

@@ -1117,35 +1117,62 @@ bool BodyContacts::detectAll(const BodyContactState& s, BodyContactStats& stats)
   return !round_.empty();
 }
 
-// The last resort (header): while a vertex is inside, the bodies of the contacts go back along
-// the straight line from where they ended towards where they started, all by one fraction.
+// The last resort (header): while a vertex is inside deeper than kTakeBackDepth of a voxel, the
+// bodies of the contacts go back along the straight line from where they ended towards where they
+// started, all by one fraction, positions and velocities alike (the taken-back bodies make that
+// fraction of the step; keeping the step's velocities while taking the positions back let the
+// elastic forces of a pressed pair accelerate the bodies step after step without moving them: two
+// balls at 4 m/s, energy x1e5). Shallower leftovers are pushed out once more and kept as contacts.
 void BodyContacts::takeBack(const BodyContactState& s, BodyContactStats& stats) {
   if (!detectAll(s, stats)) return;
   Vec3* x = s.positions;
+  Vec3* v = s.velocities;
   const Vec3* x0 = s.previousPositions;
+  const Vec3* v0 = s.previousVelocities;
+  const Real* im = s.invMass;
   const size_t B = bodies_.size();
+  // Deeper than the tolerance, for the contacts of round_ now.
+  auto deep = [&] {
+    for (const Contact& c : round_)
+      if (c.depth > kTakeBackDepth * bodies_[bodyOf_[c.face[0]]].thickness) return true;
+    return false;
+  };
   std::vector<uint8_t> back(B, 0);
-  std::vector<std::vector<Vec3>> end(B);  // a body's positions when it joined
+  std::vector<std::vector<Vec3>> end(B), endV(B);  // a body's positions and velocities when it joined
   Real f = 1;
-  for (;;) {
+  while (deep()) {
     bool grew = false;
     for (const Contact& c : round_)
       for (const size_t b : {size_t(bodyOf_[c.vertex]), size_t(bodyOf_[c.face[0]])})  // (both on a surface)
         if (b < B && !back[b]) {
           back[b] = 1, grew = true;
           end[b].assign(x + bodies_[b].vertexBegin, x + bodies_[b].vertexEnd);
+          endV[b].assign(v + bodies_[b].vertexBegin, v + bodies_[b].vertexEnd);
         }
     if (f == 0 && !grew) break;  // nothing left to take back (pinned vertices stay)
     f = f > kTakeBackLeast ? f / 2 : 0;
     for (size_t b = 0; b < B; ++b) {
       if (!back[b]) continue;
-      for (uint32_t u = bodies_[b].vertexBegin; u < bodies_[b].vertexEnd; ++u)
-        if (s.invMass[u] != 0) x[u] = x0[u] + f * (end[b][u - bodies_[b].vertexBegin] - x0[u]);
+      const uint32_t begin = bodies_[b].vertexBegin;
+      for (uint32_t u = begin; u < bodies_[b].vertexEnd; ++u) {
+        if (im[u] == 0) continue;
+        x[u] = x0[u] + f * (end[b][u - begin] - x0[u]);
+        if (v0) v[u] = v0[u] + f * (endV[b][u - begin] - v0[u]);
+      }
     }
     ++stats.takeBacks;
     if (!detectAll(s, stats)) break;
   }
   stats.takenBackTo = f;
+  if (round_.empty()) return;
+  // What is left is shallow (or could not be taken back: pinned): out once more, as a round's contacts.
+  contacts_.insert(contacts_.end(), round_.begin(), round_.end());
+  for (int it = 0; it < kIterations; ++it)
+    for (const Contact& c : round_) {
+      const Real W = contactInvMass(c, im);
+      const Real gap = c.n.dot(relative(c, x)) - skin_;
+      if (W > 0 && gap < 0) applyPair(c, im, x, (-gap / W) * c.n);
+    }
 }
 
 // The warm start (header): the last stage's contacts whose vertex and face corners start this
@@ -1332,26 +1359,50 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
   }
   if (fellBack) takeBack(s, stats);
   keepWarm(x);
-  // Velocities: equal and opposite impulses on the relative velocity at each contact.
+  // Velocities: equal and opposite impulses on the relative velocity at each contact, never adding
+  // kinetic energy (the manipulators' rules, contacts.h). With symplectic Euler the stored velocity
+  // is half a step behind the positions: the relative velocity at their time is w = rel + a dt / 2,
+  // a dt the step's change of the contact's relative velocity (from the velocities the response
+  // started with: entry_); the impulses act on w. An impulse that takes the normal part of w from
+  // wn < 0 to wn' with |wn'| <= |wn| and shrinks the tangential part changes the kinetic energy by
+  // (|w'|^2 - |w|^2) / (2 W) <= 0, whatever the other contacts on the same vertices did before it.
   const Real e = settings_.restitution, mu = settings_.friction;
-  for (const Contact& c : contacts_) {
+  const Vec3* v0 = s.previousVelocities;
+  const bool leap = s.leapfrog && v0;
+  const bool timed = v0 && s.dt > 0;
+  entry_.resize(contacts_.size());
+  for (size_t k = 0; k < contacts_.size(); ++k) entry_[k] = relative(contacts_[k], v);
+  for (size_t k = 0; k < contacts_.size(); ++k) {
+    const Contact& c = contacts_[k];
     const Real W = contactInvMass(c, im);
     if (!(W > 0)) continue;
-    const Vec3 rel = relative(c, v);
-    const Real vn = rel.dot(c.n);
-    if (vn >= 0) continue;
-    // The bounce: restitution times the speed at which the contact approached at the start of
-    // the step; nothing for one that was resting or receding then (contacts.h, rule 1).
-    const Real u0 = s.previousVelocities ? relative(c, s.previousVelocities).dot(c.n) : vn;
-    const Real out = u0 < 0 ? e * std::min(-u0, -vn) : Real(0);
-    const Real jn = (out - vn) / W;
-    applyPair(c, im, v, jn * c.n);
-    const Vec3 vt = rel - vn * c.n;
-    const Real vtLen = vt.norm();
-    if (mu > 0 && vtLen > 0) {
-      const Real jt = std::min(vtLen / W, mu * jn);
-      applyPair(c, im, v, (-jt / vtLen) * vt);
+    const Vec3 start = v0 ? relative(c, v0) : entry_[k];
+    const Vec3 half = leap ? Vec3(0.5 * (entry_[k] - start)) : Vec3::Zero();  // a dt / 2
+    const Vec3 w = relative(c, v) + half;
+    const Real wn = w.dot(c.n);
+    if (!(wn < 0)) continue;  // receding at the time of the positions: its next step takes it out
+    // The bounce: restitution times the speed at which the contact approached at the start of the
+    // step, never more than it has now; nothing for one that was resting or receding then (rule 1).
+    const Real u0 = start.dot(c.n);
+    Real out = u0 < 0 ? e * std::min(-u0, -wn) : Real(0);
+    // The elastic energy the position projection stored (rule 2): pushed apart by `depth` along n
+    // against the relative acceleration an < 0 that pressed the vertex in, -an depth per unit of
+    // generalised mass 1 / W; taken out of the bounce, then out of the sliding.
+    Real stored = timed ? std::max(Real(0), -(entry_[k] - start).dot(c.n) / s.dt) * c.depth : Real(0);
+    const Real fromBounce = std::min(stored, Real(0.5) * out * out);
+    out = std::sqrt(std::max(Real(0), out * out - 2 * fromBounce));
+    stored -= fromBounce;
+    const Real jn = (out - wn) / W;
+    Vec3 wt = w - wn * c.n;
+    const Real wtLen = wt.norm();
+    Vec3 dv = (out - wn) * c.n;  // the change of the relative velocity
+    if (wtLen > 0 && (mu > 0 || stored > 0)) {
+      // Coulomb: the tangential impulse at most mu times the normal one; then the stored energy.
+      Real keep = std::max(Real(0), wtLen - mu * jn * W);
+      if (stored > 0) keep = std::sqrt(std::max(Real(0), keep * keep - 2 * stored));
+      dv += ((keep - wtLen) / wtLen) * wt;
     }
+    applyPair(c, im, v, dv / W);
   }
   stats.contacts = contacts_.size();
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -730,7 +730,8 @@ void World::stageBodyContacts() {
     bodyMotionMeasured_ = false;
   }
   bodyContactStats_ = bodyContacts_->resolve(
-      {x, v, bodyContactStartX_.data(), bodyContactStartV_.data(), bodyContactInvMass_.data(), motion});
+      {x, v, bodyContactStartX_.data(), bodyContactStartV_.data(), bodyContactInvMass_.data(), motion, dt_,
+       sim_.integrator == IntegratorKind::SymplecticEuler});
   scratch_->maxContactDepth = std::max(scratch_->maxContactDepth, bodyContactStats_.maxDepth);
   if (!domain_.enabled || bodyContacts_->contacts().empty()) return;
   std::vector<uint32_t> moved;
