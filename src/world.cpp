@@ -171,7 +171,9 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
 IntegratorCost integratorCost(size_t vertices, double explicitDt, double largeDt) {
   IntegratorCost c;
   c.explicitWallPerSecond = double(vertices) * kAutoExplicitSecondsPerVertexStep / explicitDt;
-  c.largeStepWallPerSecond = double(vertices) * kAutoLargeStepSecondsPerVertexStep / largeDt;
+  const double perVertexStep =
+      kAutoLargeStepSecondsPerVertexStep * std::pow(double(vertices) / kAutoLargeStepVertices, kAutoLargeStepExponent);
+  c.largeStepWallPerSecond = double(vertices) * perVertexStep / largeDt;
   c.pick = c.largeStepWallPerSecond < c.explicitWallPerSecond ? IntegratorKind::LargeStep
                                                               : IntegratorKind::SymplecticEuler;
   return c;

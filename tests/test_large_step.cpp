@@ -361,5 +361,25 @@ TEST(LargeStep, AutoIntegratorExplicitWhileRealTimeElseLargeStep) {
   EXPECT_EQ(parseIntegratorKind("auto"), IntegratorKind::Auto);
 }
 
+// auto's cost model (integrator.h): the cheaper wall time per simulated second wins; the large
+// step's cost per vertex-step grows with the body, the explicit step's does not.
+TEST(LargeStep, AutoPicksTheCheaperIntegratorPerSimulatedSecond) {
+  const IntegratorCost soft = integratorCost(31007, 7.7e-5, 1.0 / 60);  // 64-voxel sphere, E = 1e6 Pa
+  EXPECT_EQ(soft.pick, IntegratorKind::SymplecticEuler);
+  EXPECT_LT(soft.explicitWallPerSecond, soft.largeStepWallPerSecond / 3);
+  const IntegratorCost stiff = integratorCost(31007, 7.7e-6, 1.0 / 60);  // the same at E = 1e8 Pa
+  EXPECT_EQ(stiff.pick, IntegratorKind::LargeStep);
+  EXPECT_NEAR(stiff.explicitWallPerSecond, 10 * soft.explicitWallPerSecond, 1e-9 * stiff.explicitWallPerSecond);
+  // Per vertex, the large step costs more in a bigger body.
+  EXPECT_GT(integratorCost(100000, 1e-5, 1.0 / 60).largeStepWallPerSecond / 100000,
+            integratorCost(1000, 1e-5, 1.0 / 60).largeStepWallPerSecond / 1000);
+  // The shipped real-time box (64 voxels, E = 1e6 Pa): the explicit step at its own dt, not the
+  // scene's 1/60 s frame (12x faster there, issue 25).
+  BuiltScene box = buildScene(loadScene(std::string(GRADEL_SOURCE_DIR) + "/scenes/box-realtime.json"));
+  EXPECT_EQ(box.world->settings().integrator, IntegratorKind::SymplecticEuler) << box.world->integratorChoice();
+  EXPECT_LT(box.world->dt(), 1e-3);
+  EXPECT_NE(box.world->integratorChoice().find("large_step at"), std::string::npos) << "names both estimates";
+}
+
 }  // namespace
 }  // namespace gradel

@@ -80,6 +80,7 @@ TEST(Stability, symplecticEulerHoldsBelowTheMeasuredLimitAndDivergesAbove) {
   const Body b = makeBody("sphere", 10, 3, LayoutKind::Gradational);
   auto energyGrowth = [&](double fraction) {
     SimulationSettings s = isolated();
+    s.dtPeriod = PeriodRule::Operator;
     s.dtFraction = fraction;
     World w(b.model, s, {}, {});
     EXPECT_NEAR(w.dt(), fraction * 2 * M_PI / w.stabilityEstimate().omega, 1e-15);
@@ -102,10 +103,13 @@ TEST(Stability, symplecticEulerHoldsBelowTheMeasuredLimitAndDivergesAbove) {
   EXPECT_GT(energyGrowth(0.34), 1e6);
 }
 
-TEST(Stability, worldTakesTheOperatorRuleByDefault) {
+TEST(Stability, operatorRuleStepsAtItsDefaultFraction) {
   const Body b = makeBody("sphere", 8, 3, LayoutKind::Gradational);
-  World w(b.model, isolated(), {}, {});
-  EXPECT_EQ(w.settings().dtPeriod, PeriodRule::Operator);
+  EXPECT_EQ(World(b.model, isolated(), {}, {}).settings().dtPeriod, PeriodRule::Vertex);  // the default, 0.1
+  EXPECT_EQ(World(b.model, isolated(), {}, {}).settings().dtFraction, 0.1);
+  SimulationSettings s = isolated();
+  s.dtPeriod = PeriodRule::Operator;
+  World w(b.model, s, {}, {});
   EXPECT_EQ(w.settings().dtFraction, 0.2);
   EXPECT_DOUBLE_EQ(w.dt(), 0.2 * 2 * M_PI / w.stabilityEstimate().omega);
   // 2x (and a little more: the operator's period is longer than the vertex bound's) the step

@@ -26,16 +26,16 @@ IntegratorKind parseIntegratorKind(const std::string& name);
 const char* integratorKindName(IntegratorKind k);
 
 /// What "the smallest period" means for dt = auto.
-/// Operator (default): 2 pi / omega_max, the fastest vibration of the assembled body at rest
+/// Operator (opt-in, dt_period "operator"): 2 pi / omega_max, the fastest vibration of the assembled body at rest
 ///   (stability.h: Lanczos on M^-1 K, hanging vertices and regions included). Symplectic Euler is
 ///   stable while omega_max dt < 2, i.e. dt_fraction < 1/pi = 0.318; the default 0.2 keeps
-///   omega_max dt = 1.26, 2-2.3x the vertex rule's steps. Chosen by measurement (docs/scenes.md): at
-///   0.25 two 8-voxel balls meeting at 1 m/s leave a vertex inside the other ball (body contacts
-///   assume smaller moves per step); at 0.2 every shipped scene, the validation suite and the
-///   body-contact tests hold.
-/// Vertex: the period of the stiffest vertex with all its elements (a bound within ~4 % of the
-///   operator's on uniform bodies); dt = T/10 keeps omega dt ~ 0.6 for every mode (the default
-///   before the operator rule: 2.5x smaller steps).
+///   omega_max dt = 1.26, 2-2.3x the vertex rule's steps. Not yet the default (docs/scenes.md): at
+///   0.2 the shipped scenes and the validation suite run, but 12 tests of the suite fail (body
+///   contacts pressed together need the last resort, energy swings of symplectic Euler's staggered
+///   velocities exceed the 1 % the resolved-body tests allow); at 0.25 two 8-voxel balls meeting at
+///   1 m/s leave a vertex inside the other ball.
+/// Vertex (default): the period of the stiffest vertex with all its elements (a bound 0-15 % above
+///   the operator's omega_max); dt = T/10 keeps omega dt ~ 0.6 for every mode.
 /// Element: the paper's rule (sec. 3.4), the period of the smallest element on its own. A vertex
 ///   shared by n elements vibrates ~sqrt(n) times faster, so dt = T/10 lands at omega dt ~ 1.8,
 ///   just inside symplectic Euler's stability limit of 2: stable but with large energy swings.
@@ -60,12 +60,16 @@ inline int hardwareThreads() { return int(std::clamp(std::thread::hardware_concu
 inline constexpr double kExplicitSecondsPerVertexStep = 30e-9;
 inline constexpr double kImplicitSecondsPerVertexStep = 4e-6;
 /// The cost model of `auto`: wall seconds per vertex and step of each integrator on 2 threads of
-/// the project's 2-core VM, on the real-scene rows of gradel-bench (gravity, walls, a pressing
-/// manipulator, output frames; bench/results/2026-11-26-vm-auto.csv, docs/speed.md "Which
-/// integrator auto picks"). Only their ratio decides; the absolute figures are what the viewer,
-/// `gradel run` and Python report as the expected speed.
-inline constexpr double kAutoExplicitSecondsPerVertexStep = 25e-9;   ///< [s] symplectic, contacts included.
-inline constexpr double kAutoLargeStepSecondsPerVertexStep = 12e-6;  ///< [s] large step at 2 substeps.
+/// the project's 2-core VM with other work on it, on the real-scene rows of gradel-bench (a sphere
+/// on the floor under gravity, pressed by a manipulator, pinned, frames every 1/60 s;
+/// bench/results/2026-11-27-vm-auto.csv, docs/speed.md "Which integrator auto picks"). The
+/// explicit step's cost per vertex is flat in the body's size (25-40 ns); the large step's grows
+/// as vertices^0.55 (its factor solves: 10-13 us at 1,667 vertices, 17-21 us at 7,037, 49-61 us at
+/// 31,007). Only their ratio decides the pick.
+inline constexpr double kAutoExplicitSecondsPerVertexStep = 30e-9;   ///< [s] symplectic, contacts included.
+inline constexpr double kAutoLargeStepSecondsPerVertexStep = 11e-6;  ///< [s] large step at kAutoLargeStepVertices.
+inline constexpr double kAutoLargeStepVertices = 1667;               ///< the 16-voxel sphere's vertices.
+inline constexpr double kAutoLargeStepExponent = 0.55;               ///< growth of its cost per vertex-step.
 
 /// What `auto` compares: wall seconds per simulated second of each integrator for a body of
 /// `vertices` vertices, the explicit step at `explicitDt` and the large step at `largeDt`.
@@ -80,7 +84,7 @@ struct SimulationSettings {
   IntegratorKind integrator = IntegratorKind::SymplecticEuler;
   Real dt = 0;  ///< [s] time step; 0 = auto: dtFraction of the smallest period (dtPeriod).
   Real dtFraction = 0;  ///< [-] used when dt is auto, up to maxDtFraction(dtPeriod); 0 = defaultDtFraction(dtPeriod).
-  PeriodRule dtPeriod = PeriodRule::Operator;  ///< Which smallest period dt = auto refers to.
+  PeriodRule dtPeriod = PeriodRule::Vertex;  ///< Which smallest period dt = auto refers to (docs/scenes.md).
   Real damping = 0.0;         ///< [1/s] velocity damping rate c: v <- v / (1 + c dt) every step (never adds energy).
   Vec3 gravity{0, -9.81, 0};  ///< [m/s^2]
   int threads = hardwareThreads();  ///< Worker threads (results are identical at any count).
