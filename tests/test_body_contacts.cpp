@@ -529,18 +529,8 @@ struct WorldOfBodies {
     world->setBodyContacts(buildContactBodies(*m, layouts, volumes), contact);
   }
   const BodyRange& range(size_t i) const { return world->model().bodies[i]; }
-  Vec3 momentum() const {
-    Vec3 p = Vec3::Zero();
-    for (size_t u = 0; u < world->model().numVertices(); ++u)
-      p += world->model().mass[u] * world->state().velocities[u];
-    return p;
-  }
-  Real momentumScale() const {
-    Real s = 0;
-    for (size_t u = 0; u < world->model().numVertices(); ++u)
-      s += world->model().mass[u] * world->state().velocities[u].norm();
-    return s;
-  }
+  Vec3 momentum() const { return test::momentum(*world); }
+  Real momentumScale() const { return test::momentumScale(*world); }
   Vec3 centre(size_t i) const {
     Vec3 c = Vec3::Zero();
     Real m = 0;

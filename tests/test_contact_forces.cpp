@@ -18,12 +18,6 @@ using namespace gradel::test;
 
 namespace {
 
-Vec3 momentum(const World& w) {  // sum m v of the stored velocities
-  Vec3 p = Vec3::Zero();
-  for (size_t i = 0; i < w.model().numVertices(); ++i) p += w.model().mass[i] * w.state().velocities[i];
-  return p;
-}
-
 // A 6 cm cube (6^3 voxels of 1 cm, 1 m^3 of water's density: 0.216 kg) on the floor z = 0 of a
 // box of walls, gravity -z, damped so that it comes to rest; a manipulator posed from outside.
 struct PressedCube {

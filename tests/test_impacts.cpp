@@ -80,18 +80,8 @@ struct ImpactWorld {
         world->state().velocities[u] = i == 0 ? vA : vB;
     world->setBodyContacts(buildContactBodies(*m, layouts, volumes), {c.restitution, c.friction, false});
   }
-  Vec3 momentum() const {
-    Vec3 p = Vec3::Zero();
-    for (size_t u = 0; u < world->model().numVertices(); ++u)
-      p += world->model().mass[u] * world->state().velocities[u];
-    return p;
-  }
-  Real momentumScale() const {
-    Real s = 0;
-    for (size_t u = 0; u < world->model().numVertices(); ++u)
-      s += world->model().mass[u] * world->state().velocities[u].norm();
-    return s;
-  }
+  Vec3 momentum() const { return test::momentum(*world); }
+  Real momentumScale() const { return test::momentumScale(*world); }
 };
 
 Real energyOf(const Metrics& m) { return m.kineticEnergy + m.elasticEnergy; }

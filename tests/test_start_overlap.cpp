@@ -16,12 +16,6 @@ namespace {
 
 BuiltScene build(const std::string& json) { return buildScene(parseScene(json, "test.json")); }
 
-Vec3 momentum(const World& w) {
-  Vec3 p = Vec3::Zero();
-  for (size_t u = 0; u < w.model().numVertices(); ++u) p += w.model().mass[u] * w.state().velocities[u];
-  return p;
-}
-
 TEST(StartOverlap, BodiesHalfInsideEachOtherSeparateWithoutEnergyMomentumKept) {
   // Two 12^3 balls (12 cm) whose centres are 6 cm apart: half inside each other, moving at
   // +-0.2 m/s, no gravity, no damping.
@@ -41,7 +35,7 @@ TEST(StartOverlap, BodiesHalfInsideEachOtherSeparateWithoutEnergyMomentumKept) {
   EXPECT_NE(text.find("body 'left' and body 'right' start overlapping"), std::string::npos) << text;
   const Metrics m0 = w.metrics();
   const Real e0 = m0.kineticEnergy + m0.elasticEnergy;
-  const Vec3 p0 = momentum(w);
+  const Vec3 p0 = test::momentum(w);
   // Separated within depth / speed (+ a step).
   Real peak = 0, separatedAt = -1;
   while (w.time() < 0.2) {
@@ -49,7 +43,7 @@ TEST(StartOverlap, BodiesHalfInsideEachOtherSeparateWithoutEnergyMomentumKept) {
     const Metrics m = w.metrics();
     peak = std::max(peak, m.kineticEnergy + m.elasticEnergy);
     if (separatedAt < 0 && !w.separatingStartOverlaps()) separatedAt = w.time();
-    EXPECT_LT((momentum(w) - p0).norm(), 1e-9 * (p0.norm() + 1e-3));
+    EXPECT_LT((test::momentum(w) - p0).norm(), 1e-9 * (p0.norm() + 1e-3));
   }
   std::printf("[ measured ] separated at t = %.4g s (bound 0.06 s); energy %.4g J at the start, peak %.4g J\n",
               separatedAt, e0, peak);

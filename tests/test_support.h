@@ -142,6 +142,19 @@ inline Vec3 centreOfMass(const World& w) {
   return c / w.model().totalMass;
 }
 
+// Linear momentum of every vertex, and its scale (sum of |m v|) for relative tolerances.
+inline Vec3 momentum(const World& w) {
+  Vec3 p = Vec3::Zero();
+  for (size_t u = 0; u < w.model().numVertices(); ++u) p += w.model().mass[u] * w.state().velocities[u];
+  return p;
+}
+
+inline Real momentumScale(const World& w) {
+  Real s = 0;
+  for (size_t u = 0; u < w.model().numVertices(); ++u) s += w.model().mass[u] * w.state().velocities[u].norm();
+  return s;
+}
+
 inline Vec3 centreOfMassVelocity(const World& w) {
   Vec3 c = Vec3::Zero();
   for (size_t i = 0; i < w.model().numVertices(); ++i) c += w.model().mass[i] * w.state().velocities[i];
