@@ -157,8 +157,12 @@ TEST(BodyContactsLarge, TwoFastBallsImplicit) {
   twoBallsCollide(IntegratorKind::Implicit, 5.0, 1);
 }
 // At 10 m/s each (33 cm a step) the solve's contacts leave vertices inside and the post-step
-// stage's last resort takes the balls back towards where they were (body_contacts.h).
-TEST(BodyContactsLarge, TwoBallsAtTenMetresPerSecond) { twoBallsCollide(IntegratorKind::LargeStep, 10.0); }
+// stage's last resort takes the balls back towards where they were (body_contacts.h). A vertex
+// left less than kTakeBackDepth (0.1 voxel) inside is pushed out again in the next step instead of
+// taking the balls back (issue 26: the take-back kept the step's velocities and made energy):
+// one step of 30 ends with such a vertex on the sanitizer build (portable rounding), none on the
+// Release build.
+TEST(BodyContactsLarge, TwoBallsAtTenMetresPerSecond) { twoBallsCollide(IntegratorKind::LargeStep, 10.0, 1); }
 
 // The stack and two bigger balls (2 threads take part: > 2048 vertices) at large step: the same
 // state hash at 1 and 2 threads.
