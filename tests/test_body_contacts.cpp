@@ -515,19 +515,7 @@ struct WorldOfBodies {
 
   WorldOfBodies(std::vector<test::Body> bodies, const std::vector<Vec3>& velocities, const SimulationSettings& sim,
                 const BodyContactSettings& contact, const DomainSettings& domain = {})
-      : parts(std::move(bodies)) {
-    std::vector<std::shared_ptr<const RestModel>> models;
-    std::vector<const Layout*> layouts;
-    std::vector<const VoxelVolume*> volumes;
-    for (const test::Body& b : parts)
-      models.push_back(b.model), layouts.push_back(&b.layout), volumes.push_back(&b.volume);
-    auto m = std::make_shared<RestModel>(combineRestModels(models));
-    world = std::make_unique<World>(m, sim, domain, std::vector<ManipulatorSettings>{});
-    for (size_t i = 0; i < parts.size(); ++i)
-      for (uint32_t u = m->bodies[i].vertexBegin; u < m->bodies[i].vertexEnd; ++u)
-        world->state().velocities[u] = velocities[i];
-    world->setBodyContacts(buildContactBodies(*m, layouts, volumes), contact);
-  }
+      : parts(std::move(bodies)), world(test::worldOfBodies(parts, velocities, sim, contact, domain)) {}
   const BodyRange& range(size_t i) const { return world->model().bodies[i]; }
   Vec3 momentum() const { return test::momentum(*world); }
   Real momentumScale() const { return test::momentumScale(*world); }

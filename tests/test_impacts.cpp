@@ -62,23 +62,13 @@ struct ImpactWorld {
     const Vec3 originB(c.sizeA * c.voxel + c.gap * c.voxel, rA - rB + c.offset * (rA + rB), rA - rB);
     parts.push_back(test::makeBody(c.shapeA, c.sizeA, 3, LayoutKind::Gradational, ma, c.voxel));
     parts.push_back(test::makeBody(c.shapeB, c.sizeB, 3, LayoutKind::Gradational, mb, c.voxel, originB));
-    std::vector<std::shared_ptr<const RestModel>> models;
-    std::vector<const Layout*> layouts;
-    std::vector<const VoxelVolume*> volumes;
-    for (const test::Body& b : parts)
-      models.push_back(b.model), layouts.push_back(&b.layout), volumes.push_back(&b.volume);
-    auto m = std::make_shared<RestModel>(combineRestModels(models));
     SimulationSettings sim = test::isolated();
     sim.threads = 1;
     sim.integrator = c.integrator;
     sim.dtFraction = c.dtFraction;
     sim.dtPeriod = PeriodRule::Vertex;
-    world = std::make_unique<World>(m, sim, DomainSettings{}, std::vector<ManipulatorSettings>{});
     const Vec3 vA(c.shareA * c.closing, 0, 0), vB(-(1 - c.shareA) * c.closing, 0, 0);
-    for (size_t i = 0; i < 2; ++i)
-      for (uint32_t u = m->bodies[i].vertexBegin; u < m->bodies[i].vertexEnd; ++u)
-        world->state().velocities[u] = i == 0 ? vA : vB;
-    world->setBodyContacts(buildContactBodies(*m, layouts, volumes), {c.restitution, c.friction, false});
+    world = test::worldOfBodies(parts, {vA, vB}, sim, {c.restitution, c.friction, false});
   }
   Vec3 momentum() const { return test::momentum(*world); }
   Real momentumScale() const { return test::momentumScale(*world); }

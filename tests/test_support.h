@@ -8,6 +8,7 @@
 #include <memory>
 #include <random>
 
+#include "gradel/bodies.h"
 #include "gradel/body_contacts.h"
 #include "gradel/layout.h"
 #include "gradel/model.h"
@@ -140,6 +141,23 @@ inline Vec3 centreOfMass(const World& w) {
   Vec3 c = Vec3::Zero();
   for (size_t i = 0; i < w.model().numVertices(); ++i) c += w.model().mass[i] * w.state().positions[i];
   return c / w.model().totalMass;
+}
+
+// Bodies side by side in one world (combineRestModels), each body's vertices at its velocity,
+// with soft-soft contact between them.
+inline std::unique_ptr<World> worldOfBodies(const std::vector<Body>& parts, const std::vector<Vec3>& velocities,
+                                            const SimulationSettings& sim, const BodyContactSettings& contact,
+                                            const DomainSettings& domain = {}) {
+  std::vector<std::shared_ptr<const RestModel>> models;
+  std::vector<const Layout*> layouts;
+  std::vector<const VoxelVolume*> volumes;
+  for (const Body& b : parts) models.push_back(b.model), layouts.push_back(&b.layout), volumes.push_back(&b.volume);
+  auto m = std::make_shared<RestModel>(combineRestModels(models));
+  auto world = std::make_unique<World>(m, sim, domain, std::vector<ManipulatorSettings>{});
+  for (size_t i = 0; i < parts.size(); ++i)
+    for (uint32_t u = m->bodies[i].vertexBegin; u < m->bodies[i].vertexEnd; ++u) world->state().velocities[u] = velocities[i];
+  world->setBodyContacts(buildContactBodies(*m, layouts, volumes), contact);
+  return world;
 }
 
 // Linear momentum of every vertex, and its scale (sum of |m v|) for relative tolerances.
