@@ -190,6 +190,48 @@ TEST(Impacts, DISABLED_GlancingHitWithFriction) {
   }
 }
 
+// A stiff ball (9^3, E = 1.9e5 Pa) at 1.45 m/s into a soft one (6^3, E = 1.4e4 Pa) at rest,
+// slightly off centre (found by scripts/soak). The soft ball's surface folds where it is crushed
+// (elements at 40 % of their volume), and the pseudo-normal test read vertices of the stiff ball
+// near the fold as up to 1.2 voxels inside although they had moved 0.02 voxel and the winding
+// number of the soft surface says outside: pushed out along far faces, they took the energy to
+// 1.8x in one step at 22.7 ms and to 28x (elements inverted) by 25 ms. Such findings are dropped
+// (BodyContacts::dropUnreachable). Checked over the first 40 ms, the press and the first rebound.
+// (Later, at 43 ms, this pair still ends stuck: a step ends with vertices inside that the
+// incremental rounds did not find, and the last resort, which takes the bodies back to where the
+// step started, cannot undo what was already inside then: issue 26's notes.)
+TEST(Impacts, FoldedSoftSurfaceIsNotReadAsInside) {
+  Impact c;
+  c.sizeA = 9, c.youngA = 1.9e5;
+  c.sizeB = 6, c.youngB = 1.37e4;
+  c.voxel = 0.01, c.gap = 1;
+  c.closing = 1.45, c.shareA = 1;
+  c.offset = -0.168;
+  c.restitution = 0.8, c.friction = 0.27;
+  c.duration = 0.04;
+  ImpactWorld w(c);
+  World& world = *w.world;
+  const Real e0 = energyOf(world.metrics());
+  const Vec3 p0 = w.momentum();
+  Real peak = 0, minDet = 1;
+  size_t dropped = 0, contacts = 0;
+  while (world.time() < c.duration) {
+    world.step();
+    const Metrics m = world.metrics();
+    peak = std::max(peak, energyOf(m) / e0);
+    minDet = std::min(minDet, m.minElementDet);
+    dropped += world.bodyContactStats().unreachable;
+    contacts += world.bodyContactStats().contacts;
+  }
+  std::printf("  peak %.4f E0, min det %.3f, contacts %zu, unreachable findings dropped %zu\n", peak, minDet, contacts,
+              dropped);
+  EXPECT_GT(contacts, 0u) << "the balls met";
+  EXPECT_GT(dropped, 0u) << "the fold misled the pseudo-normal test (the case this covers)";
+  EXPECT_LE(peak, 1.02) << "energy over its start";
+  EXPECT_GT(minDet, 0) << "an element inverted";
+  EXPECT_LE((w.momentum() - p0).norm(), 1e-9 * w.momentumScale());
+}
+
 // Random pairs (shapes, sizes 6..10, E 1e4..1e7, speeds 1..20 m/s, who moves, offset, restitution
 // and friction 0..1, dt_fraction 0.1 or 0.25): small enough for CI (docs/tests.md: a longer run).
 void randomImpactIsSafe() {

@@ -276,6 +276,10 @@ struct BodyContactStats {
   int takeBacks = 0;      ///< Times the last resort took bodies back towards the step's start (0: not needed).
   size_t warm = 0;        ///< Contacts of the last stage that the warm start applied (found inside their plane).
   Real takenBackTo = 1;   ///< [-] the fraction of the step's motion the taken-back bodies kept.
+  /// "Inside" findings deeper than the step's motion can reach that the winding number of the
+  /// other body's surface said were outside (a folded surface misleads the pseudo-normal test):
+  /// dropped, not pushed (dropUnreachable).
+  size_t unreachable = 0;
   double seconds = 0;     ///< Wall time of the call (measurements; no result depends on it).
 };
 
@@ -422,6 +426,7 @@ class BodyContacts {
   void detectPairs(const BodyContactState& s, BodyContactStats& stats, const std::vector<uint8_t>& pick);
   void detectSelf(size_t a, const BodyContactState& s, BodyContactStats& stats);
   bool detectAll(const BodyContactState& s, BodyContactStats& stats);
+  void dropUnreachable(const BodyContactState& s, BodyContactStats& stats);
   void takeBack(const BodyContactState& s, BodyContactStats& stats);
   void buildGrid(Grid& g, const ContactBody& faces, const Box& region, const Vec3* x,
                  const std::vector<uint32_t>* subset, Real reach, Real grow);
