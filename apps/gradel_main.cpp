@@ -308,7 +308,7 @@ int runScene(const RunOptions& o) {
     gradel::Metrics m = gradel::combineMetrics(each);
     m.contactForces = world.averageContactForces();  // what the bodies exert together (World::metrics)
     std::string warning;
-    if (auto diverged = guard.check(m, world.contactWork(), gradel::likelyCause(facts, m), &warning))
+    if (auto diverged = guard.check(m, gradel::suppliedWork(world), gradel::likelyCause(facts, m), &warning))
       throw Diverged(*diverged);
     if (!warning.empty()) std::fprintf(stderr, "gradel: %s: %s\n", o.scene.c_str(), warning.c_str());
     if (several) {
@@ -437,6 +437,21 @@ int main(int argc, char** argv) {
   gradel::render::RenderCommandOptions rendo;
   CLI::App* render = gradel::render::addRenderCommand(app, rendo);
 #endif
+
+  // An unknown subcommand is named (CLI11 would only say that one is required).
+  if (argc >= 2 && argv[1][0] != '-') {
+    std::string names;
+    bool known = false;
+    for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+      known = known || sub->get_name() == argv[1];
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (!known) {
+      std::cerr << "gradel: unknown subcommand '" << oneLine(argv[1]) << "' (expected one of " << names
+                << "; see gradel --help)\n";
+      return kExitInput;
+    }
+  }
 
   gradel::setSlowStageReports(true);  // a line on stderr for a layout or build that takes over a second
   try {
