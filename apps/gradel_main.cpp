@@ -217,6 +217,44 @@ std::string hex64(uint64_t h) {
   return buf;
 }
 
+// The run's step budget (run_budget.h) as a vertex limit per body, checked with the layout's
+// counts before any layout is built (size_limits.h check 2): a body of size 1000 is refused in
+// seconds instead of after building it. dt comes from a 4-voxel box of the first body's material
+// and voxel size in the voxel layout (every element a voxel); a body's own dt is smaller (a
+// gradational sphere's 0.6x), so the steps are at least that many, and the limit allows 2x the
+// budget on top. None with --max-steps (steps only) or when the steps alone are over their limit.
+gradel::SizeLimits runSizeLimits(const gradel::Scene& scene, Real duration, std::optional<double> maxSteps) {
+  gradel::SizeLimits limits;
+  if (maxSteps) return limits;
+  gradel::Scene probe;
+  probe.dim = scene.dim;
+  probe.simulation = scene.simulation;
+  probe.simulation.threads = 1;
+  probe.body.material = scene.body.material;
+  probe.body.layout = gradel::LayoutKind::Voxel;
+  probe.body.shape = gradel::presetShape("box", 4, scene.dim, scene.body.shape.voxelSize);
+  probe.body.material.regions.clear();
+  Real dt = 0;
+  try {
+    dt = gradel::buildScene(probe).world->dt();
+  } catch (const InputError&) {
+    return limits;  // the scene's own build reports it
+  }
+  const double steps = std::ceil(duration / dt - 1e-9);
+  if (steps > gradel::kDefaultMaxSteps) return limits;  // refused for its steps after the build, with the exact dt
+  const double allowed = 2 * gradel::kDefaultMaxVertexSteps / std::max(1.0, steps);
+  if (allowed >= 1e15) return limits;
+  limits.maxVertices = uint64_t(allowed);
+  char buf[320];
+  std::snprintf(buf, sizeof buf,
+                "that a run of %g s allows (dt at most about %.3g s: at least %.3g steps; the budget of %.3g "
+                "vertex-steps, with a margin of 2); use a smaller size, a larger voxel_size, a shorter duration, or "
+                "pass --max-steps to run it anyway",
+                duration, dt, steps, gradel::kDefaultMaxVertexSteps);
+  limits.vertexLimitReason = buf;
+  return limits;
+}
+
 int runScene(const RunOptions& o) {
   // Everything that can be wrong with the input is checked before anything is written.
   gradel::Scene scene = gradel::loadScene(o.scene);
@@ -236,7 +274,7 @@ int runScene(const RunOptions& o) {
 
   gradel::BuiltScene built;
   try {
-    built = gradel::buildScene(scene);
+    built = gradel::buildScene(scene, runSizeLimits(scene, duration, o.maxSteps));
   } catch (const InputError& e) {
     throw InputError(o.scene + ": " + e.what());
   }
@@ -308,7 +346,7 @@ int runScene(const RunOptions& o) {
     gradel::Metrics m = gradel::combineMetrics(each);
     m.contactForces = world.averageContactForces();  // what the bodies exert together (World::metrics)
     std::string warning;
-    if (auto diverged = guard.check(m, world.contactWork(), gradel::likelyCause(facts, m), &warning))
+    if (auto diverged = guard.check(m, gradel::suppliedWork(world), gradel::likelyCause(facts, m), &warning))
       throw Diverged(*diverged);
     if (!warning.empty()) std::fprintf(stderr, "gradel: %s: %s\n", o.scene.c_str(), warning.c_str());
     if (several) {
@@ -437,6 +475,21 @@ int main(int argc, char** argv) {
   gradel::render::RenderCommandOptions rendo;
   CLI::App* render = gradel::render::addRenderCommand(app, rendo);
 #endif
+
+  // An unknown subcommand is named (CLI11 would only say that one is required).
+  if (argc >= 2 && argv[1][0] != '-') {
+    std::string names;
+    bool known = false;
+    for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+      known = known || sub->get_name() == argv[1];
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (!known) {
+      std::cerr << "gradel: unknown subcommand '" << oneLine(argv[1]) << "' (expected one of " << names
+                << "; see gradel --help)\n";
+      return kExitInput;
+    }
+  }
 
   gradel::setSlowStageReports(true);  // a line on stderr for a layout or build that takes over a second
   try {

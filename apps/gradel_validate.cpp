@@ -665,20 +665,27 @@ fig.tight_layout(); fig.savefig(os.path.join(d, "tip_explicit_implicit.png"), dp
         if (r.s == sc && r.l == l && r.n == n) return r.v.frequency;
       return 0.0;
     };
+    // The targets are consistent scaling's; paper scaling's rows compare against the same numbers
+    // (its stiffness does not follow E across element sizes, docs/decisions.md) and say so.
+    bool targets = true;
     auto ratioRow = [&](const std::string& target, Real ratio, Real tolerance, const std::string& detail) {
       const bool met = std::abs(ratio - 1) <= tolerance;
-      md << "| " << target << " | " << pct(ratio) << " (" << detail << ") | " << (met ? "yes" : "**no**") << " |\n";
+      md << "| " << target << " | " << pct(ratio) << " (" << detail << ") | "
+         << (targets ? (met ? "yes" : "**no**") : (met ? "within (not a target)" : "outside (not a target)")) << " |\n";
     };
     const Real sagEB0 = beamTipSag(kAspect * kWidth, kWidth, kRho, kE);
     const Real fEB0 = beamFrequency(kAspect * kWidth, kWidth, kRho, kE);
     md << "## Targets (issue 5)\n\n"
        << "Read off the sections below at the finest resolution, n = " << finest << " voxels across; the issue sets "
-       << "them for `consistent` scaling, and `paper` is measured against the same numbers. `met` is computed, not "
-       << "written by hand.\n\n";
+       << "them for `consistent` scaling (the default): those rows are the targets. `paper` scaling is measured "
+       << "against the same numbers for comparison only (not targets: its k does not follow E across element "
+       << "sizes). `met` is computed, not written by hand.\n\n";
     for (Scaling sc : scalings) {
+      targets = sc == Scaling::Consistent;
       const Real gs = sagAt(sc, LayoutKind::Gradational, finest), us = sagAt(sc, LayoutKind::Uniform, finest);
       const Real gf = freqAt(sc, LayoutKind::Gradational, finest), uf = freqAt(sc, LayoutKind::Uniform, finest);
-      md << "### `" << scalingName(sc) << "` scaling\n\n| target | measured | met |\n| --- | --- | --- |\n";
+      md << "### `" << scalingName(sc) << "` scaling" << (targets ? ": the targets" : ": for comparison, not targets")
+         << "\n\n| " << (targets ? "target" : "compared with") << " | measured | met |\n| --- | --- | --- |\n";
       ratioRow("gradational sag within 5 % of uniform", gs / us, 0.05,
                fmt(gs * 1000) + " vs " + fmt(us * 1000) + " mm");
       ratioRow("gradational first frequency within 5 % of uniform", gf / uf, 0.05, fmt(gf) + " vs " + fmt(uf) + " Hz");
@@ -693,6 +700,7 @@ fig.tight_layout(); fig.savefig(os.path.join(d, "tip_explicit_implicit.png"), dp
                fmt(modulus[{int(sc), int(LayoutKind::Gradational), finest}] / kE, 4) + " E");
       md << "\n";
     }
+    targets = true;
     // Stability at 100x stiffness: finite throughout, and the largest energy sampled below 1000x
     // that of the explicit run at the scene's own E (a blow-up grows without bound; squeezing a
     // 100x stiffer body along the same paths may legitimately store up to ~100x the energy).

@@ -10,8 +10,8 @@ CLI::App* addRenderCommand(CLI::App& app, RenderCommandOptions& o) {
   r->add_option("--size", o.size, "Picture size WxH [pixels]")->capture_default_str();
   r->add_option(
        "--surface", o.surface,
-       "auto | smooth | voxel | embedded | none (auto: the body's own mesh, embedded, when it comes from a mesh "
-       "file; else smooth)")
+       "auto | smooth | voxel | embedded | none (auto: none with --section; the body's own mesh, embedded, when it "
+       "comes from a mesh file; else smooth)")
       ->capture_default_str();
   r->add_flag("--stress", o.stress, "Colour the surface by stress (darker = higher), with a legend");
   r->add_flag("--wireframe", o.wireframe, "Draw the element outlines coloured by level");

@@ -15,6 +15,7 @@ set(GRADEL_CORE_SOURCES
   src/element_stiffness.cpp
   src/element_stage.cpp
   src/embedding.cpp
+  src/external_force.cpp
   src/huge_pages.cpp
   src/isosurface.cpp
   src/layout.cpp
@@ -86,6 +87,7 @@ set(GRADEL_CLI_RENDER_SOURCES apps/render_cli.cpp)
 # gradel_tests (GRADEL_BUILD_TESTS): GoogleTest + rapidcheck, one file per engine part.
 set(GRADEL_TEST_SOURCES
   tests/test_bodies.cpp
+  tests/test_external_force.cpp
   tests/test_body_contacts.cpp
   tests/test_body_contacts_large.cpp
   tests/test_broad_phase.cpp

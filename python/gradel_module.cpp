@@ -2,10 +2,12 @@
 // simulate it, and read the state as numpy arrays. Positions and velocities are views of the
 // World's own memory (no copy; writable); results computed on demand (stress, surfaces, volumes)
 // are moved into the array's owner instead of copied. See python/example.py and docs/io.md.
+#include <pybind11/eval.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -118,16 +120,32 @@ io::VolumeFileSpec fileSpec(const std::string& path, std::optional<std::string> 
 
 // ---- simulations ------------------------------------------------------------------------
 
+Vec3 vec(const std::vector<double>& v, const char* what, int dim) {
+  if (int(v.size()) != dim && v.size() != 3)
+    throw InputError(std::string(what) + ": expected " + std::to_string(dim) + " numbers, got " +
+                     std::to_string(v.size()));
+  Vec3 out(0, 0, 0);
+  for (size_t i = 0; i < v.size(); ++i) out[int(i)] = v[i];
+  if (!out.allFinite()) throw InputError(std::string(what) + ": not finite");
+  return out;
+}
+
+
 /// A built scene plus lazily built display surfaces.
 /// Thread safety (python/README.md): every method that reads or changes the world holds `mutex`;
 /// step / advance_to hold it for the whole call (with the GIL released), so a mutation from
 /// another thread waits for the step to end, and concurrent step calls run one after the other
 /// (no lost steps). The mutex is always taken with the GIL released (WorldLock), so a thread
 /// waiting for it never blocks a stepping thread that briefly takes the GIL to check signals.
+/// Scene-level changes (add_body, add_pin before the first step) edit `scene` and build it again
+/// (buildScene, as a scene file); the replaced worlds are kept in `retired` so that views taken
+/// before stay valid memory (they no longer follow the simulation).
 struct Simulation {
   std::mutex mutex;
   Scene scene;
   BuiltScene built;
+  bool stepped = false;  ///< A step was made: the bodies are fixed from now on.
+  std::vector<std::unique_ptr<BuiltScene>> retired;
   std::map<std::pair<size_t, SurfaceKind>, DisplaySurface> surfaces;  ///< Per (body, kind), built on first use.
   /// surface("embedded") of a body from a volume: its isosurface, built on first use (per body).
   std::map<size_t, EmbeddedMesh> isoEmbedded;
@@ -142,14 +160,107 @@ std::unique_ptr<Simulation> makeSimulation(Scene scene) {
   return s;
 }
 
-Vec3 vec(const std::vector<double>& v, const char* what, int dim) {
-  if (int(v.size()) != dim && v.size() != 3)
-    throw InputError(std::string(what) + ": expected " + std::to_string(dim) + " numbers, got " +
-                     std::to_string(v.size()));
-  Vec3 out(0, 0, 0);
-  for (size_t i = 0; i < v.size(); ++i) out[int(i)] = v[i];
-  if (!out.allFinite()) throw InputError(std::string(what) + ": not finite");
-  return out;
+/// Builds `next` (the simulation's scene with a change) in place of the current world, keeping
+/// the manipulators added from Python (at their pose now). The scene is replaced only when the
+/// build succeeds. Caller holds the lock.
+void rebuild(Simulation& s, Scene next) {
+  BuiltScene built = buildScene(next);
+  const World& old = s.world();
+  for (size_t i = s.scene.manipulators.size(); i < old.manipulators().size(); ++i)
+    built.world->addManipulator(old.manipulators()[i].settings, old.manipulators()[i].position);
+  s.retired.push_back(std::make_unique<BuiltScene>(std::move(s.built)));
+  s.built = std::move(built);
+  s.scene = std::move(next);
+  s.surfaces.clear();
+  s.isoEmbedded.clear();
+}
+
+/// Python data (dicts, lists, numbers, numpy arrays) as JSON text for the scene reader.
+std::string toJson(const py::handle& obj, const std::string& what) {
+  try {
+    static const py::object* toList = new py::object(py::eval("lambda o: o.tolist()"));  // lives as the module
+    return py::module_::import("json").attr("dumps")(obj, py::arg("default") = *toList).cast<std::string>();
+  } catch (py::error_already_set& e) {
+    throw InputError(what + ": not expressible as a scene's JSON (" + std::string(py::str(e.value())) + ")");
+  }
+}
+
+/// Parses `scene` (JSON text) with the scene reader under the name `what`, reporting a key path
+/// that starts with `prefix` (the wrapper's own key, e.g. "bodies[0].") without it.
+Scene parseFragment(const std::string& scene, const std::string& what, const std::string& prefix) {
+  try {
+    return parseScene(scene, what);
+  } catch (const InputError& e) {
+    std::string m = e.what();
+    const std::string head = what + ": " + prefix;
+    if (m.rfind(head, 0) == 0) m = what + ": " + m.substr(head.size());
+    throw InputError(m);
+  }
+}
+
+/// A path from Python: a list of keyframes, each a dict {"t", "position", "velocity"} (the scene
+/// file's) or a tuple (t, position) / (t, position, velocity); as JSON text.
+py::list pathList(const py::object& path) {
+  py::list keys;
+  for (const py::handle& k : path) {
+    if (py::isinstance<py::dict>(k)) {
+      keys.append(k);
+    } else {
+      const py::tuple t = py::tuple(py::reinterpret_borrow<py::object>(k));
+      if (t.size() != 2 && t.size() != 3)
+        throw InputError("path: a keyframe is (t, position), (t, position, velocity) or a dict, got " +
+                         std::string(py::str(k)));
+      py::dict d;
+      d["t"] = t[0];
+      d["position"] = t[1];
+      if (t.size() == 3) d["velocity"] = t[2];
+      keys.append(d);
+    }
+  }
+  return keys;
+}
+
+/// A scene from Python: a file's path (str or os.PathLike) read by loadScene, or a dict of the
+/// same keys read by the same reader as JSON (messages "dict: KEY: ..."; relative files from the
+/// working folder).
+Scene readScene(const py::object& scene) {
+  if (py::isinstance<py::dict>(scene)) return parseScene(toJson(scene, "dict"), "dict");
+  std::string path;
+  try {
+    path = py::module_::import("os").attr("fspath")(scene).cast<std::string>();
+  } catch (py::error_already_set&) {
+    throw py::type_error("expected a scene file's path (str or pathlib.Path) or a dict, got " +
+                         std::string(py::str(py::type::of(scene).attr("__name__"))));
+  }
+  return loadScene(path);
+}
+
+/// Stand-ins for the simulation's bodies in a scene fragment: what a pin is read against (its
+/// body's lattice: voxel size and position; the number of bodies).
+py::list bodyStandIns(const Scene& scene) {
+  py::list bodies;
+  for (size_t i = 0; i < scene.numBodies(); ++i) {
+    const BodySettings& b = scene.bodyAt(i);
+    py::dict d;
+    d["shape"] = "box";
+    d["size"] = 1;
+    d["voxel_size"] = b.shape.voxelSize;
+    d["position"] = std::vector<double>{b.position.x(), b.position.y(), b.position.z()};
+    bodies.append(d);
+  }
+  return bodies;
+}
+
+/// A manipulator's axis: "x", "y", "z" (as a union primitive's) or a direction vector.
+Vec3 axisOf(const py::object& axis, int dim) {
+  if (py::isinstance<py::str>(axis)) {
+    const std::string a = axis.cast<std::string>();
+    if (a == "x") return Vec3(1, 0, 0);
+    if (a == "y") return Vec3(0, 1, 0);
+    if (a == "z") return Vec3(0, 0, 1);
+    throw InputError("axis: unknown value '" + a + "' (expected \"x\", \"y\", \"z\" or a vector)");
+  }
+  return vec(axis.cast<std::vector<double>>(), "axis", dim);
 }
 
 /// Holds a Simulation's mutex; taken with the GIL released (see Simulation), then the GIL is back.
@@ -197,9 +308,14 @@ void runSteps(Simulation& s, More more) {
   std::lock_guard<std::mutex> lock(s.mutex);
   requireFiniteState(s.world());
   s.world().restartForceAverage();  // manipulator_force(): the average over this call's steps
+  struct ForcesForThisCall {        // apply_force(): the forces act in this call's steps only
+    World& w;
+    ~ForcesForThisCall() { w.clearExternalForces(); }
+  } forces{s.world()};
   auto last = std::chrono::steady_clock::now();
   while (more()) {
     s.world().step();
+    s.stepped = true;
     const auto now = std::chrono::steady_clock::now();
     if (now - last > std::chrono::milliseconds(50)) {
       last = now;
@@ -285,6 +401,12 @@ PYBIND11_MODULE(gradel, m) {
       "Reads a volume or mesh file (binvox, vox, nrrd, nifti, raw, obj, stl, ply) into a read-only boolean array "
       "[i, j, k] without copying it.");
 
+  m.def(
+      "check_scene", [](const py::object& scene) { (void)readScene(scene); }, py::arg("scene"),
+      "Reads and checks a scene (a file's path, str or pathlib.Path, or a dict of its keys) with the scene "
+      "reader, building nothing: ValueError (InputError) naming the key, e.g. 'dict: body.size: ...'. Referenced "
+      "files must exist; they are read when the scene is built.");
+
   py::class_<Body>(m, "Body", "A binary voxel volume to simulate.")
       .def_static("from_array", &bodyFromArray, py::arg("voxels"), py::kw_only(), py::arg("voxel_size") = 0.01,
                   "From a 3D (or 2D) array indexed [i, j, k]; non-zero entries are filled. voxel_size in metres.")
@@ -331,6 +453,7 @@ PYBIND11_MODULE(gradel, m) {
              s.name = "python";
              s.dim = body.volume->dim();
              s.body.source = std::make_shared<io::VolumeDataSource>(body.volume, body.name);
+             s.body.shape.voxelSize = body.volume->voxelSize();  // the body's lattice (pins)
              s.body.layout = parseLayoutKind(layout);
              s.body.material.scaling = parseScaling(scaling);
              s.body.material.youngsModulus = youngsModulus;
@@ -371,12 +494,213 @@ PYBIND11_MODULE(gradel, m) {
            "Builds layout, rest model and world. Units: SI (m, s, kg, Pa). Material, layout and integrator are fixed "
            "for the simulation's life (the rest model is immutable): make a new Simulation to change them.")
       .def_static(
-          "from_scene", [](const std::string& path) { return makeSimulation(loadScene(path)); }, py::arg("path"),
-          "Builds the simulation of a JSON scene file (docs/scenes.md), manipulators and all.")
+          "from_scene", [](const py::object& scene) { return makeSimulation(readScene(scene)); },
+          py::arg("scene"),
+          "Builds the simulation of a scene (docs/scenes.md), manipulators, pins and all: a JSON file's path (str "
+          "or pathlib.Path) or a dict of the same keys, read and checked by the same reader (ValueError naming the "
+          "key, e.g. 'dict: body.size: ...').")
+      .def(
+          "add_body",
+          [](Simulation& s, const Body* volume, py::kwargs kw) {
+            static const std::vector<std::string> kKeys = {
+                "shape", "size", "grid", "primitives", "source", "voxel_size", "layout", "position", "velocity",
+                "name", "material", "scaling", "youngs_modulus", "density", "k", "regions"};
+            py::dict entry, material;
+            for (const auto& [key, value] : kw) {
+              const std::string k = key.cast<std::string>();
+              if (std::find(kKeys.begin(), kKeys.end(), k) == kKeys.end())
+                throw py::type_error("add_body() got an unexpected keyword argument '" + k + "'");
+              if (value.is_none()) continue;
+              if (k == "material") {
+                for (const auto& [mk, mv] : value.cast<py::dict>()) material[mk] = mv;
+              } else if (k == "scaling" || k == "youngs_modulus" || k == "density" || k == "k" || k == "regions") {
+                material[py::str(k)] = value;
+              } else {
+                entry[py::str(k)] = value;
+              }
+            }
+            if (volume) {
+              for (const char* k : {"shape", "size", "grid", "primitives", "source", "voxel_size"})
+                if (entry.contains(k))
+                  throw InputError(std::string("add_body: ") + k + ": not allowed with a Body (it has its voxels)");
+              if (volume->volume->dim() != s.scene.dim)
+                throw InputError("add_body: body: a " + std::to_string(volume->volume->dim()) + "D Body in a " +
+                                 std::to_string(s.scene.dim) + "D simulation");
+              entry["shape"] = "box";  // a stand-in for the reader; the Body's voxels replace it
+              entry["size"] = 1;
+              entry["voxel_size"] = volume->volume->voxelSize();
+            }
+            if (material.size() > 0) entry["material"] = material;
+            py::dict scene;
+            scene["dim"] = s.scene.dim;
+            scene["bodies"] = py::make_tuple(entry);
+            Scene parsed = parseFragment(toJson(scene, "add_body"), "add_body", "bodies[0].");
+            BodySettings b = std::move(parsed.body);
+            if (volume) {
+              b.source = std::make_shared<io::VolumeDataSource>(volume->volume, volume->name);
+              b.sizeKey = "add_body";
+            }
+            WorldLock lock(s);
+            if (s.stepped)
+              throw InputError("add_body: bodies are added before the first step (the simulation is at t = " +
+                               num(s.world().time()) + " s); build a new Simulation");
+            const size_t index = s.scene.numBodies();
+            if (!entry.contains("name")) b.name = "body" + std::to_string(index);
+            for (size_t i = 0; i < index; ++i)
+              if (s.scene.bodyAt(i).name == b.name)
+                throw InputError("add_body: name: \"" + b.name + "\" is the name of body " + std::to_string(i) +
+                                 " too (expected a name of its own)");
+            Scene next = s.scene;
+            next.moreBodies.push_back(std::move(b));
+            rebuild(s, std::move(next));
+            return index;
+          },
+          py::arg("body") = py::none(),
+          "Adds a body before the first step and returns its index: a Body (its voxels), or the keys of a scene "
+          "file's bodies[i] as keyword arguments: shape, size (or grid, primitives), source (a dict as body.source), "
+          "voxel_size, layout, position [m], velocity [m/s], name, material (a dict: scaling, youngs_modulus, "
+          "density, k, regions) or those material keys directly. Checked by the scene reader (ValueError naming "
+          "the key). The world is built again: views of positions taken before no longer follow it. Bodies in 3D "
+          "collide with each other (body_contact). ValueError after the first step.")
+      .def(
+          "add_pin",
+          [](Simulation& s, std::optional<std::vector<double>> min, std::optional<std::vector<double>> max,
+             std::optional<py::array> mask, std::optional<py::list> boxes, std::optional<std::vector<int>> offset,
+             size_t body, std::optional<py::object> path) {
+            py::dict pin;
+            if (min) pin["min"] = *min;
+            if (max) pin["max"] = *max;
+            if (mask || boxes || offset) {
+              py::dict m;
+              py::list bs;
+              if (boxes)
+                for (const py::handle& b : *boxes) {
+                  const py::tuple t = py::tuple(py::reinterpret_borrow<py::object>(b));
+                  if (t.size() != 2) throw InputError("add_pin: boxes: each box is (min index, max index)");
+                  py::dict d;
+                  d["min"] = t[0];
+                  d["max"] = t[1];
+                  bs.append(d);
+                }
+              if (mask && bs.size() == 0) {  // a stand-in for the reader; the array replaces it
+                py::dict d;
+                d["min"] = std::vector<int>{0, 0, 0};
+                d["max"] = std::vector<int>{0, 0, 0};
+                bs.append(d);
+              }
+              m["boxes"] = bs;
+              if (offset) m["offset"] = *offset;
+              pin["mask"] = m;
+            }
+            pin["body"] = body;
+            if (path) pin["path"] = pathList(*path);
+            py::dict scene;
+            scene["dim"] = s.scene.dim;
+            scene["bodies"] = bodyStandIns(s.scene);
+            scene["pins"] = py::make_tuple(pin);
+            Scene parsed = parseFragment(toJson(scene, "add_pin"), "add_pin", "pins[0].");
+            PinSettings p = std::move(parsed.pins.at(0));
+            if (mask) {
+              auto pm = std::make_shared<PinMask>(*p.mask);
+              if (!boxes) pm->boxes.clear();
+              Body m = bodyFromArray(*mask, pm->voxelSize);
+              pm->volume = m.volume;
+              p.mask = pm;
+            }
+            WorldLock lock(s);
+            Scene next = s.scene;
+            next.pins.push_back(p);
+            const std::string key = "pins[" + std::to_string(next.pins.size() - 1) + "]";
+            try {
+              if (!s.stepped) {
+                rebuild(s, std::move(next));
+              } else {  // an anchor made while running: the live world takes it (its solvers refactor)
+                s.world().setPins(next.pins);
+                s.scene = std::move(next);
+              }
+            } catch (const InputError& e) {  // "pins[i]: ..." of this pin: "add_pin: ..."
+              std::string m = e.what();
+              if (m.rfind(key + ": ", 0) == 0) m = "add_pin: " + m.substr(key.size() + 2);
+              else if (m.rfind(key + ".", 0) == 0) m = "add_pin: " + m.substr(key.size() + 1);
+              throw InputError(m);
+            }
+            return s.scene.pins.size() - 1;
+          },
+          py::arg("min") = py::none(), py::arg("max") = py::none(), py::kw_only(), py::arg("mask") = py::none(),
+          py::arg("boxes") = py::none(), py::arg("offset") = py::none(), py::arg("body") = 0,
+          py::arg("path") = py::none(),
+          "Pins (anchors) vertices of body `body` and returns the pin's index (scene key pins[i], pins.h): every "
+          "vertex in the box [min, max] [m] (world, at rest), or every corner of a filled voxel of `mask` (a boolean "
+          "array [i, j, k] on the body's lattice, from voxel `offset`) and of `boxes` ((min index, max index), "
+          "inclusive). `path`: keyframes (t, offset [m]) or (t, offset, velocity) or dicts {t, position, velocity}: "
+          "the pinned vertices' offset from rest over time (a moving target); none: held at rest. Before the first "
+          "step the world is built again (views taken before no longer follow it); after, the live world takes it. "
+          "ValueError when it holds no vertex.")
+      .def(
+          "apply_force",
+          [](Simulation& s, const py::array_t<int64_t, py::array::c_style | py::array::forcecast>& vertices,
+             const py::array_t<double, py::array::c_style | py::array::forcecast>& forces, std::optional<size_t> body) {
+            if (vertices.ndim() > 1) throw InputError("vertex_indices: expected a 1D array of vertex indices");
+            const py::ssize_t n = vertices.ndim() == 0 ? 1 : vertices.shape(0);
+            const bool one = forces.ndim() == 1;
+            if (!(one && forces.shape(0) == 3) && !(forces.ndim() == 2 && forces.shape(0) == n && forces.shape(1) == 3))
+              throw InputError("forces: expected shape (3,) or (" + std::to_string(n) + ", 3) [N]");
+            WorldLock lock(s);
+            size_t begin = 0, end = s.world().model().numVertices();
+            if (body) {
+              const BodyRange& r = bodyRange(s, *body);
+              begin = r.vertexBegin, end = r.vertexEnd;
+            }
+            std::vector<uint32_t> ids(static_cast<size_t>(n));
+            std::vector<Vec3> f(static_cast<size_t>(n));
+            const int64_t* vi = vertices.data();
+            for (py::ssize_t k = 0; k < n; ++k) {
+              const int64_t v = vi[k];
+              if (v < 0 || size_t(v) >= end - begin)
+                throw py::index_error("vertex_indices: " + std::to_string(v) + " is not a vertex" +
+                                      (body ? " of body " + std::to_string(*body) : std::string()) + " (expected 0.." +
+                                      std::to_string(end - begin - 1) + ")");
+              ids[size_t(k)] = uint32_t(begin + size_t(v));
+              const double* fr = forces.data() + (one ? 0 : 3 * k);
+              f[size_t(k)] = Vec3(fr[0], fr[1], fr[2]);
+              if (!f[size_t(k)].allFinite()) throw InputError("forces: row " + std::to_string(k) + " is not finite");
+            }
+            s.world().addExternalForces(ids, f);
+          },
+          py::arg("vertex_indices"), py::arg("forces"), py::kw_only(), py::arg("body") = py::none(),
+          "External forces [N] on vertices (PyBullet's applyExternalForce): forces (3,) for every listed vertex or "
+          "(n, 3), one per vertex, added to those applied before; they act in every step of the next step() or "
+          "advance_to() call, then are cleared. Indices are rows of positions, or of body_positions(body) with "
+          "body=. Every integrator applies them as the impulse F dt at the start of a step (external_force.h): a "
+          "force F on a free body for a time T changes its momentum by F T. Pinned vertices ignore them.")
+      .def_property_readonly(
+          "external_impulse",
+          [](Simulation& s) {
+            WorldLock lock(s);
+            const Vec3& j = s.world().externalImpulse();
+            return std::vector<double>{j.x(), j.y(), j.z()};
+          },
+          "[N s] the impulse apply_force() gave the bodies since t = 0 (their momentum is conserved up to it).")
+      .def_property_readonly(
+          "external_work",
+          [](Simulation& s) {
+            WorldLock lock(s);
+            return s.world().externalWork();
+          },
+          "[J] the energy apply_force() gave the bodies since t = 0.")
+      .def_property_readonly(
+          "num_pins", [](Simulation& s) { return s.scene.pins.size(); }, "Pins of the scene and add_pin().")
+      .def_property_readonly(
+          "pinned_vertices",
+          [](Simulation& s) {
+            WorldLock lock(s);
+            return std::vector<uint32_t>(s.world().pinned().vertices);
+          },
+          "Rows of positions held by a pin (ascending).")
       .def(
           "add_manipulator",
           [](Simulation& s, const std::string& type, Real radius, std::vector<double> position, Real halfLength,
-             std::vector<double> axis, Real restitution, Real friction) {
+             const py::object& axis, Real restitution, Real friction, std::optional<py::object> path) {
             ManipulatorSettings mp;
             mp.shape = parseManipulatorShape(type);
             if ((mp.shape == ManipulatorShape::Circle) != (s.scene.dim == 2))
@@ -384,19 +708,34 @@ PYBIND11_MODULE(gradel, m) {
             if (!(radius > 0)) throw InputError("radius: must be > 0 [m]");
             mp.radius = radius;
             mp.halfLength = halfLength;
-            mp.axis = vec(axis, "axis", s.scene.dim);
+            mp.axis = axisOf(axis, s.scene.dim);
             if (!(mp.axis.norm() > 0)) throw InputError("axis: must be non-zero");
             mp.restitution = restitution;
             mp.friction = friction;
             validate(mp);
+            if (path) {  // the scene reader's path, on a stand-in manipulator
+              py::dict m, scene;
+              m["type"] = s.scene.dim == 3 ? "sphere" : "circle";
+              m["path"] = pathList(*path);
+              scene["dim"] = s.scene.dim;
+              scene["bodies"] = bodyStandIns(s.scene);
+              scene["manipulators"] = py::make_tuple(m);
+              mp.path = parseFragment(toJson(scene, "add_manipulator"), "add_manipulator", "manipulators[0].")
+                            .manipulators.at(0)
+                            .path;
+            }
             const Vec3 at = vec(position, "position", s.scene.dim);
             WorldLock lock(s);
             return s.world().addManipulator(std::move(mp), at);
           },
           py::arg("type") = "sphere", py::kw_only(), py::arg("radius") = 0.02,
           py::arg("position") = std::vector<double>{0, 0, 0}, py::arg("half_length") = 0.05,
-          py::arg("axis") = std::vector<double>{0, 0, 1}, py::arg("restitution") = 1.0, py::arg("friction") = 0.0,
-          "Adds a kinematic manipulator ('sphere', 'cylinder'; 'circle' in 2D); returns its index.")
+          py::arg("axis") = "z", py::arg("restitution") = 1.0, py::arg("friction") = 0.0,
+          py::arg("path") = py::none(),
+          "Adds a kinematic manipulator ('sphere', 'cylinder'; 'circle' in 2D); returns its index. axis: 'x', 'y', "
+          "'z' or a vector (cylinder). path: keyframes (t, position) or (t, position, velocity) or dicts {t, "
+          "position, velocity} as a scene's manipulators[i].path: it moves along it (position is then ignored); "
+          "none: it stays at `position` until move_manipulator().")
       .def(
           "move_manipulator",
           [](Simulation& s, size_t i, std::vector<double> position, std::vector<double> velocity) {

@@ -7,6 +7,8 @@
 
 namespace gradel {
 
+double suppliedWork(const World& world) { return world.contactWork() + world.externalWork(); }
+
 double allowedEnergy(const EnergyBudget& b, const DivergenceSettings& s, const Metrics& now, double contactWork) {
   if (b.unbounded) return std::numeric_limits<double>::infinity();
   const double gravityDrop = std::max(0.0, b.initial.gravityEnergy - now.gravityEnergy);

@@ -562,7 +562,8 @@ std::shared_ptr<const VolumeSource> readSource(Fields f, int dim, Real voxelSize
   std::error_code ec;
   if (!std::filesystem::is_regular_file(spec.path, ec))
     f.fail("file",
-           "\"" + shown(file.get<std::string>()) + "\" is not a readable file (looked for " + shown(spec.path) + ")");
+           "\"" + shown(file.get<std::string>()) + "\" is not a readable file (looked for " +
+               shown(std::filesystem::absolute(spec.path, ec).lexically_normal().string(), 300) + ")");
   if (f.take("format")) {
     spec.format = f.enumeration("format", io::VolumeFormat::Binvox, &io::parseVolumeFormat);
   } else {
@@ -891,7 +892,12 @@ ManipulatorSettings readManipulator(Fields& f, int dim) {
   m.radius = f.number("radius", m.radius, kPositive, "m");
   if (m.shape == ManipulatorShape::Cylinder) {
     m.halfLength = f.number("half_length", m.halfLength, kPositive, "m");
-    if (const auto axis = f.optVec("axis", kAny, "")) {
+    // "x", "y", "z" as a union primitive's axis, or a direction vector.
+    const json* a = f.take("axis");
+    if (a && a->is_string()) {
+      const int k = f.choice("axis", {"x", "y", "z"}, 2);
+      m.axis = Vec3::Unit(k);
+    } else if (const auto axis = f.optVec("axis", kAny, "")) {
       if (!(axis->norm() > 0)) f.fail("axis", "is the zero vector (expected a non-zero direction)");
       m.axis = *axis;
     }

@@ -84,6 +84,10 @@ void checkModelSize(const LayoutCounts& c, int dim, LayoutKind kind, const SizeL
         " elements and " + std::to_string(c.vertices) + " vertices, which need about " + formatBytes(bytes) +
         ", over the memory limit of " + formatBytes(maxBytes) +
         " (3/4 of this machine's memory, or GRADEL_MEMORY_LIMIT_MB); use a smaller size or the gradational layout");
+  if (limits.maxVertices && c.vertices > limits.maxVertices)
+    throw InputError(key + ": the " + layoutKindName(kind) + " layout of this body has " + std::to_string(c.vertices) +
+                     " vertices, over the limit of " + std::to_string(limits.maxVertices) + " vertices " +
+                     limits.vertexLimitReason);
 }
 
 void checkLayoutSize(const VoxelVolume& volume, LayoutKind kind, const SizeLimits& limits, const std::string& key) {
@@ -95,7 +99,8 @@ void checkLayoutSize(const VoxelVolume& volume, LayoutKind kind, const SizeLimit
   worst.vertices = (uint64_t(n[0]) + 1) * (uint64_t(n[1]) + 1) * (dim == 3 ? uint64_t(n[2]) + 1 : 1);
   worst.pairsEstimate = (dim == 3 ? 27 : 9) * voxels;
   const uint64_t maxBytes = limits.maxBytes ? limits.maxBytes : defaultMemoryLimit();
-  if (estimateModelBytes(worst, dim) <= maxBytes) return;  // fits whatever the layout: skip the count
+  if (estimateModelBytes(worst, dim) <= maxBytes && (!limits.maxVertices || worst.vertices <= limits.maxVertices))
+    return;  // fits whatever the layout: skip the count
   checkModelSize(countLayout(volume, kind), dim, kind, limits, key);
 }
 

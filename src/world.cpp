@@ -572,6 +572,13 @@ void World::step() {
     wallVelocity_.fill(Vec3::Zero());
     manipulatorGrowth_.clear();
   }
+  if (!externalForce_.empty()) {  // external_force.h: the same impulse before every integrator
+    const ExternalImpulse e = applyExternalImpulses(externalForce_, model_->mass, pinSet_.vertices, dt_, model_->dim,
+                                                    state_.velocities);
+    externalImpulse_ += e.impulse;
+    externalWork_ += std::max(Real(0), e.work);
+    if (largeStep_) largeStep_->resetEnergyBudget();  // the forces did work
+  }
   // (The explicit integrators keep the start in their vertex pass, stageVertices.)
   const bool frameStep = sim_.integrator == IntegratorKind::Implicit || sim_.integrator == IntegratorKind::LargeStep;
   if (bodyContactsOn() && frameStep) saveBodyContactStart();
@@ -915,6 +922,21 @@ void World::setPins(std::vector<PinSettings> pins) {
   updateBodyContactInvMass();
   projective_.reset(), largeStep_.reset();  // the implicit systems eliminate the pinned vertices: refactor
   applyPins(state_.time);
+}
+
+void World::addExternalForces(const std::vector<uint32_t>& vertices, const std::vector<Vec3>& forces) {
+  if (vertices.size() != forces.size())
+    throw InputError("forces: " + std::to_string(forces.size()) + " forces for " + std::to_string(vertices.size()) +
+                     " vertices (expected one per vertex)");
+  const size_t n = model_->numVertices();
+  for (size_t k = 0; k < vertices.size(); ++k) {
+    if (vertices[k] >= n)
+      throw InputError("vertices: " + std::to_string(vertices[k]) + " is not a vertex (expected 0.." +
+                       std::to_string(n - 1) + ")");
+    if (!forces[k].allFinite()) throw InputError("forces: entry " + std::to_string(k) + " is not finite");
+  }
+  if (externalForce_.empty()) externalForce_.assign(n, Vec3::Zero());
+  for (size_t k = 0; k < vertices.size(); ++k) externalForce_[vertices[k]] += forces[k];
 }
 
 std::vector<Vec3> World::pinTargets(Real t) const {

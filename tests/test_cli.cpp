@@ -123,6 +123,44 @@ TEST_F(CliTest, BadArgumentsExit2OneLine) {
   EXPECT_FALSE(fs::exists(dir_ / "out"));
 }
 
+TEST_F(CliTest, UnknownSubcommandIsNamed) {
+  const Result r = run("frobnicate x.json");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.err.rfind("gradel: unknown subcommand 'frobnicate' (expected one of layout, run, study", 0), 0u) << r.err;
+  EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << r.err;
+}
+
+// A mesh or volume file that is missing: the message shows where it was looked for, resolved
+// against the scene's folder and the working directory (an absolute path).
+TEST_F(CliTest, MissingSourceFileShowsTheResolvedPath) {
+  fs::create_directories(dir_ / "sub");
+  write("sub/s.json", R"({"body": {"source": {"file": "../meshes/nope.obj"}}})");
+  const Result r = run("run sub/s.json --out res");
+  EXPECT_EQ(r.code, 2);
+  const std::string resolved = (fs::weakly_canonical(dir_) / "meshes" / "nope.obj").string();
+  EXPECT_NE(r.err.find("sub/s.json: body.source.file: \"../meshes/nope.obj\" is not a readable file (looked for " +
+                       resolved + ")"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "res"));
+}
+
+#ifdef GRADEL_WITH_RENDER
+// `render --section` shows the section: no surface drawn over it unless --surface asks for one.
+TEST_F(CliTest, RenderSectionDrawsNoSurfaceByDefault) {
+  write("x.json", kTinyScene);
+  Result r = run("render x.json --wireframe --section --frames 1 --no-pictures --export obj --no-video --out a");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(json::parse(readFile(dir_ / "a" / "render.json")).at("surface"), "none");
+  r = run("render x.json --wireframe --section --surface smooth --frames 1 --no-pictures --export obj --no-video --out b");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(json::parse(readFile(dir_ / "b" / "render.json")).at("surface"), "smooth");
+  r = run("render x.json --wireframe --frames 1 --no-pictures --export obj --no-video --out c");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(json::parse(readFile(dir_ / "c" / "render.json")).at("surface"), "smooth");
+}
+#endif
+
 TEST_F(CliTest, VersionPrintsVersion) {
   const Result r = run("--version");
   EXPECT_EQ(r.code, 0);
@@ -277,6 +315,27 @@ TEST_F(CliTest, LayoutSizeLimitsNameTheKeyAndEstimate) {
   EXPECT_EQ(j.at("voxel_layout").at("elements").get<int>(), 96 * 96 * 96);
   EXPECT_EQ(j.at("voxel_layout").at("unique_vertices").get<int>(), 97 * 97 * 97);
   EXPECT_EQ(j.at("voxel_layout").at("pairs").get<int>(), 8 * 96 * 96 * 96);
+}
+
+// A body too big for the run's vertex-step budget is refused from the layout's counts, before
+// the layout or model is built, naming the key and the limit (issue 28: body.size 1000 took 42 s
+// and 3.3 GB before the refusal).
+TEST_F(CliTest, RunBodyTooBigForTheRunRefusedBeforeBuildingNamingTheKey) {
+  // 31007 vertices; 3000 s are at least 9.5e6 steps of the voxel probe's dt (3.1e-4 s).
+  write("big.json", R"({"body": {"shape": "sphere", "size": 64},
+      "simulation": {"duration": 3000, "frame_interval": 100}})");
+  Result r = run("run big.json --out res");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(r.err.rfind("gradel: big.json: body.size: the gradational layout of this body has ", 0), 0u) << r.err;
+  EXPECT_NE(r.err.find("vertices, over the limit of "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("that a run of 3000 s allows (dt at most about"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--max-steps"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "res"));
+  // The same body for a short run is fine.
+  write("short.json", R"({"body": {"shape": "sphere", "size": 64},
+      "simulation": {"duration": 0.001, "frame_interval": 0.001}})");
+  r = run("run short.json --out res");
+  EXPECT_EQ(r.code, 0) << r.err;
 }
 
 TEST_F(CliTest, RunTooManyStepsRefusedUnlessMaxStepsAllows) {

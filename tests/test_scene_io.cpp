@@ -103,6 +103,19 @@ TEST(SceneIo, ParseSceneFullFileGivesExpectedSettings) {
   EXPECT_TRUE(s.manipulators[1].path.keys.empty());
 }
 
+// A manipulator's axis takes an axis name like a union primitive's (issue 28), or a vector.
+TEST(SceneIo, ManipulatorAxisByNameOrVector) {
+  for (const auto& [axis, expected] : std::vector<std::pair<std::string, Vec3>>{
+           {R"("x")", Vec3(1, 0, 0)}, {R"("y")", Vec3(0, 1, 0)}, {R"("z")", Vec3(0, 0, 1)}, {"[0, 2, 0]", Vec3(0, 2, 0)}}) {
+    const Scene s = parseScene(
+        scene3(R"("shape": "sphere", "size": 8)", R"("manipulators": [{"type": "cylinder", "axis": )" + axis + "}]"),
+        kFile);
+    EXPECT_EQ(s.manipulators[0].axis, expected) << axis;
+  }
+  expectError(scene3(R"("shape": "sphere", "size": 8)", R"("manipulators": [{"type": "cylinder", "axis": "w"}])"),
+              "manipulators[0].axis", "\"x\"");
+}
+
 TEST(SceneIo, ParseSceneMinimalFileUsesStructDefaults) {
   const Scene s = parseScene(scene3(), "dir/my-scene.json");
   const Scene d;

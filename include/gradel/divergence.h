@@ -1,7 +1,8 @@
 // Divergence guard of a run: a body that blew up with walls around it keeps finite numbers, so
 // "diverged" is judged on physics, once per written frame, from World::metrics():
 //   * energy: kinetic + elastic energy far above what the initial state, gravity, the
-//     manipulators' speed and the work the contacts did (World::contactWork(), contact_work.h:
+//     manipulators' speed, the work of external forces (external_force.h) and the work the
+//     contacts did (World::contactWork(), contact_work.h:
 //     a tool inside a body, a crush, a fast strike, start overlaps pushed apart) can have
 //     supplied (an energy budget with a generous factor). Only this, or a non-finite state, is a
 //     divergence (exit 3).
@@ -41,6 +42,11 @@ struct EnergyBudget {
 double allowedEnergy(const EnergyBudget& budget, const DivergenceSettings& settings, const Metrics& now,
                      double contactWork = 0);
 
+/// The work [J] the world was supplied from outside so far, what the guard's `contactWork`
+/// argument takes: the contacts' (World::contactWork()) plus the external forces'
+/// (World::externalWork(), external_force.h).
+double suppliedWork(const World& world);
+
 /// The fastest speed of a path over [0, duration] [m/s] (sampled at every key and 64 points per
 /// segment, plus the velocity kept after the last key).
 double maxPathSpeed(const Path& path, double duration);
@@ -73,7 +79,7 @@ class DivergenceGuard {
  public:
   DivergenceGuard(EnergyBudget budget, DivergenceSettings settings = {}) : budget_(budget), settings_(settings) {}
   /// The reason the run diverged, or nothing while it is plausible. `contactWork` is what the
-  /// contacts supplied so far (World::contactWork()); `cause` names the likely culprit for the
+  /// contacts and external forces supplied so far (suppliedWork(world)); `cause` names the likely culprit for the
   /// message. A persistent inversion sets `*warning` (once per inversion that lasts) and is not
   /// a divergence.
   std::optional<std::string> check(const Metrics& m, double contactWork, const std::string& cause,

@@ -27,6 +27,11 @@ inline constexpr int kMaxGridEdge = 4096;
 struct SizeLimits {
   uint64_t maxVoxels = kMaxBodyVoxels;
   uint64_t maxBytes = 0;  ///< 0: defaultMemoryLimit().
+  /// Most vertices a body may have (0: no limit), checked with the layout's counts before the
+  /// layout is built (check 2): what a run's step budget allows (`gradel run`, run_budget.h),
+  /// with `vertexLimitReason` saying so in the message.
+  uint64_t maxVertices = 0;
+  std::string vertexLimitReason;
 };
 
 /// 3/4 of physical memory, or the environment variable GRADEL_MEMORY_LIMIT_MB when set (> 0).
@@ -42,7 +47,8 @@ uint64_t estimateModelBytes(const LayoutCounts& counts, int dim);
 /// Check 1: throws InputError "KEY: ..." when the grid exceeds the voxel count or memory limit.
 void checkVolumeSize(const std::array<int, 3>& dims, int dim, const SizeLimits& limits, const std::string& key,
                      bool labelled = false);
-/// Check 2: throws InputError "KEY: ..." when the model's estimated bytes exceed the limit.
+/// Check 2: throws InputError "KEY: ..." when the model's estimated bytes exceed the limit, or
+/// its vertices exceed limits.maxVertices.
 void checkModelSize(const LayoutCounts& counts, int dim, LayoutKind kind, const SizeLimits& limits,
                     const std::string& key);
 

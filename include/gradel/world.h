@@ -14,6 +14,7 @@
 
 #include "gradel/body_contacts.h"
 #include "gradel/contacts.h"
+#include "gradel/external_force.h"
 #include "gradel/integrator.h"
 #include "gradel/large_step.h"
 #include "gradel/model.h"
@@ -147,6 +148,21 @@ class World {
   BodyContacts* bodyContacts() { return bodyContacts_.get(); }  ///< For tests and tools (its switches).
   const BodyContactStats& bodyContactStats() const { return bodyContactStats_; }
 
+  /// External forces [N] on vertices (external_force.h): added to those set before, they act in
+  /// every step until clearExternalForces(), as the impulse F dt at the start of each step in
+  /// every integrator. InputError for a vertex id out of range, a non-finite force or sizes that
+  /// differ.
+  void addExternalForces(const std::vector<uint32_t>& vertices, const std::vector<Vec3>& forces);
+  void clearExternalForces() { externalForce_.clear(); }
+  /// Per vertex, the external force acting now (empty: none).
+  const std::vector<Vec3>& externalForces() const { return externalForce_; }
+  /// The energy [J] the external forces gave the bodies since t = 0 (the sum of each step's
+  /// positive total): what the divergence guard counts as supplied by them.
+  Real externalWork() const { return externalWork_; }
+  /// The impulse [N s] the external forces gave the bodies since t = 0: their momentum is
+  /// conserved up to it (and to gravity, walls, manipulators and pins).
+  const Vec3& externalImpulse() const { return externalImpulse_; }
+
   void setThreads(int n) { sim_.threads = n < 1 ? 1 : n; }
 
   /// Boundary conditions (pins.h): replaces the pins and moves the pinned vertices to their
@@ -256,6 +272,9 @@ class World {
   Real averageTime_ = 0;          ///< [s] since restartForceAverage().
   std::vector<Real> vertexStiffness_;  ///< [N/m] per vertex: sum of its elements' k_e (contact_work.h).
   Real contactWork_ = 0;               ///< [J] World::contactWork().
+  std::vector<Vec3> externalForce_;    ///< [N] per vertex (empty: none); addExternalForces().
+  Real externalWork_ = 0;              ///< [J] World::externalWork().
+  Vec3 externalImpulse_{0, 0, 0};      ///< [N s] World::externalImpulse().
   // Start overlaps (overlaps.h), released from the first step on at kStartSeparationSpeed.
   DomainSettings domainSet_;             ///< The walls as set (domain_: where they are while released).
   bool wallsReleasing_ = false;

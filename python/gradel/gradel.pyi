@@ -1,7 +1,8 @@
 # Type stubs of the compiled module gradel.gradel (python/gradel_module.cpp), re-exported by the
 # package `gradel`. Units are SI (m, s, kg, Pa). Checked against the module by
 # python/tests/test_stubs.py (mypy's stubtest).
-from typing import List, Optional, Sequence, Tuple, TypedDict
+import os
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, TypedDict, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -35,6 +36,14 @@ def load_volume(
 ) -> npt.NDArray[np.bool_]:
     """Reads a volume or mesh file (binvox, vox, nrrd, nifti, raw, obj, stl, ply) into a
     read-only boolean array [i, j, k] without copying it."""
+
+_Scene = Union[str, os.PathLike[str], Dict[str, Any]]
+# A keyframe: (t [s], position [m]), (t, position, velocity [m/s]) or a scene file's dict.
+_Keyframe = Union[Tuple[float, Sequence[float]], Tuple[float, Sequence[float], Sequence[float]], Mapping[str, Any]]
+
+def check_scene(scene: _Scene) -> None:
+    """Reads and checks a scene (a file's path or a dict of its keys) with the scene reader,
+    building nothing: InputError naming the key."""
 
 class Body:
     """A binary voxel volume to simulate."""
@@ -94,7 +103,42 @@ class Simulation:
         friction: float = ...,
     ) -> None: ...
     @staticmethod
-    def from_scene(path: str) -> Simulation: ...
+    def from_scene(scene: _Scene) -> Simulation:
+        """The simulation of a scene: a JSON file's path (str or pathlib.Path) or a dict of the
+        same keys (docs/scenes.md), read and checked by the scene reader."""
+    def add_body(self, body: Optional[Body] = None, **kwargs: Any) -> int:
+        """Adds a body before the first step; returns its index. A Body, or a scene's bodies[i]
+        keys as keyword arguments: shape, size, grid, primitives, source, voxel_size, layout,
+        position, velocity, name, material (dict) or scaling, youngs_modulus, density, k,
+        regions."""
+    def add_pin(
+        self,
+        min: Optional[Sequence[float]] = None,
+        max: Optional[Sequence[float]] = None,
+        *,
+        mask: Optional[npt.ArrayLike] = None,
+        boxes: Optional[Sequence[Tuple[Sequence[int], Sequence[int]]]] = None,
+        offset: Optional[Sequence[int]] = None,
+        body: int = 0,
+        path: Optional[Sequence[_Keyframe]] = None,
+    ) -> int:
+        """Pins (anchors) the vertices of body `body` in the box [min, max] [m] or on the
+        voxels of `mask` / `boxes`; `path`: their offset from rest over time. Returns the
+        pin's index."""
+    def apply_force(
+        self, vertex_indices: npt.ArrayLike, forces: npt.ArrayLike, *, body: Optional[int] = None
+    ) -> None:
+        """External forces [N] on vertices for every step of the next step()/advance_to() call."""
+    @property
+    def external_impulse(self) -> list[float]:
+        """[N s] the impulse apply_force() gave the bodies since t = 0."""
+    @property
+    def external_work(self) -> float:
+        """[J] the energy apply_force() gave the bodies since t = 0."""
+    @property
+    def num_pins(self) -> int: ...
+    @property
+    def pinned_vertices(self) -> List[int]: ...
     def add_manipulator(
         self,
         type: str = "sphere",
@@ -102,9 +146,10 @@ class Simulation:
         radius: float = 0.02,
         position: Sequence[float] = [0.0, 0.0, 0.0],
         half_length: float = 0.05,
-        axis: Sequence[float] = [0.0, 0.0, 1.0],
+        axis: Union[str, Sequence[float]] = "z",
         restitution: float = 1.0,
         friction: float = 0.0,
+        path: Optional[Sequence[_Keyframe]] = None,
     ) -> int: ...
     def move_manipulator(self, index: int, position: Sequence[float], velocity: Sequence[float] = [0.0, 0.0, 0.0]) -> None: ...
     def manipulator_force(self, index: int, *, average: bool = True) -> Tuple[list[float], list[float]]:

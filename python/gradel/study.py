@@ -40,6 +40,8 @@ __all__ = [
     "apply_overrides",
     "run_scene",
     "run_study",
+    "check_first_run",
+    "summary_lines",
     "main",
 ]
 
@@ -61,6 +63,7 @@ class Study:
     out: Path
     source: str = "<study>"
     keys: List[str] = field(default_factory=list)  # every overridden key, in first-seen order
+    metric: str = "max_stress"  # the column summarised on screen at the end (DEFAULT_METRIC)
 
 
 # ---- study files ----------------------------------------------------------------------------
@@ -138,12 +141,19 @@ def _read_json(path: Path, context: str = "") -> Any:
         raise StudyError(f"{context}{path}: not JSON ({e})") from None
 
 
-_STUDY_KEYS = {"base", "grid", "runs", "out", "name"}
+_STUDY_KEYS = {"base", "grid", "runs", "out", "name", "metric"}
+
+# The column the end-of-study summary shows against the varied keys (the study's "metric",
+# or --metric).
+DEFAULT_METRIC = "max_stress"
 
 
-def parse_study(data: Mapping[str, Any], source: str = "<study>", base_dir: Optional[Path] = None) -> Study:
+def parse_study(data: Mapping[str, Any], source: str = "<study>", base_dir: Optional[Path] = None,
+                check_scene: bool = True) -> Study:
     """Validates a study given as a dict (the JSON of a study file). Relative paths (``base``,
-    ``out``) are relative to ``base_dir`` (the study file's folder; default: the current one)."""
+    ``out``) are relative to ``base_dir`` (the study file's folder; default: the current one).
+    With ``check_scene``, the first run's scene is read by the scene reader too
+    (check_first_run)."""
     base_dir = Path(base_dir or ".")
     if not isinstance(data, Mapping):
         raise StudyError(f"{source}: expected a JSON object with base, grid or runs, and out")
@@ -186,7 +196,27 @@ def parse_study(data: Mapping[str, Any], source: str = "<study>", base_dir: Opti
     keys: List[str] = []
     for r in runs:
         keys.extend(k for k in r if k not in keys)
-    return Study(base=base, runs=runs, out=out, source=source, keys=keys)
+    metric = data.get("metric", DEFAULT_METRIC)
+    if not isinstance(metric, str) or not metric:
+        raise StudyError(f"{source}: metric: expected a column name such as {DEFAULT_METRIC}")
+    if check_scene:
+        check_first_run(base, runs[0], source)
+    return Study(base=base, runs=runs, out=out, source=source, keys=keys, metric=metric)
+
+
+def check_first_run(base: Mapping[str, Any], overrides: Mapping[str, Any], source: str = "<study>") -> None:
+    """Reads the first run's scene with the scene reader (gradel.check_scene, building nothing),
+    so that a misspelt key or a bad value in the base or the grid stops the study before any
+    worker starts: StudyError naming the key."""
+    from . import InputError, check_scene
+
+    try:
+        check_scene(apply_overrides(base, overrides, source))
+    except InputError as e:
+        message = str(e)
+        if message.startswith("dict: "):
+            message = message[len("dict: "):]
+        raise StudyError(f"{source}: the first run {json.dumps(dict(overrides))}: {message}") from None
 
 
 def load_study(path: os.PathLike | str) -> Study:
@@ -424,6 +454,42 @@ def run_study(study: Study, address: Optional[str] = None, n_workers: Optional[i
     return table
 
 
+def _cell(v: Any) -> str:
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return json.dumps(v) if isinstance(v, (list, dict)) else str(v)
+
+
+def summary_lines(study: Study, table: List[Dict[str, Any]], metric: Optional[str] = None,
+                  max_rows: int = 40) -> List[str]:
+    """A short summary for the screen: runs, failures, then one line per run with the varied
+    keys against one metric (``metric``, default the study's), failed runs marked; at most
+    ``max_rows`` runs (the first ones) and a count of the rest."""
+    metric = metric or study.metric
+    failed = sum(bool(r.get("error")) for r in table)
+    cached = sum(bool(r.get("cached")) for r in table)
+    lines = [f"study: {len(table)} runs, {failed} failed, {cached} cached; {metric} by "
+             + (", ".join(study.keys) if study.keys else "run")]
+    header = study.keys + [metric]
+    rows = []
+    for r in table[:max_rows]:
+        cells = [_cell(r.get("overrides", {}).get(k, "")) for k in study.keys]
+        if r.get("error"):
+            cells.append("FAILED: " + r["error"].splitlines()[0][:60])
+        elif metric in r:
+            cells.append(_cell(r[metric]))
+        else:
+            cells.append(f"(no column {metric})")
+        rows.append(cells)
+    widths = [max(len(h), *(len(c[i]) for c in rows)) if rows else len(h) for i, h in enumerate(header)]
+    lines.append("  ".join(h.ljust(w) for h, w in zip(header, widths)).rstrip())
+    for cells in rows:
+        lines.append("  ".join(c.ljust(w) for c, w in zip(cells, widths)).rstrip())
+    if len(table) > max_rows:
+        lines.append(f"... and {len(table) - max_rows} more runs (results.csv)")
+    return lines
+
+
 # ---- command line -----------------------------------------------------------------------------
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
@@ -436,6 +502,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument("--threads-per-worker", type=int, default=1, help="local cluster: threads per worker (default 1)")
     parser.add_argument("--out", help="result folder (overrides the study's out)")
     parser.add_argument("--no-progress", action="store_true", help="print no progress")
+    parser.add_argument("--metric", help=f"the column the summary at the end shows against the varied keys "
+                                         f"(default: the study's metric, else {DEFAULT_METRIC})")
     args = parser.parse_args(argv)
     try:
         study = load_study(args.study)
@@ -452,6 +520,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     print(json.dumps(summary, indent=2))
     for r in failed:
         print(f"gradel.study: run {r['run_id']} {json.dumps(r['overrides'])} failed: {r['error']}", file=sys.stderr)
+    for line in summary_lines(study, table, args.metric):  # on the screen (stderr): stdout stays JSON
+        print(line, file=sys.stderr)
     return EXIT_RUNS_FAILED if failed else EXIT_OK
 
 

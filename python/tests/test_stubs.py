@@ -45,6 +45,8 @@ def stub_params(fn):
     names = [x.arg for x in a.posonlyargs + a.args if x.arg != "self"]
     if a.kwonlyargs:
         names += ["*"] + [x.arg for x in a.kwonlyargs]
+    if a.kwarg:
+        names.append("**" + a.kwarg.arg)
     return names
 
 

@@ -114,3 +114,56 @@ def test_command_line_exit_codes(tmp_path):
     (tmp_path / "bad.json").write_text('{"base": {}, "grid": {"a": []}, "out": "o"}')
     assert gs.main([str(tmp_path / "bad.json"), "--no-progress"]) == gs.EXIT_BAD_STUDY
     assert not (tmp_path / "o").exists()
+
+
+def test_a_bad_key_or_value_in_the_grid_stops_the_study_before_any_worker(tmp_path):
+    data = {"base": BASE, "grid": {"material.youngs_modulu": [1e4, 2e4]}, "out": "o"}
+    with pytest.raises(gs.StudyError, match=r"^s\.json: the first run .*: material\.youngs_modulu: "):
+        gs.parse_study(data, "s.json", tmp_path)
+    data = {"base": BASE, "grid": {"body.size": [0, 8]}, "out": "o"}
+    with pytest.raises(gs.StudyError, match=r"^s\.json: the first run \{\"body\.size\": 0\}: body\.size: "):
+        gs.parse_study(data, "s.json", tmp_path)
+    # The command line: exit 2 naming the key, nothing written, no cluster started.
+    (tmp_path / "typo.json").write_text(json.dumps({"base": BASE, "grid": {"simulation.dampng": [1, 2]}, "out": "o"}))
+    assert gs.main([str(tmp_path / "typo.json"), "--no-progress"]) == gs.EXIT_BAD_STUDY
+    assert not (tmp_path / "o").exists()
+    # Only the first run is read ahead: a later run that fails is that run's failure.
+    gs.parse_study({"base": BASE, "runs": [{}, {"body.size": 0}], "out": "o"}, "s.json", tmp_path)
+
+
+def test_the_summary_shows_the_varied_keys_against_one_metric():
+    study = gs.parse_study({"base": BASE, "grid": {"material.youngs_modulus": [2e4, 1e5], "body.size": [6]},
+                            "out": "o", "metric": "final_com_y"}, "s.json")
+    table = [
+        {"run_id": "a", "overrides": study.runs[0], "error": "", "cached": False, "final_com_y": 0.0312345},
+        {"run_id": "b", "overrides": study.runs[1], "error": "RuntimeError: diverged", "cached": True},
+    ]
+    lines = gs.summary_lines(study, table)
+    assert lines[0] == "study: 2 runs, 1 failed, 1 cached; final_com_y by material.youngs_modulus, body.size"
+    assert lines[1].split() == ["material.youngs_modulus", "body.size", "final_com_y"]
+    assert lines[2].split() == ["2e+04", "6", "0.03123"]
+    assert lines[3].split()[:3] == ["1e+05", "6", "FAILED:"]
+    assert gs.summary_lines(study, table, "max_stress")[2].split()[-3:] == ["(no", "column", "max_stress)"]
+    assert len(gs.summary_lines(study, table * 30, max_rows=5)) == 2 + 5 + 1
+
+
+def test_scripts_study_uses_the_active_virtual_environment(tmp_path):
+    # A "virtual environment" whose python notes that it ran, then runs this interpreter.
+    import subprocess
+    import sys
+    import gradel
+
+    venv = tmp_path / "venv"
+    (venv / "bin").mkdir(parents=True)
+    marker = tmp_path / "used"
+    site = os.path.dirname(os.path.dirname(os.path.abspath(gradel.__file__)))
+    for name in ("python", "python3"):
+        script = venv / "bin" / name
+        script.write_text(f"#!/bin/sh\necho $0 >> '{marker}'\nPYTHONPATH='{site}' exec '{sys.executable}' \"$@\"\n")
+        script.chmod(0o755)
+    env = {k: v for k, v in os.environ.items() if k not in ("GRADEL_PYTHON",)}
+    env.update(VIRTUAL_ENV=str(venv), PATH=f"{venv / 'bin'}:{env.get('PATH', '')}")
+    r = subprocess.run([os.path.join(ROOT, "scripts", "study"), "--help"], env=env, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "--metric" in r.stdout
+    assert marker.exists() and str(venv / "bin") in marker.read_text()

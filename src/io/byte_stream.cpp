@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
+#include <filesystem>
 #include <cstring>
 #include <vector>
 
@@ -150,7 +151,17 @@ class GzipStream final : public ByteStream {
 std::unique_ptr<ByteStream> openFileStream(const std::string& path) {
   errno = 0;
   std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) throw InputError(path + ": cannot read: " + std::strerror(errno ? errno : ENOENT));
+  if (!f) {
+    const int err = errno ? errno : ENOENT;
+    // A relative path is shown resolved: where the file was looked for.
+    std::string where;
+    std::error_code ec;
+    if (std::filesystem::path(path).is_relative()) {
+      const std::filesystem::path abs = std::filesystem::absolute(path, ec);
+      if (!ec) where = " (looked for " + abs.lexically_normal().string() + ")";
+    }
+    throw InputError(path + ": cannot read: " + std::strerror(err) + where);
+  }
   // The size bounds every count read from a header; a directory or pipe has none we can trust.
   if (std::fseek(f, 0, SEEK_END) != 0) {
     std::fclose(f);

@@ -85,7 +85,9 @@ int runRenderCommand(const RenderCommandOptions& o) {
     throw InputError(o.scene + ": simulation." + e.what());
   }
   const Real interval = schedule.interval;
-  if (o.surface == "auto") view.surface = built.embedded ? SurfaceMode::Embedded : SurfaceMode::Smooth;
+  // auto: none under a section (the section is what is looked at), else the body's own mesh or smooth.
+  if (o.surface == "auto")
+    view.surface = o.section ? SurfaceMode::None : built.embedded ? SurfaceMode::Embedded : SurfaceMode::Smooth;
   const BodyView body = makeBodyView(built);
   Vec3 lo, hi;
   sceneBounds(world, &lo, &hi);
@@ -162,6 +164,8 @@ int runRenderCommand(const RenderCommandOptions& o) {
   j["gl_renderer"] = o.noPictures ? std::string("none") : Renderer::glRenderer();
   j["video"] = video ? "render.mp4" : "";
   j["export"] = o.exportFormat;
+  static const char* kSurfaceNames[] = {"smooth", "voxel", "embedded", "none"};  // SurfaceMode order
+  j["surface"] = kSurfaceNames[int(view.surface)];
   j["out"] = dir.target().string();
   {
     std::FILE* f = std::fopen(dir.file("render.json").c_str(), "w");
