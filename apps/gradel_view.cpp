@@ -303,7 +303,9 @@ class Viewer {
   long totalSteps() const { return steps_; }
   /// [s] how long the last frame held the world (figures + draw list); 0 when it was busy.
   double worldHeldSeconds() const { return worldHeldSeconds_; }
-  size_t drawTriangles() const { return list_.triangles.size() / 3; }
+  size_t drawTriangles() const {
+    return list_.triangles.size() / 3 + (list_.meshIndices ? list_.meshIndices->size() / 3 : 0);
+  }
   const RateWindow& rates() const { return rates_; }
   bool rebuilding() const { return rebuild_ != nullptr; }
   double lastRebuildSeconds() const { return lastRebuildSeconds_; }
@@ -738,9 +740,17 @@ class Viewer {
     if (ImGui::IsItemDeactivatedAfterEdit()) changed = true;
     if (ImGui::SliderFloat("density", &rho, 100.f, 5000.f, "%.0f kg/m3")) body.material.density = rho;
     if (ImGui::IsItemDeactivatedAfterEdit()) changed = true;
-    if (!body.material.regions.empty())
-      ImGui::TextWrapped("materials per region: %zu labels have their own; E and density above are the default's",
-                         body.material.regions.size());
+    if (!body.material.regions.empty()) {
+      // Label 1 without an entry of its own takes the fields above: one more material.
+      bool label1Listed = false;
+      for (const RegionMaterial& r : body.material.regions) label1Listed |= r.label == 1;
+      const size_t materials = body.material.regions.size() + (label1Listed ? 0 : 1);
+      ImGui::TextWrapped("%zu materials (one per region label)%s", materials,
+                         label1Listed ? "" : "; E and density above are label 1's");
+      for (const RegionMaterial& r : body.material.regions)
+        ImGui::TextDisabled("  label %u: E %.3g Pa, density %.0f kg/m3", unsigned(r.label), r.youngsModulus,
+                            r.density);
+    }
     float damping = float(scene_.simulation.damping);
     if (ImGui::SliderFloat("damping [1/s]", &damping, 0.f, 20.f, "%.2f")) scene_.simulation.damping = damping;
     if (ImGui::IsItemDeactivatedAfterEdit()) changed = true;
