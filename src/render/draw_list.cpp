@@ -279,7 +279,14 @@ void appendBodyView(BodyView& all, BodyView part, const BodyRange& range) {
   auto appendSurface = [&](DisplaySurface& to, DisplaySurface from) {
     shiftVertexIds(from, offset);
     const uint32_t base = uint32_t(to.modelVertex.size());
+    const bool normals = to.restFieldNormals.size() == base && !from.restFieldNormals.empty();
     to.dim = from.dim, to.kind = from.kind;
+    if (normals) {  // every body's carried normals, or none
+      to.restMeshNormals.insert(to.restMeshNormals.end(), from.restMeshNormals.begin(), from.restMeshNormals.end());
+      to.restFieldNormals.insert(to.restFieldNormals.end(), from.restFieldNormals.begin(), from.restFieldNormals.end());
+    } else {
+      to.restMeshNormals.clear(), to.restFieldNormals.clear();
+    }
     to.modelVertex.insert(to.modelVertex.end(), from.modelVertex.begin(), from.modelVertex.end());
     for (auto t : from.triangles) to.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
   };
@@ -302,6 +309,12 @@ void appendBodyView(BodyView& all, BodyView part, const BodyRange& range) {
       to.weightVertex.insert(to.weightVertex.end(), from.weightVertex.begin(), from.weightVertex.end());
       to.weight.insert(to.weight.end(), from.weight.begin(), from.weight.end());
       to.element.insert(to.element.end(), from.element.begin(), from.element.end());
+      if (to.restFieldNormals.size() == vertexBase && !from.restFieldNormals.empty()) {
+        to.restMeshNormals.insert(to.restMeshNormals.end(), from.restMeshNormals.begin(), from.restMeshNormals.end());
+        to.restFieldNormals.insert(to.restFieldNormals.end(), from.restFieldNormals.begin(), from.restFieldNormals.end());
+      } else {
+        to.restMeshNormals.clear(), to.restFieldNormals.clear();
+      }
     }
   }
 }
