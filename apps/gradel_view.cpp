@@ -184,6 +184,10 @@ class Viewer {
       status_ = "simulation diverged; reset";
       requestRebuild(builtScene_, false, false, "reset");
     }
+    if (loopDue_ && !rebuild_) {
+      loopDue_ = false;
+      requestRebuild(builtScene_, false, false, "loop");
+    }
     std::unique_lock<std::timed_mutex> world = tryWorld();
     if (world.owns_lock()) {
       advanceByFrame();
@@ -234,6 +238,13 @@ class Viewer {
       figures_.bounds.push_back({lo, hi});
     }
     simTime_ = w.time();
+    if (follow_ && !figures_.bounds.empty()) {  // the camera keeps the bodies where they were on screen
+      Vec3 lo = figures_.bounds[0].first, hi = figures_.bounds[0].second;
+      for (const auto& [a, b] : figures_.bounds) lo = lo.cwiseMin(a), hi = hi.cwiseMax(b);
+      const Vec3 centre = (lo + hi) / 2;
+      if (followCentre_ && mode_ != Mode::Drag) camera_.target += centre - *followCentre_;
+      followCentre_ = centre;
+    }
     list_ = buildDrawList(body_, w, view_, width, height);
     w.restartForceAverage();  // the force arrows: averaged over the steps between two frames
   }
@@ -284,6 +295,13 @@ class Viewer {
       if (shift_ && !camera_.flat) return dragInDepth(camera_, *drag_, -dy * pixelSize(camera_, height));
       dragInPlane(camera_, *drag_, x, y, width, height);
     }
+  }
+
+  /// F: frame the camera on the scene again.
+  void key(int key, int action) {
+    if (ImGui::GetIO().WantCaptureKeyboard || action != GLFW_PRESS) return;
+    std::unique_lock<std::mutex> state = lockState();
+    if (key == GLFW_KEY_F) reframeCamera();
   }
 
   void scroll(double dy) {
@@ -415,8 +433,13 @@ class Viewer {
       if (drag && drag_ && drag_->index == drag->index) drag_->from = drag->to;  // reached
       pacer_.stepped(n, seconds);
       steps_ += n;
+      const double end = builtScene_.output.duration, before = simTime_;
       simTime_ = simTime;
       if (!ok) diverged_ = true;
+      if (before < end && simTime >= end) {  // crossed the scene's end in this batch
+        if (atEnd_ == int(AtEnd::Stop)) paused_ = true, status_ = "stopped at the scene's end (Run goes on)";
+        if (atEnd_ == int(AtEnd::Loop)) loopDue_ = true;
+      }
     }
   }
 
@@ -491,8 +514,10 @@ class Viewer {
     pacer_ = StepPacer(built_.world->dt(), speed_);
     pacer_.restart(wallNow());
     behind_ = false;
+    followCentre_.reset();
     if (load) {
       original_ = scene_;
+      atEnd_ = int(scene_.name == "play" ? AtEnd::RunOn : AtEnd::Stop);
       // A body from a mesh file shows that mesh (embedded) first; other bodies the smooth surface.
       view_.surface = built_.embedded ? SurfaceMode::Embedded : SurfaceMode::Smooth;
       view_.forces = true;  // the contact force arrows on the tools
@@ -534,6 +559,7 @@ class Viewer {
 
   // Frames the scene in the part of the window right of the panel.
   void reframeCamera() {
+    followCentre_.reset();
     Vec3 lo, hi;
     sceneBounds(*built_.world, &lo, &hi);
     camera_ = frameBox(lo, hi, scene_.dim == 2);
@@ -624,6 +650,15 @@ class Viewer {
     if (ImGui::Button("Reset")) requestRebuild(original_, true, false, "reset");
     float speed = speed_;
     if (ImGui::SliderFloat("speed", &speed, 0.05f, 2.0f, "x%.2f")) speed_ = speed;
+    {
+      char label[48];
+      std::snprintf(label, sizeof label, "at the end (%.3g s)", builtScene_.output.duration);
+      static const char* atEnd[] = {"run on", "stop", "loop"};  // AtEnd order
+      ImGui::Combo(label, &atEnd_, atEnd, 3);
+    }
+    if (ImGui::Checkbox("camera follows the bodies", &follow_)) followCentre_.reset();
+    ImGui::SameLine();
+    if (ImGui::SmallButton("Fit (F)")) reframeCamera();
 
     // ---- the paper's interactions, one click each ----
     section("Scenes");
@@ -848,6 +883,14 @@ class Viewer {
   double lastX_ = 0, lastY_ = 0;
   bool shift_ = false, paused_ = false, stepOnce_ = false, behind_ = false, diverged_ = false;
   float speed_ = 1.0f;
+  // The scene's end (its simulation.duration): run on, stop (pause there) or loop (start again
+  // with the settings as running). The play scene has no end of its own: run on.
+  enum class AtEnd { RunOn, Stop, Loop };
+  int atEnd_ = int(AtEnd::Stop);
+  bool loopDue_ = false;  ///< The stepping thread passed the end with AtEnd::Loop: the next frame restarts.
+  // The camera follows the bodies: its target moves with the centre of their bounds.
+  bool follow_ = true;
+  std::optional<Vec3> followCentre_;  ///< The bodies' centre when the camera last moved with it.
   long steps_ = 0;
   double simTime_ = 0;  ///< [s] the world's time after the last batch
   double worldHeldSeconds_ = 0;
@@ -873,6 +916,10 @@ void onMouseButton(GLFWwindow* w, int button, int action, int mods) {
   gViewer->mouseButton(button, action, mods);
 }
 void onCursor(GLFWwindow*, double x, double y) { gViewer->cursor(x, y); }
+void onKey(GLFWwindow* w, int key, int scancode, int action, int mods) {
+  ImGui_ImplGlfw_KeyCallback(w, key, scancode, action, mods);
+  gViewer->key(key, action);
+}
 void onScroll(GLFWwindow* w, double dx, double dy) {
   ImGui_ImplGlfw_ScrollCallback(w, dx, dy);
   gViewer->scroll(dy);
@@ -946,7 +993,7 @@ int run(const Options& o) {
     glfwSetMouseButtonCallback(window, onMouseButton);
     glfwSetCursorPosCallback(window, onCursor);
     glfwSetScrollCallback(window, onScroll);
-    glfwSetKeyCallback(window, ImGui_ImplGlfw_KeyCallback);
+    glfwSetKeyCallback(window, onKey);
     glfwSetCharCallback(window, ImGui_ImplGlfw_CharCallback);
     glfwSetWindowFocusCallback(window, ImGui_ImplGlfw_WindowFocusCallback);
     glfwSetCursorEnterCallback(window, ImGui_ImplGlfw_CursorEnterCallback);
