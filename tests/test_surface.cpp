@@ -250,7 +250,7 @@ TEST(DisplayNormals, CarriedNormalsFollowAMovedBody) {
   }
   const double mean = sum / double(rest.normals.size());
   std::printf("rotated by 0.9 rad: drawn normals vs the rotated rest ones: mean %.2f, max %.2f degrees\n", mean, worst);
-  EXPECT_LT(mean, 6.0);  // 4.2 measured; the mesh's own normals are 8.4 degrees off the sphere
+  EXPECT_LT(mean, 6.0);    // 4.2 measured; the mesh's own normals are 8.4 degrees off the sphere
   EXPECT_LT(worst, 25.0);  // 19.7 measured
 }
 

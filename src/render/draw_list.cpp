@@ -311,7 +311,8 @@ void appendBodyView(BodyView& all, BodyView part, const BodyRange& range) {
       to.element.insert(to.element.end(), from.element.begin(), from.element.end());
       if (to.restFieldNormals.size() == vertexBase && !from.restFieldNormals.empty()) {
         to.restMeshNormals.insert(to.restMeshNormals.end(), from.restMeshNormals.begin(), from.restMeshNormals.end());
-        to.restFieldNormals.insert(to.restFieldNormals.end(), from.restFieldNormals.begin(), from.restFieldNormals.end());
+        to.restFieldNormals.insert(to.restFieldNormals.end(), from.restFieldNormals.begin(),
+                                   from.restFieldNormals.end());
       } else {
         to.restMeshNormals.clear(), to.restFieldNormals.clear();
       }

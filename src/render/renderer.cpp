@@ -142,11 +142,11 @@ void Renderer::draw(const DrawList& list, const Camera& camera, int width, int h
     glBindBuffer(GL_ARRAY_BUFFER, meshVbo_);
     if (list.meshIndices != meshIndices_) {  // another body (or surface): its triangles, once
       meshIndices_ = list.meshIndices;
-      glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(meshIndices_->size() * sizeof(uint32_t)),
-                   meshIndices_->data(), GL_STATIC_DRAW);
+      glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(meshIndices_->size() * sizeof(uint32_t)), meshIndices_->data(),
+                   GL_STATIC_DRAW);
     }
-    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(list.meshVertices.size() * sizeof(DrawVertex)),
-                 list.meshVertices.data(), GL_STREAM_DRAW);
+    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(list.meshVertices.size() * sizeof(DrawVertex)), list.meshVertices.data(),
+                 GL_STREAM_DRAW);
     glDrawElements(GL_TRIANGLES, GLsizei(meshIndices_->size()), GL_UNSIGNED_INT, nullptr);
     glBindVertexArray(vao_);
     glBindBuffer(GL_ARRAY_BUFFER, vbo_);
