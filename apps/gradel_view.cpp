@@ -242,7 +242,13 @@ class Viewer {
       Vec3 lo = figures_.bounds[0].first, hi = figures_.bounds[0].second;
       for (const auto& [a, b] : figures_.bounds) lo = lo.cwiseMin(a), hi = hi.cwiseMax(b);
       const Vec3 centre = (lo + hi) / 2;
-      if (followCentre_ && mode_ != Mode::Drag) camera_.target += centre - *followCentre_;
+      const Real extent = (hi - lo).norm();
+      if (followCentre_ && mode_ != Mode::Drag) {
+        camera_.target += centre - *followCentre_;
+        // Bodies flying apart: step back as their bounds grow past the largest seen (never closer).
+        if (extent > followExtent_ && followExtent_ > 0) camera_.distance *= extent / followExtent_;
+      }
+      if (!followCentre_ || extent > followExtent_) followExtent_ = extent;
       followCentre_ = centre;
     }
     list_ = buildDrawList(body_, w, view_, width, height);
@@ -652,13 +658,11 @@ class Viewer {
     if (ImGui::SliderFloat("speed", &speed, 0.05f, 2.0f, "x%.2f")) speed_ = speed;
     {
       char label[48];
-      std::snprintf(label, sizeof label, "at the end (%.3g s)", builtScene_.output.duration);
+      std::snprintf(label, sizeof label, "end (%.3g s)", builtScene_.output.duration);
       static const char* atEnd[] = {"run on", "stop", "loop"};  // AtEnd order
       ImGui::Combo(label, &atEnd_, atEnd, 3);
     }
     if (ImGui::Checkbox("camera follows the bodies", &follow_)) followCentre_.reset();
-    ImGui::SameLine();
-    if (ImGui::SmallButton("Fit (F)")) reframeCamera();
 
     // ---- the paper's interactions, one click each ----
     section("Scenes");
@@ -704,7 +708,7 @@ class Viewer {
     if (ImGui::SliderFloat("stress scale", &scale, 0.005f, 0.3f, "%.3f", ImGuiSliderFlags_Logarithmic))
       view_.stressScale = scale;
     ImGui::EndDisabled();
-    if (ImGui::Button("Reframe camera")) reframeCamera();
+    if (ImGui::Button("Reframe camera (F)")) reframeCamera();
 
     // ---- body and settings: any change rebuilds the world (in the background) ----
     section("Body (changes restart)");
@@ -891,6 +895,7 @@ class Viewer {
   // The camera follows the bodies: its target moves with the centre of their bounds.
   bool follow_ = true;
   std::optional<Vec3> followCentre_;  ///< The bodies' centre when the camera last moved with it.
+  Real followExtent_ = 0;             ///< [m] the largest diagonal of their bounds since then.
   long steps_ = 0;
   double simTime_ = 0;  ///< [s] the world's time after the last batch
   double worldHeldSeconds_ = 0;
