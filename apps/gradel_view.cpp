@@ -184,6 +184,10 @@ class Viewer {
       status_ = "simulation diverged; reset";
       requestRebuild(builtScene_, false, false, "reset");
     }
+    if (loopDue_ && !rebuild_) {
+      loopDue_ = false;
+      requestRebuild(builtScene_, false, false, "loop");
+    }
     std::unique_lock<std::timed_mutex> world = tryWorld();
     if (world.owns_lock()) {
       advanceByFrame();
@@ -234,6 +238,19 @@ class Viewer {
       figures_.bounds.push_back({lo, hi});
     }
     simTime_ = w.time();
+    if (follow_ && !figures_.bounds.empty()) {  // the camera keeps the bodies where they were on screen
+      Vec3 lo = figures_.bounds[0].first, hi = figures_.bounds[0].second;
+      for (const auto& [a, b] : figures_.bounds) lo = lo.cwiseMin(a), hi = hi.cwiseMax(b);
+      const Vec3 centre = (lo + hi) / 2;
+      const Real extent = (hi - lo).norm();
+      if (followCentre_ && mode_ != Mode::Drag) {
+        camera_.target += centre - *followCentre_;
+        // Bodies flying apart: step back as their bounds grow past the largest seen (never closer).
+        if (extent > followExtent_ && followExtent_ > 0) camera_.distance *= extent / followExtent_;
+      }
+      if (!followCentre_ || extent > followExtent_) followExtent_ = extent;
+      followCentre_ = centre;
+    }
     list_ = buildDrawList(body_, w, view_, width, height);
     w.restartForceAverage();  // the force arrows: averaged over the steps between two frames
   }
@@ -286,6 +303,13 @@ class Viewer {
     }
   }
 
+  /// F: frame the camera on the scene again.
+  void key(int key, int action) {
+    if (ImGui::GetIO().WantCaptureKeyboard || action != GLFW_PRESS) return;
+    std::unique_lock<std::mutex> state = lockState();
+    if (key == GLFW_KEY_F) reframeCamera();
+  }
+
   void scroll(double dy) {
     if (ImGui::GetIO().WantCaptureMouse) return;
     std::unique_lock<std::mutex> state = lockState();
@@ -303,7 +327,9 @@ class Viewer {
   long totalSteps() const { return steps_; }
   /// [s] how long the last frame held the world (figures + draw list); 0 when it was busy.
   double worldHeldSeconds() const { return worldHeldSeconds_; }
-  size_t drawTriangles() const { return list_.triangles.size() / 3; }
+  size_t drawTriangles() const {
+    return list_.triangles.size() / 3 + (list_.meshIndices ? list_.meshIndices->size() / 3 : 0);
+  }
   const RateWindow& rates() const { return rates_; }
   bool rebuilding() const { return rebuild_ != nullptr; }
   double lastRebuildSeconds() const { return lastRebuildSeconds_; }
@@ -413,8 +439,13 @@ class Viewer {
       if (drag && drag_ && drag_->index == drag->index) drag_->from = drag->to;  // reached
       pacer_.stepped(n, seconds);
       steps_ += n;
+      const double end = builtScene_.output.duration, before = simTime_;
       simTime_ = simTime;
       if (!ok) diverged_ = true;
+      if (before < end && simTime >= end) {  // crossed the scene's end in this batch
+        if (atEnd_ == int(AtEnd::Stop)) paused_ = true, status_ = "stopped at the scene's end (Run goes on)";
+        if (atEnd_ == int(AtEnd::Loop)) loopDue_ = true;
+      }
     }
   }
 
@@ -489,8 +520,10 @@ class Viewer {
     pacer_ = StepPacer(built_.world->dt(), speed_);
     pacer_.restart(wallNow());
     behind_ = false;
+    followCentre_.reset();
     if (load) {
       original_ = scene_;
+      atEnd_ = int(scene_.name == "play" ? AtEnd::RunOn : AtEnd::Stop);
       // A body from a mesh file shows that mesh (embedded) first; other bodies the smooth surface.
       view_.surface = built_.embedded ? SurfaceMode::Embedded : SurfaceMode::Smooth;
       view_.forces = true;  // the contact force arrows on the tools
@@ -532,6 +565,7 @@ class Viewer {
 
   // Frames the scene in the part of the window right of the panel.
   void reframeCamera() {
+    followCentre_.reset();
     Vec3 lo, hi;
     sceneBounds(*built_.world, &lo, &hi);
     camera_ = frameBox(lo, hi, scene_.dim == 2);
@@ -622,6 +656,13 @@ class Viewer {
     if (ImGui::Button("Reset")) requestRebuild(original_, true, false, "reset");
     float speed = speed_;
     if (ImGui::SliderFloat("speed", &speed, 0.05f, 2.0f, "x%.2f")) speed_ = speed;
+    {
+      char label[48];
+      std::snprintf(label, sizeof label, "end (%.3g s)", builtScene_.output.duration);
+      static const char* atEnd[] = {"run on", "stop", "loop"};  // AtEnd order
+      ImGui::Combo(label, &atEnd_, atEnd, 3);
+    }
+    if (ImGui::Checkbox("camera follows the bodies", &follow_)) followCentre_.reset();
 
     // ---- the paper's interactions, one click each ----
     section("Scenes");
@@ -667,7 +708,7 @@ class Viewer {
     if (ImGui::SliderFloat("stress scale", &scale, 0.005f, 0.3f, "%.3f", ImGuiSliderFlags_Logarithmic))
       view_.stressScale = scale;
     ImGui::EndDisabled();
-    if (ImGui::Button("Reframe camera")) reframeCamera();
+    if (ImGui::Button("Reframe camera (F)")) reframeCamera();
 
     // ---- body and settings: any change rebuilds the world (in the background) ----
     section("Body (changes restart)");
@@ -738,9 +779,17 @@ class Viewer {
     if (ImGui::IsItemDeactivatedAfterEdit()) changed = true;
     if (ImGui::SliderFloat("density", &rho, 100.f, 5000.f, "%.0f kg/m3")) body.material.density = rho;
     if (ImGui::IsItemDeactivatedAfterEdit()) changed = true;
-    if (!body.material.regions.empty())
-      ImGui::TextWrapped("materials per region: %zu labels have their own; E and density above are the default's",
-                         body.material.regions.size());
+    if (!body.material.regions.empty()) {
+      // Label 1 without an entry of its own takes the fields above: one more material.
+      bool label1Listed = false;
+      for (const RegionMaterial& r : body.material.regions) label1Listed |= r.label == 1;
+      const size_t materials = body.material.regions.size() + (label1Listed ? 0 : 1);
+      ImGui::TextWrapped("%zu materials (one per region label)%s", materials,
+                         label1Listed ? "" : "; E and density above are label 1's");
+      for (const RegionMaterial& r : body.material.regions)
+        ImGui::TextDisabled("  label %u: E %.3g Pa, density %.0f kg/m3", unsigned(r.label), r.youngsModulus,
+                            r.density);
+    }
     float damping = float(scene_.simulation.damping);
     if (ImGui::SliderFloat("damping [1/s]", &damping, 0.f, 20.f, "%.2f")) scene_.simulation.damping = damping;
     if (ImGui::IsItemDeactivatedAfterEdit()) changed = true;
@@ -838,6 +887,15 @@ class Viewer {
   double lastX_ = 0, lastY_ = 0;
   bool shift_ = false, paused_ = false, stepOnce_ = false, behind_ = false, diverged_ = false;
   float speed_ = 1.0f;
+  // The scene's end (its simulation.duration): run on, stop (pause there) or loop (start again
+  // with the settings as running). The play scene has no end of its own: run on.
+  enum class AtEnd { RunOn, Stop, Loop };
+  int atEnd_ = int(AtEnd::Stop);
+  bool loopDue_ = false;  ///< The stepping thread passed the end with AtEnd::Loop: the next frame restarts.
+  // The camera follows the bodies: its target moves with the centre of their bounds.
+  bool follow_ = true;
+  std::optional<Vec3> followCentre_;  ///< The bodies' centre when the camera last moved with it.
+  Real followExtent_ = 0;             ///< [m] the largest diagonal of their bounds since then.
   long steps_ = 0;
   double simTime_ = 0;  ///< [s] the world's time after the last batch
   double worldHeldSeconds_ = 0;
@@ -863,6 +921,10 @@ void onMouseButton(GLFWwindow* w, int button, int action, int mods) {
   gViewer->mouseButton(button, action, mods);
 }
 void onCursor(GLFWwindow*, double x, double y) { gViewer->cursor(x, y); }
+void onKey(GLFWwindow* w, int key, int scancode, int action, int mods) {
+  ImGui_ImplGlfw_KeyCallback(w, key, scancode, action, mods);
+  gViewer->key(key, action);
+}
 void onScroll(GLFWwindow* w, double dx, double dy) {
   ImGui_ImplGlfw_ScrollCallback(w, dx, dy);
   gViewer->scroll(dy);
@@ -936,7 +998,7 @@ int run(const Options& o) {
     glfwSetMouseButtonCallback(window, onMouseButton);
     glfwSetCursorPosCallback(window, onCursor);
     glfwSetScrollCallback(window, onScroll);
-    glfwSetKeyCallback(window, ImGui_ImplGlfw_KeyCallback);
+    glfwSetKeyCallback(window, onKey);
     glfwSetCharCallback(window, ImGui_ImplGlfw_CharCallback);
     glfwSetWindowFocusCallback(window, ImGui_ImplGlfw_WindowFocusCallback);
     glfwSetCursorEnterCallback(window, ImGui_ImplGlfw_CursorEnterCallback);

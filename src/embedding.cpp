@@ -1,5 +1,8 @@
 #include "gradel/embedding.h"
 
+#include "gradel/display_normals.h"
+#include "gradel/surface.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -106,6 +109,11 @@ EmbeddedMesh embedMesh(const TriangleMesh& restMesh, const Layout& layout, const
 
   EmbeddedMesh out;
   out.triangles = restMesh.triangles;
+  if (restMesh.normals.size() == restMesh.vertices.size()) {
+    out.restMeshNormals = vertexNormals(restMesh.vertices, restMesh.triangles);
+    out.restFieldNormals = restMesh.normals;
+    for (Vec3& n : out.restFieldNormals) n = n.norm() > 0 && n.allFinite() ? Vec3(n.normalized()) : Vec3::Zero();
+  }
   out.weightStart.push_back(0);
   for (const Vec3& p : restMesh.vertices) {
     const Vec3 q = (p - origin) / h;
@@ -150,6 +158,8 @@ TriangleMesh embeddedMesh(const EmbeddedMesh& embedded, const std::vector<Vec3>&
       m.vertices[v] += embedded.weight[k] * positions[embedded.weightVertex[k]];
   m.triangles = embedded.triangles;
   m.normals = vertexNormals(m.vertices, m.triangles);
+  if (!embedded.restFieldNormals.empty())
+    m.normals = carryNormals(m.normals, embedded.restMeshNormals, embedded.restFieldNormals);
   return m;
 }
 

@@ -2,6 +2,7 @@
 
 #include <unordered_map>
 
+#include "gradel/display_normals.h"
 #include "gradel/surface.h"
 
 namespace gradel {
@@ -84,7 +85,14 @@ TriangleMesh isosurface(const VoxelVolume& volume, const Vec3& origin) {
           }
         }
       }
+  // Normals from the occupancy smoothed wider than the surface itself (display_normals.h): no
+  // terraces; the mesh's own where that field is flat.
   mesh.normals = vertexNormals(mesh.vertices, mesh.triangles);
+  std::vector<Vec3> lattice(mesh.vertices.size());
+  for (size_t v = 0; v < lattice.size(); ++v) lattice[v] = (mesh.vertices[v] - origin) / volume.voxelSize();
+  const std::vector<Vec3> smoothed = fieldNormals(volume, lattice, displayNormalSigma(volume));
+  for (size_t v = 0; v < smoothed.size(); ++v)
+    if (smoothed[v].squaredNorm() > 0) mesh.normals[v] = smoothed[v];
   return mesh;
 }
 

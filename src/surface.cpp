@@ -1,5 +1,7 @@
 #include "gradel/surface.h"
 
+#include "gradel/display_normals.h"
+
 #include <algorithm>
 #include <map>
 #include <stdexcept>
@@ -321,10 +323,13 @@ DisplaySurface buildDisplaySurface(const Layout& layout, const VoxelVolume& volu
   if (kind == SurfaceKind::Smooth) {
     std::vector<Vec3> rest(s.modelVertex.size());
     for (size_t i = 0; i < rest.size(); ++i) rest[i] = layout.vertices[s.modelVertex[i]].cast<Real>();
-    if (layout.dim == 3)
+    if (layout.dim == 3) {
       flipConcaveEdges(s.triangles, rest);
-    else
+      s.restMeshNormals = smoothVertexNormals(rest, s.triangles);
+      s.restFieldNormals = fieldNormals(volume, rest, displayNormalSigma(volume));
+    } else {
       coverConcaveCorners2D(s.triangles, rest);
+    }
   }
   return s;
 }
@@ -344,21 +349,31 @@ std::vector<Vec3> vertexNormals(const std::vector<Vec3>& vertices,
   return n;
 }
 
+std::vector<Vec3> smoothVertexNormals(const std::vector<Vec3>& vertices,
+                                      const std::vector<std::array<uint32_t, 3>>& triangles) {
+  // Averaged from the neighbouring faces, then once more over the neighbouring vertices: the
+  // faces laid over the steps are small and tilted every which way, and one average still
+  // shows each of them.
+  const std::vector<Vec3> n1 = vertexNormals(vertices, triangles);
+  std::vector<Vec3> n2 = n1;
+  for (const auto& t : triangles)
+    for (int k = 0; k < 3; ++k) n2[t[size_t(k)]] += n1[t[size_t((k + 1) % 3)]] + n1[t[size_t((k + 2) % 3)]];
+  for (Vec3& n : n2) {
+    const Real len = n.norm();
+    n = len > 0 ? Vec3(n / len) : Vec3(0, 0, 1);
+  }
+  return n2;
+}
+
 TriangleMesh surfaceMesh(const DisplaySurface& surface, const std::vector<Vec3>& positions) {
   TriangleMesh m;
   m.vertices.resize(surface.modelVertex.size());
   for (size_t i = 0; i < m.vertices.size(); ++i) m.vertices[i] = positions[surface.modelVertex[i]];
   m.triangles = surface.triangles;
   if (surface.dim == 3 && surface.kind == SurfaceKind::Smooth) {
-    // Averaged from the neighbouring faces, then once more over the neighbouring vertices: the
-    // faces laid over the steps are small and tilted every which way, and one average still
-    // shows each of them.
-    const std::vector<Vec3> n1 = vertexNormals(m.vertices, m.triangles);
-    std::vector<Vec3> n2 = n1;
-    for (const auto& t : m.triangles)
-      for (int k = 0; k < 3; ++k) n2[t[size_t(k)]] += n1[t[size_t((k + 1) % 3)]] + n1[t[size_t((k + 2) % 3)]];
-    for (Vec3& n : n2) n.normalize();
-    m.normals = std::move(n2);
+    m.normals = smoothVertexNormals(m.vertices, m.triangles);
+    if (!surface.restFieldNormals.empty())
+      m.normals = carryNormals(m.normals, surface.restMeshNormals, surface.restFieldNormals);
   } else if (surface.dim == 3) {
     m.normals = vertexNormals(m.vertices, m.triangles);
   } else

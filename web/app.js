@@ -135,7 +135,7 @@ void main() {
     }
     if (!renderer) status('No WebGL2 in this browser: the simulation runs, but cannot be drawn.');
 
-    let sceneName = 'play', paused = false;
+    let sceneName = 'play', paused = false, endTime = Infinity;
     const cache = {};
     const fetchScene = (name) => cache[name] ? Promise.resolve(cache[name])
       : fetch('scenes/' + name + '.json').then((r) => { if (!r.ok) throw new Error('scenes/' + name + '.json: HTTP ' + r.status); return r.text(); })
@@ -148,6 +148,10 @@ void main() {
         const err = demo.load(text, name + '.json');
         if (err) return status(err);
         sceneName = name;
+        // The scene's end (simulation.duration, as gradel run): the play scene has none of its own.
+        const duration = (JSON.parse(text).simulation || {}).duration;
+        endTime = name === 'play' || !(duration > 0) ? Infinity : duration;
+        $('end-out').textContent = Number.isFinite(endTime) ? endTime : '-';
         const body = bodyChoice();
         if (!(body.shape === 'sphere' && body.size === 12 && body.layout === 'gradational')) {
           const e = demo.setBody(body.shape, body.size, body.layout);
@@ -179,8 +183,12 @@ void main() {
     for (const name of ['strike', 'grasp-wall', 'grasp-two', 'play'])
       $(name).addEventListener('click', () => loadScene(name));
     $('reset').addEventListener('click', () => loadScene(sceneName));
-    $('pause').addEventListener('click', () => { paused = !paused; $('pause').textContent = paused ? 'Run' : 'Pause'; });
+    $('pause').addEventListener('click', () => setPaused(!paused));
     $('reframe').addEventListener('click', () => reframe());
+    window.addEventListener('keydown', (e) => {
+      if ((e.key === 'f' || e.key === 'F') && !(e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement)) reframe();
+    });
+    const setPaused = (p) => { paused = p; $('pause').textContent = paused ? 'Run' : 'Pause'; };
     $('size').addEventListener('input', () => { $('size-out').textContent = $('size').value; });
     for (const id of ['shape', 'size', 'layout']) $(id).addEventListener('change', applyBody);
     for (const id of ['stress', 'wireframe', 'surface']) $(id).addEventListener('change', applyView);
@@ -238,6 +246,11 @@ void main() {
         steps = demo.advance(seconds, STEP_BUDGET_MS, 1.0);
         sim = demo.time() - t0;
         if (demo.takeDiverged()) status('the simulation diverged and was restarted');
+        if (t0 < endTime && demo.time() >= endTime) {  // crossed the scene's end
+          const atEnd = $('at-end').value;
+          if (atEnd === 'stop') setPaused(true), status("stopped at the scene's end (Run goes on)");
+          if (atEnd === 'loop') loadScene(sceneName);
+        }
       }
       frames.push([now, steps, sim, demo.behind()]);
       if (renderer) {

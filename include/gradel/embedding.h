@@ -28,6 +28,10 @@ struct EmbeddedMesh {
   std::vector<uint32_t> weightVertex;  ///< Model vertex id of each weight.
   std::vector<Real> weight;            ///< [-] sums to 1 per mesh vertex.
   std::vector<uint32_t> element;       ///< Element each mesh vertex is bound to.
+  /// The input mesh's own normals (when it has them), drawn carried from restMeshNormals (the
+  /// mesh's area-weighted normals at rest) to its current ones (display_normals.h); empty: the
+  /// current area-weighted normals.
+  std::vector<Vec3> restMeshNormals, restFieldNormals;
 };
 
 /// Binds `restMesh` (rest coordinates [m], the model's frame) to the model. Throws InputError
@@ -38,7 +42,8 @@ EmbeddedMesh embedMesh(const TriangleMesh& restMesh, const Layout& layout, const
 /// mesh, embedded in its own model, onto the world's model of several bodies (bodies.h).
 void shiftVertexIds(EmbeddedMesh& embedded, uint32_t offset, uint32_t elementOffset = 0);
 
-/// The embedded mesh at the given model vertex positions [m], with area-weighted vertex normals.
+/// The embedded mesh at the given model vertex positions [m], with area-weighted vertex normals
+/// (or, restFieldNormals set, those carried along by them).
 TriangleMesh embeddedMesh(const EmbeddedMesh& embedded, const std::vector<Vec3>& positions);
 
 }  // namespace gradel

@@ -15,7 +15,7 @@ namespace gradel {
 
 /// The isosurface of a 3D volume in metres (lattice point (0,0,0) at `origin`), triangles
 /// counter-clockwise seen from outside, vertices shared (closed, consistently oriented), with
-/// area-weighted vertex normals. Throws InputError for a 2D or empty volume.
+/// normals from the occupancy smoothed by a Gaussian (display_normals.h; no terraces). Throws InputError for a 2D or empty volume.
 TriangleMesh isosurface(const VoxelVolume& volume, const Vec3& origin);
 
 }  // namespace gradel

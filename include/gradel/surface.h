@@ -42,6 +42,10 @@ struct DisplaySurface {
   SurfaceKind kind = SurfaceKind::Smooth;
   std::vector<uint32_t> modelVertex;               ///< Model vertex id of each surface vertex.
   std::vector<std::array<uint32_t, 3>> triangles;  ///< Surface vertex ids, CCW from outside.
+  /// Smooth 3D surface: the normals drawn are restFieldNormals (the smoothed occupancy's,
+  /// display_normals.h) carried from restMeshNormals (the mesh's own at rest) to its current
+  /// ones. Empty: the mesh's own normals.
+  std::vector<Vec3> restMeshNormals, restFieldNormals;
 };
 
 /// Builds the surface from the layout (and the volume it was built from). Pure function.
@@ -53,8 +57,13 @@ void shiftVertexIds(DisplaySurface& surface, uint32_t offset);
 
 /// The surface at the given model vertex positions [m]: vertices gathered from `positions`,
 /// normals averaged from the neighbouring faces (area-weighted, unit length; +z in 2D); for the
-/// smooth surface averaged once more over the neighbouring vertices.
+/// smooth surface averaged once more over the neighbouring vertices, then (restFieldNormals set)
+/// the field normals carried by those (display_normals.h).
 TriangleMesh surfaceMesh(const DisplaySurface& surface, const std::vector<Vec3>& positions);
+
+/// vertexNormals averaged once more over each vertex's neighbours (the smooth surface's own).
+std::vector<Vec3> smoothVertexNormals(const std::vector<Vec3>& vertices,
+                                      const std::vector<std::array<uint32_t, 3>>& triangles);
 
 /// Unit vertex normals of `mesh` averaged from its faces, area-weighted (sec. 3.3). A vertex
 /// with no face (or only degenerate ones) gets (0, 0, 1).

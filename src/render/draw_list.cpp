@@ -56,12 +56,26 @@ void addQuad2D(DrawList& list, float x0, float y0, float x1, float y1, const Col
   list.overlay.insert(list.overlay.end(), {a, b, c, a, c, d});
 }
 
-// Triangles of a mesh; flat = one normal per face (the voxel staircase), otherwise the mesh's
-// vertex normals (the smooth display).
-void addMesh(DrawList& list, const TriangleMesh& m, const std::vector<Color>& colors, bool flat) {
+// The vertices of a mesh drawn indexed (its triangles are the BodyView's index list).
+void addIndexedMesh(DrawList& list, const TriangleMesh& m, const std::vector<Color>& colors,
+                    const std::shared_ptr<const std::vector<uint32_t>>& indices) {
+  list.meshVertices.resize(m.vertices.size());
+  for (size_t v = 0; v < m.vertices.size(); ++v) list.meshVertices[v] = vertex(m.vertices[v], m.normals[v], colors[v]);
+  list.meshIndices = indices;
+}
+
+std::shared_ptr<const std::vector<uint32_t>> indexList(const std::vector<std::array<uint32_t, 3>>& triangles) {
+  auto out = std::make_shared<std::vector<uint32_t>>();
+  out->reserve(3 * triangles.size());
+  for (const auto& t : triangles) out->insert(out->end(), t.begin(), t.end());
+  return out;
+}
+
+// Triangles of a mesh, flat shaded: one normal per face (the voxel staircase).
+void addFlatMesh(DrawList& list, const TriangleMesh& m, const std::vector<Color>& colors) {
   for (const auto& t : m.triangles) {
     const Vec3 fn = (m.vertices[t[1]] - m.vertices[t[0]]).cross(m.vertices[t[2]] - m.vertices[t[0]]).normalized();
-    for (uint32_t v : t) list.triangles.push_back(vertex(m.vertices[v], flat ? fn : m.normals[v], colors[v]));
+    for (uint32_t v : t) list.triangles.push_back(vertex(m.vertices[v], fn, colors[v]));
   }
 }
 
@@ -265,7 +279,14 @@ void appendBodyView(BodyView& all, BodyView part, const BodyRange& range) {
   auto appendSurface = [&](DisplaySurface& to, DisplaySurface from) {
     shiftVertexIds(from, offset);
     const uint32_t base = uint32_t(to.modelVertex.size());
+    const bool normals = to.restFieldNormals.size() == base && !from.restFieldNormals.empty();
     to.dim = from.dim, to.kind = from.kind;
+    if (normals) {  // every body's carried normals, or none
+      to.restMeshNormals.insert(to.restMeshNormals.end(), from.restMeshNormals.begin(), from.restMeshNormals.end());
+      to.restFieldNormals.insert(to.restFieldNormals.end(), from.restFieldNormals.begin(), from.restFieldNormals.end());
+    } else {
+      to.restMeshNormals.clear(), to.restFieldNormals.clear();
+    }
     to.modelVertex.insert(to.modelVertex.end(), from.modelVertex.begin(), from.modelVertex.end());
     for (auto t : from.triangles) to.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
   };
@@ -288,6 +309,13 @@ void appendBodyView(BodyView& all, BodyView part, const BodyRange& range) {
       to.weightVertex.insert(to.weightVertex.end(), from.weightVertex.begin(), from.weightVertex.end());
       to.weight.insert(to.weight.end(), from.weight.begin(), from.weight.end());
       to.element.insert(to.element.end(), from.element.begin(), from.element.end());
+      if (to.restFieldNormals.size() == vertexBase && !from.restFieldNormals.empty()) {
+        to.restMeshNormals.insert(to.restMeshNormals.end(), from.restMeshNormals.begin(), from.restMeshNormals.end());
+        to.restFieldNormals.insert(to.restFieldNormals.end(), from.restFieldNormals.begin(),
+                                   from.restFieldNormals.end());
+      } else {
+        to.restMeshNormals.clear(), to.restFieldNormals.clear();
+      }
     }
   }
 }
@@ -295,10 +323,15 @@ void appendBodyView(BodyView& all, BodyView part, const BodyRange& range) {
 }  // namespace
 
 BodyView makeBodyView(const BuiltScene& scene, const TriangleMesh* restMesh) {
-  if (scene.numBodies() == 1) return makeOneBodyView(scene, restMesh);
   BodyView all;
-  for (size_t i = 0; i < scene.numBodies(); ++i)
-    appendBodyView(all, makeOneBodyView(scene.body(i), i == 0 ? restMesh : nullptr), scene.range(i));
+  if (scene.numBodies() == 1) {
+    all = makeOneBodyView(scene, restMesh);
+  } else {
+    for (size_t i = 0; i < scene.numBodies(); ++i)
+      appendBodyView(all, makeOneBodyView(scene.body(i), i == 0 ? restMesh : nullptr), scene.range(i));
+  }
+  all.smoothIndices = indexList(all.smooth.triangles);
+  if (all.embedded) all.embeddedIndices = indexList(all.embedded->triangles);
   return all;
 }
 
@@ -352,14 +385,17 @@ DrawList buildDrawList(const BodyView& body, const World& world, const ViewOptio
           s += em.weight[k] * stress[em.weightVertex[k]];
         colors[v] = stressColor(std::max(s, 0.0), o.stressScale);
       }
-    addMesh(list, m, colors, false);
+    addIndexedMesh(list, m, colors, body.embeddedIndices ? body.embeddedIndices : indexList(m.triangles));
   } else if (o.surface != SurfaceMode::None) {
     const DisplaySurface& s = o.surface == SurfaceMode::Voxel ? body.voxel : body.smooth;
     const TriangleMesh m = surfaceMesh(s, x);
     std::vector<Color> colors(m.vertices.size(), kBodyColor);
     if (o.stress)
       for (size_t v = 0; v < colors.size(); ++v) colors[v] = stressColor(stress[s.modelVertex[v]], o.stressScale);
-    addMesh(list, m, colors, o.surface == SurfaceMode::Voxel);
+    if (o.surface == SurfaceMode::Voxel)
+      addFlatMesh(list, m, colors);  // a vertex per triangle corner
+    else
+      addIndexedMesh(list, m, colors, body.smoothIndices ? body.smoothIndices : indexList(m.triangles));
   }
 
   if (o.wireframe)

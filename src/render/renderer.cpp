@@ -71,25 +71,34 @@ Renderer::Renderer() {
   locLit_ = glGetUniformLocation(program_, "uLit");
   locLight_ = glGetUniformLocation(program_, "uLight");
   locPointSize_ = glGetUniformLocation(program_, "uPointSize");
-  glGenVertexArrays(1, &vao_);
-  glGenBuffers(1, &vbo_);
-  glBindVertexArray(vao_);
-  glBindBuffer(GL_ARRAY_BUFFER, vbo_);
-  glEnableVertexAttribArray(0);
-  glEnableVertexAttribArray(1);
-  glEnableVertexAttribArray(2);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(DrawVertex),
-                        reinterpret_cast<void*>(offsetof(DrawVertex, position)));
-  glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(DrawVertex),
-                        reinterpret_cast<void*>(offsetof(DrawVertex, normal)));
-  glVertexAttribPointer(2, 4, GL_FLOAT, GL_FALSE, sizeof(DrawVertex),
-                        reinterpret_cast<void*>(offsetof(DrawVertex, color)));
+  auto vertexArray = [](unsigned* vao, unsigned* vbo) {
+    glGenVertexArrays(1, vao);
+    glGenBuffers(1, vbo);
+    glBindVertexArray(*vao);
+    glBindBuffer(GL_ARRAY_BUFFER, *vbo);
+    glEnableVertexAttribArray(0);
+    glEnableVertexAttribArray(1);
+    glEnableVertexAttribArray(2);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(DrawVertex),
+                          reinterpret_cast<void*>(offsetof(DrawVertex, position)));
+    glVertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(DrawVertex),
+                          reinterpret_cast<void*>(offsetof(DrawVertex, normal)));
+    glVertexAttribPointer(2, 4, GL_FLOAT, GL_FALSE, sizeof(DrawVertex),
+                          reinterpret_cast<void*>(offsetof(DrawVertex, color)));
+  };
+  vertexArray(&vao_, &vbo_);
+  vertexArray(&meshVao_, &meshVbo_);
+  glGenBuffers(1, &meshEbo_);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, meshEbo_);  // part of meshVao_'s state
   glBindVertexArray(0);
 }
 
 Renderer::~Renderer() {
   glDeleteBuffers(1, &vbo_);
   glDeleteVertexArrays(1, &vao_);
+  glDeleteBuffers(1, &meshVbo_);
+  glDeleteBuffers(1, &meshEbo_);
+  glDeleteVertexArrays(1, &meshVao_);
   glDeleteProgram(program_);
 }
 
@@ -128,6 +137,20 @@ void Renderer::draw(const DrawList& list, const Camera& camera, int width, int h
   // Push filled triangles back a little so that lines on the surface stay visible.
   glEnable(GL_POLYGON_OFFSET_FILL);
   glPolygonOffset(1.0f, 1.0f);
+  if (list.meshIndices && !list.meshIndices->empty() && !list.meshVertices.empty()) {
+    glBindVertexArray(meshVao_);
+    glBindBuffer(GL_ARRAY_BUFFER, meshVbo_);
+    if (list.meshIndices != meshIndices_) {  // another body (or surface): its triangles, once
+      meshIndices_ = list.meshIndices;
+      glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(meshIndices_->size() * sizeof(uint32_t)), meshIndices_->data(),
+                   GL_STATIC_DRAW);
+    }
+    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(list.meshVertices.size() * sizeof(DrawVertex)), list.meshVertices.data(),
+                 GL_STREAM_DRAW);
+    glDrawElements(GL_TRIANGLES, GLsizei(meshIndices_->size()), GL_UNSIGNED_INT, nullptr);
+    glBindVertexArray(vao_);
+    glBindBuffer(GL_ARRAY_BUFFER, vbo_);
+  }
   drawArray(list.triangles, GL_TRIANGLES);
   glDisable(GL_POLYGON_OFFSET_FILL);
   glUniform1i(locLit_, 0);

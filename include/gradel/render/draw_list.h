@@ -5,6 +5,7 @@
 #pragma once
 
 #include <array>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -52,6 +53,9 @@ struct BodyView {
   std::vector<uint8_t> edgeInSection;          ///< 1 if that element is cut by the middle z plane (3D; always 1 in 2D).
   int levels = 1;
   std::optional<EmbeddedMesh> embedded;  ///< Drawn in SurfaceMode::Embedded (none in 2D without a mesh).
+  /// The smooth surface's and the embedded mesh's triangles as one index list each (rest data,
+  /// shared with every draw list: the renderer uploads them once).
+  std::shared_ptr<const std::vector<uint32_t>> smoothIndices, embeddedIndices;
 };
 
 /// Builds the surfaces and element outlines of a built scene, of every body (their vertex ids
@@ -68,7 +72,12 @@ struct DrawVertex {
 };
 
 struct DrawList {
-  std::vector<DrawVertex> triangles;  ///< Lit, world space.
+  /// The body's smooth or embedded surface: lit, world space, drawn indexed. The vertices are
+  /// this frame's; the indices are the BodyView's (the same pointer frame after frame, so the
+  /// renderer keeps them on the GPU and uploads only the vertices).
+  std::vector<DrawVertex> meshVertices;
+  std::shared_ptr<const std::vector<uint32_t>> meshIndices;
+  std::vector<DrawVertex> triangles;  ///< Lit, world space (voxel surface, manipulators).
   std::vector<DrawVertex> lines;      ///< Unlit, world space.
   std::vector<DrawVertex> points;     ///< Unlit, world space.
   std::vector<DrawVertex> overlay;    ///< Unlit triangles in pixels (x right, y down): legend, caption.

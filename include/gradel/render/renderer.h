@@ -2,7 +2,9 @@
 // context (a GLFW window in gradel-view, an EGL surfaceless context in `gradel render`).
 #pragma once
 
+#include <memory>
 #include <string>
+#include <vector>
 
 #include "gradel/image.h"
 #include "gradel/render/camera.h"
@@ -26,6 +28,10 @@ class Renderer {
 
  private:
   unsigned program_ = 0, vao_ = 0, vbo_ = 0;
+  // The indexed body surface: its own vertex array, vertex buffer and index buffer; the indices
+  // are uploaded when another list of them comes in (held, so that its address is not reused).
+  unsigned meshVao_ = 0, meshVbo_ = 0, meshEbo_ = 0;
+  std::shared_ptr<const std::vector<uint32_t>> meshIndices_;
   int locMvp_ = -1, locLit_ = -1, locLight_ = -1, locPointSize_ = -1;
 };
 
