@@ -56,14 +56,13 @@ struct StagePair {
   uint32_t offset;
 };
 
-/// The accuracy of the step's rotation fit [rad]: fitRotation3Batch's tolerance in pass 1. The fit
-/// is warm-started from the element's last rotation (State::rotations) and stops once the next
-/// Newton correction would be below this: after a Newton step of angle a < sqrt(1e-8) = 1e-4 rad,
-/// i.e. one iteration a step (40 % of the real bench scene's element-steps). Measured against
-/// the 1e-12 fit it replaced: rotations within 1e-8 rad over the bench scenes' runs (the error
-/// does not accumulate), validation sags within 0.23 %, undamped energy drift unchanged to 2e-4
-/// of itself (docs/speed.md, "A leaner step (issue 31)").
-constexpr Real kFrameRotationTolerance = 1e-8;
+/// The accuracy of the step's rotation fit [rad]: fitRotation3Batch's tolerance in pass 1 (warm
+/// started from the element's last rotation, State::rotations). Eq. 1 is the element's torque
+/// balance, so this tolerance is what keeps angular momentum: at 1e-8 rad (one Newton iteration
+/// for elements that turned < 1e-4 rad, 1-4 instructions per vertex-step less) an isolated body
+/// lost 7e-7 to 1.6e-6 of its angular momentum in 10^4 steps (test_dynamics.cpp allows 1e-9), so
+/// the step keeps 1e-12 (docs/speed.md, "A leaner step (issue 31)").
+constexpr Real kFrameRotationTolerance = 1e-12;
 
 /// Pass 1 prefetches the vertex of the pair this many pairs ahead (~2 batches of 4 elements).
 constexpr size_t kPrefetchPairs = 128;
