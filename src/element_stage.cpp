@@ -21,21 +21,21 @@ struct ElementRows {
   d4 r0, r1, r2;
 };
 
-inline ElementRows elementRows(const Vec3* x, const StagePair* pair, uint32_t n) {
+inline ElementRows elementRows(const char* x, const StagePair* pair, uint32_t n) {
   d4 a0 = splat(0), a1 = a0, a2 = a0, b0 = a0, b1 = a0, b2 = a0;
   uint32_t i = 0;
   for (; i + 1 < n; i += 2) {
-    __builtin_prefetch(&x[pair[i + kPrefetchPairs].vertex]);
-    __builtin_prefetch(&x[pair[i + 1 + kPrefetchPairs].vertex]);
-    const Real* p = x[pair[i].vertex].data();
-    const Real* q = x[pair[i + 1].vertex].data();
+    __builtin_prefetch(x + pair[i + kPrefetchPairs].offset);
+    __builtin_prefetch(x + pair[i + 1 + kPrefetchPairs].offset);
+    const Real* p = reinterpret_cast<const Real*>(x + pair[i].offset);
+    const Real* q = reinterpret_cast<const Real*>(x + pair[i + 1].offset);
     const d4 u = loadInt16x4(pair[i].lattice), w = loadInt16x4(pair[i + 1].lattice);
     a0 += p[0] * u, a1 += p[1] * u, a2 += p[2] * u;
     b0 += q[0] * w, b1 += q[1] * w, b2 += q[2] * w;
   }
   if (i < n) {
-    __builtin_prefetch(&x[pair[i + kPrefetchPairs].vertex]);
-    const Real* p = x[pair[i].vertex].data();
+    __builtin_prefetch(x + pair[i + kPrefetchPairs].offset);
+    const Real* p = reinterpret_cast<const Real*>(x + pair[i].offset);
     const d4 u = loadInt16x4(pair[i].lattice);
     a0 += p[0] * u, a1 += p[1] * u, a2 += p[2] * u;
   }
@@ -47,6 +47,9 @@ inline ElementRows elementRows(const Vec3* x, const StagePair* pair, uint32_t n)
 ElementStageRest::ElementStageRest(const RestModel& m)
     : elements(m.numElements()), pairs(m.numPairs() + kPrefetchPairs, StagePair{{0, 0, 0, 0}, 0}) {
   const size_t V = m.numVertices(), E = m.numElements();
+  // Pairs and the vertex gather hold 32-bit byte offsets (vertex * 24, element * 128).
+  if (V > UINT32_MAX / sizeof(Vec3) || E > UINT32_MAX / sizeof(ElementFrame))
+    throw std::logic_error("ElementStageRest: the model is too large for 32-bit offsets");
   // Each element's lattice is its body's (bodies.h): h per body; a model without bodies (made
   // by hand) is one body of m.voxelSize. Only this set-up reads h; the passes do not.
   size_t body = 0;
@@ -70,7 +73,7 @@ ElementStageRest::ElementStageRest(const RestModel& m)
         sum[a] += int(r);
       }
       pairs[p].lattice[3] = 1;
-      pairs[p].vertex = m.elemVerts[p];
+      pairs[p].offset = uint32_t(m.elemVerts[p] * sizeof(Vec3));
     }
     c /= Real(n);
     for (uint32_t p = b; p < b + n; ++p) residue += m.restPositions[m.elemVerts[p]] - c;
@@ -85,15 +88,16 @@ ElementStageRest::ElementStageRest(const RestModel& m)
   vertexStart.assign(V + 1, 0);
   for (uint32_t v : m.elemVerts) ++vertexStart[v + 1];
   for (size_t v = 0; v < V; ++v) vertexStart[v + 1] += vertexStart[v];
-  vertexElements.resize(m.numPairs());
+  vertexFrames.resize(m.numPairs());
   std::vector<uint32_t> fill(vertexStart.begin(), vertexStart.end() - 1);
   for (uint32_t e = 0; e < E; ++e)
-    for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) vertexElements[fill[m.elemVerts[p]]++] = e;
+    for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p)
+      vertexFrames[fill[m.elemVerts[p]]++] = uint32_t(e * sizeof(ElementFrame));
 }
 
 size_t ElementStageRest::memoryBytes() const {
   return elements.capacity() * sizeof(ElementConstants) + pairs.capacity() * sizeof(StagePair) +
-         (vertexStart.capacity() + vertexElements.capacity()) * sizeof(uint32_t);
+         (vertexStart.capacity() + vertexFrames.capacity()) * sizeof(uint32_t);
 }
 
 void computeElementFrames(const RestModel& m, const ElementStageRest& rest, size_t begin, size_t end, const Vec3* x,
@@ -116,7 +120,7 @@ void computeElementFrames(const RestModel& m, const ElementStageRest& rest, size
       }
       const size_t e = e0 + l;
       const uint32_t b = m.elemStart[e];
-      const ElementRows r = elementRows(x, &rest.pairs[b], m.elemStart[e + 1] - b);
+      const ElementRows r = elementRows(reinterpret_cast<const char*>(x), &rest.pairs[b], m.elemStart[e + 1] - b);
       S[0][l] = r.r0, S[1][l] = r.r1, S[2][l] = r.r2;
       K[l] = load4(constants[e].sumLattice), K[4 + l] = load4(constants[e].restCentroid);
       K[8 + l] = load4(constants[e].meanRestOffset);
@@ -145,7 +149,7 @@ void computeElementFrames(const RestModel& m, const ElementStageRest& rest, size
         for (int k = 0; k < 9; ++k) batch.M[k][l] = M[k];
       }
     } else {
-      fitRotation3Batch(batch, maxIterations, 1e-12);
+      fitRotation3Batch(batch, maxIterations, kFrameRotationTolerance);
     }
     // 4. Frames, four at once: G = k M and t = (k (e - M C), k), e = c - M mean R0 (the
     //    residue's share removed as in element.h: the forces then sum to zero to rounding),

@@ -48,12 +48,21 @@ struct alignas(32) ElementConstants {
   Real meanRestOffset[4];
 };
 
-/// Per element-vertex pair, in the model's pair order: the vertex and (P_i, 1), P_i its lattice
-/// offset [voxels] from the element's first vertex. 12 bytes.
+/// Per element-vertex pair, in the model's pair order: the vertex (as the byte offset of its
+/// position, vertex * sizeof(Vec3), so the gather needs no index arithmetic) and (P_i, 1), P_i its
+/// lattice offset [voxels] from the element's first vertex. 12 bytes.
 struct StagePair {
   int16_t lattice[4];
-  uint32_t vertex;
+  uint32_t offset;
 };
+
+/// The accuracy of the step's rotation fit [rad]: fitRotation3Batch's tolerance in pass 1 (warm
+/// started from the element's last rotation, State::rotations). Eq. 1 is the element's torque
+/// balance, so this tolerance is what keeps angular momentum: at 1e-8 rad (one Newton iteration
+/// for elements that turned < 1e-4 rad, 1-4 instructions per vertex-step less) an isolated body
+/// lost 7e-7 to 1.6e-6 of its angular momentum in 10^4 steps (test_dynamics.cpp allows 1e-9), so
+/// the step keeps 1e-12 (docs/speed.md, "A leaner step (issue 31)").
+constexpr Real kFrameRotationTolerance = 1e-12;
 
 /// Pass 1 prefetches the vertex of the pair this many pairs ahead (~2 batches of 4 elements).
 constexpr size_t kPrefetchPairs = 128;
@@ -62,10 +71,11 @@ constexpr size_t kPrefetchPairs = 128;
 struct ElementStageRest {
   std::vector<ElementConstants> elements;
   /// The model's pairs, then kPrefetchPairs padding pairs (vertex 0) for the prefetch to read.
-  /// std::logic_error when a rest position is off the model's voxel lattice.
+  /// std::logic_error when a rest position is off the model's voxel lattice, or when the model
+  /// is too large for 32-bit byte offsets (over ~178 M vertices or ~33 M elements).
   std::vector<StagePair> pairs;
-  std::vector<uint32_t> vertexStart;     ///< Per vertex + 1: its range in vertexElements.
-  std::vector<uint32_t> vertexElements;  ///< The elements of each vertex, ascending.
+  std::vector<uint32_t> vertexStart;   ///< Per vertex + 1: its range in vertexFrames.
+  std::vector<uint32_t> vertexFrames;  ///< The elements of each vertex, ascending, as frame byte offsets (e * 128).
 
   explicit ElementStageRest(const RestModel& model);
   size_t memoryBytes() const;
@@ -83,13 +93,21 @@ inline void gatherVertexForces(const RestModel& model, const ElementStageRest& r
                                const Vec3* positions, size_t begin, size_t end, Sink&& sink) {
   using namespace simd;
   const uint32_t* start = rest.vertexStart.data();
-  const uint32_t* elements = rest.vertexElements.data();
+  const uint32_t* offsets = rest.vertexFrames.data();
+  const char* base = reinterpret_cast<const char*>(frames);
   const Vec3* X = model.restPositions.data();
+  const uint32_t* j = offsets + start[begin];
   for (size_t v = begin; v < end; ++v) {
-    // sum G, sum t; lane 3 of sum t is sum k, which multiplies -x_v.
+    // sum G, sum t; lane 3 of sum t is sum k, which multiplies -x_v. The first frame starts the
+    // sums (a vertex of no element gets zero force).
+    const uint32_t* je = offsets + start[v + 1];
     d4 g0 = splat(0), g1 = g0, g2 = g0, t = g0;
-    for (const uint32_t *j = elements + start[v], *je = elements + start[v + 1]; j != je; ++j) {
-      const ElementFrame& f = frames[*j];
+    if (j != je) {
+      const ElementFrame& f = *reinterpret_cast<const ElementFrame*>(base + *j++);
+      g0 = load4(f.c0), g1 = load4(f.c1), g2 = load4(f.c2), t = load4(f.t);
+    }
+    for (; j != je; ++j) {
+      const ElementFrame& f = *reinterpret_cast<const ElementFrame*>(base + *j);
       g0 += load4(f.c0), g1 += load4(f.c1), g2 += load4(f.c2), t += load4(f.t);
     }
     const Real* r = X[v].data();

@@ -161,7 +161,7 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   adviseHugePages(state_.rotations), adviseHugePages(scratch_->frames), adviseHugePages(m.invMass);
   adviseHugePages(m.elemVerts), adviseHugePages(m.restOffsets), adviseHugePages(m.elemStart),
       adviseHugePages(m.stiffness);
-  adviseHugePages(stageRest_->vertexElements), adviseHugePages(stageRest_->vertexStart);
+  adviseHugePages(stageRest_->vertexFrames), adviseHugePages(stageRest_->vertexStart);
   adviseHugePages(stageRest_->elements), adviseHugePages(stageRest_->pairs);
 
   vertexStiffness_ = vertexStiffness(m);  // the contacts' work (contact_work.h)
