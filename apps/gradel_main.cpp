@@ -395,6 +395,7 @@ int runScene(const RunOptions& o) {
   j["scene"] = scene.name;
   j["steps"] = std::llround(world.time() / dt);
   j["dt"] = dt;
+  j["dt_rule"] = world.dtRule();  // where dt came from: given, one frame, or the rule and its fraction
   j["integrator"] = gradel::integratorKindName(world.settings().integrator);
   if (!world.integratorChoice().empty()) j["integrator_choice"] = world.integratorChoice();  // why auto picked it
   j["simulated_seconds"] = world.time();

@@ -109,7 +109,7 @@ void section(const char* title) {
 // between frames).
 struct Figures {
   double time = 0, dt = 0, maxStress = 0;
-  std::string integrator, choice;
+  std::string integrator, choice, dtRule;
   size_t elements = 0, vertices = 0, pairs = 0;
   std::vector<BodyRow> bodies;
   std::vector<std::pair<Vec3, Vec3>> bounds;  // per body: lowest and highest vertex
@@ -223,6 +223,7 @@ class Viewer {
     figures_.time = w.time(), figures_.dt = w.dt();
     figures_.integrator = integratorKindName(w.settings().integrator);
     figures_.choice = w.integratorChoice();
+    figures_.dtRule = w.dtRule();
     figures_.elements = w.model().numElements(), figures_.vertices = w.model().numVertices();
     figures_.pairs = w.model().numPairs();
     const std::vector<Real> es = w.elementStress();
@@ -623,6 +624,7 @@ class Viewer {
       reservedLine(pacer_.capacity() > 0 && steps_ >= 20, ImGui::GetStyleColorVec4(ImGuiCol_TextDisabled), cap);
     }
     ImGui::Text("t = %.3f s  dt = %.3g s  %s", f.time, f.dt, f.integrator.c_str());
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("dt: %s", f.dtRule.c_str());
     // The auto choice's reason: one line (the full text as a tooltip).
     reservedLine(!f.choice.empty(), ImGui::GetStyleColorVec4(ImGuiCol_Text), "auto: " + f.choice.substr(0, 44) +
                                                                            (f.choice.size() > 44 ? "..." : ""));
@@ -1076,6 +1078,7 @@ int run(const Options& o) {
         j["integrator"] = f.integrator;
         j["integrator_choice"] = f.choice;
         j["dt"] = f.dt;
+        j["dt_rule"] = f.dtRule;
         j["elements"] = f.elements;
         j["vertices"] = f.vertices;
         if (o.rebuildSize > 0) {

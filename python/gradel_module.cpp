@@ -824,6 +824,10 @@ PYBIND11_MODULE(gradel, m) {
       .def_property_readonly("time", [](Simulation& s) { return s.world().time(); })
       .def_property_readonly("dt", [](Simulation& s) { return s.world().dt(); })
       .def_property_readonly(
+          "dt_rule", [](Simulation& s) { return s.world().dtRule(); },
+          "Where dt came from: \"given\", \"one frame (1/60 s)\", or the rule (dt_period x dt_fraction) and its "
+          "numbers.")
+      .def_property_readonly(
           "integrator", [](Simulation& s) { return std::string(integratorKindName(s.world().settings().integrator)); },
           "The integrator that runs (what \"auto\" resolved to).")
       .def_property_readonly(

@@ -144,6 +144,23 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   }
   dt_ = sim_.dt > 0 ? sim_.dt : autoDt;
   if (!(dt_ > 0) || !std::isfinite(dt_)) throw InputError("dt: could not derive a positive time step");
+  {
+    char buf[200];
+    if (sim_.dt > 0)
+      std::snprintf(buf, sizeof buf, "given");
+    else if (frameStep)
+      std::snprintf(buf, sizeof buf, "one frame (1/60 s)");
+    else if (sim_.dtPeriod == PeriodRule::Operator && frequency_.omega > 0)
+      std::snprintf(buf, sizeof buf, "operator x %.3g: 2 pi / omega_max, omega_max %.4g rad/s", sim_.dtFraction,
+                    frequency_.omega);
+    else
+      std::snprintf(buf, sizeof buf, "%s x %.3g: %s", periodRuleName(sim_.dtPeriod), sim_.dtFraction,
+                    sim_.dtPeriod == PeriodRule::Element ? "the smallest element's period (the paper's rule)"
+                                                         : "the stiffest vertex's period");
+    dtRule_ = buf;
+    if (sim_.integrator == IntegratorKind::ForwardEuler && sim_.dt == 0 && dt_ < sim_.dtFraction * period)
+      dtRule_ += " (forward Euler: capped at damping / (2 omega^2))";
+  }
   if (!uniform) {
     vertexDampFactor_.resize(rm.numVertices());
     for (size_t i = 0; i < rm.numVertices(); ++i)
@@ -1235,6 +1252,7 @@ Metrics combineMetrics(const std::vector<Metrics>& each) {
   for (size_t k = 1; k < each.size(); ++k) {
     const Metrics& b = each[k];
     r.kineticEnergy += b.kineticEnergy, r.elasticEnergy += b.elasticEnergy, r.gravityEnergy += b.gravityEnergy;
+    r.shadowEnergy += b.shadowEnergy;
     r.linearMomentum += b.linearMomentum, r.angularMomentum += b.angularMomentum;
     r.maxStress = std::max(r.maxStress, b.maxStress), r.maxPenetration = std::max(r.maxPenetration, b.maxPenetration);
     r.minElementDet = std::min(r.minElementDet, b.minElementDet);
@@ -1279,11 +1297,17 @@ Metrics World::metricsOf(const BodyRange& body, std::vector<Real>* elementStress
   // leapfrog v_{n-1/2}); the kinetic energy at time t uses v + a(x) dt / 2, as Stormer-Verlet
   // does. This is what makes the measured energy of an undamped run flat to O(dt^2) rather
   // than swing by O(omega dt). Forward Euler's velocity is already synchronous.
+  // The modified energy's term -dt^2/8 m |a|^2 (Metrics::shadowEnergy) makes the total the
+  // quantity symplectic Euler keeps: 1/2 m v_{n-1/2} . v_{n+1/2} = 1/2 m |v_n|^2 - dt^2/8 m |a|^2.
   const bool staggered = sim_.integrator == IntegratorKind::SymplecticEuler;
   for (size_t i = body.vertexBegin; i < body.vertexEnd; ++i) {
     const Vec3& x = state_.positions[i];
     Vec3 v = state_.velocities[i];
-    if (staggered) v += 0.5 * dt_ * (forces[i - v0] * m.invMass[i] + g);
+    if (staggered) {
+      const Vec3 a = forces[i - v0] * m.invMass[i] + g;
+      v += 0.5 * dt_ * a;
+      r.shadowEnergy -= 0.125 * dt_ * dt_ * m.mass[i] * a.squaredNorm();
+    }
     r.kineticEnergy += 0.5 * m.mass[i] * v.squaredNorm();
     r.gravityEnergy -= m.mass[i] * g.dot(x);
     r.linearMomentum += m.mass[i] * v;

@@ -218,6 +218,7 @@ TEST_F(CliTest, RunWritesCompleteResultAndSummary) {
   ASSERT_EQ(again.code, 0) << again.err;
   EXPECT_FALSE(fs::exists(res / "frame_00002.vtu"));
   EXPECT_EQ(json::parse(again.out).at("steps").get<int>() * 2, j.at("steps").get<int>());
+  EXPECT_EQ(j.at("dt_rule").get<std::string>().rfind("vertex x 0.1: ", 0), 0u) << j.at("dt_rule");  // where dt came from
 }
 
 // metrics.csv carries the frame-averaged contact forces: per manipulator and the walls. A ball

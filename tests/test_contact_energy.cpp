@@ -198,7 +198,7 @@ Rise rise(World& w, long steps) {
     if (s % 25 == 0) r.peak = std::max(r.peak, totalEnergy(w));
   }
   const Metrics m = w.metrics();
-  r.last = m.kineticEnergy + m.elasticEnergy + m.gravityEnergy;
+  r.last = m.totalEnergy();
   r.elastic = m.elasticEnergy;
   r.peak = std::max(r.peak, r.last);
   return r;

@@ -61,6 +61,15 @@ struct Metrics {
   Real kineticEnergy = 0;         ///< [J]
   Real elasticEnergy = 0;         ///< [J]
   Real gravityEnergy = 0;         ///< [J] -sum m g.x (relative to the origin)
+  /// [J] symplectic Euler's modified-energy term -dt^2/8 sum m |a|^2 (a: the vertex's elastic plus
+  /// gravity acceleration at the current positions; 0 for the other integrators). With it,
+  /// totalEnergy() = sum 1/2 m v_{n-1/2} . v_{n+1/2} + elastic + gravity, which symplectic Euler
+  /// keeps exactly on linear forces; the kinetic energy alone (synchronised velocity) swings by up
+  /// to a factor 1 / (1 - (omega dt / 2)^2) in a mode of frequency omega. Not positive-definite
+  /// above the stability limit (omega dt > 2), so the divergence guard uses kinetic + elastic.
+  Real shadowEnergy = 0;
+  /// [J] kinetic + elastic + gravity + shadowEnergy: flat on an undamped, contact-free run.
+  Real totalEnergy() const { return kineticEnergy + elasticEnergy + gravityEnergy + shadowEnergy; }
   Vec3 linearMomentum{0, 0, 0};   ///< [kg m/s]
   Vec3 angularMomentum{0, 0, 0};  ///< [kg m^2/s] about the world origin.
   Real maxStress = 0;             ///< [-] max per-element stress (strain-like, see stress()).
@@ -112,6 +121,10 @@ class World {
   const SimulationSettings& settings() const { return sim_; }
   /// Which integrator "auto" chose and why (empty when the integrator was given).
   const std::string& integratorChoice() const { return integratorChoice_; }
+  /// Where dt came from, in words: "given", "one frame (1/60 s)", or the rule and its numbers,
+  /// e.g. "operator x 0.2: 2 pi / omega_max, omega_max 4.1e+04 rad/s" (shown by `gradel run`'s
+  /// JSON summary and the viewer).
+  const std::string& dtRule() const { return dtRule_; }
   /// The body's fastest vibration at rest (stability.h), measured when dt_period is "operator"
   /// (all zero otherwise): dt = dt_fraction 2 pi / omega.
   const FrequencyEstimate& stabilityEstimate() const { return frequency_; }
@@ -238,6 +251,7 @@ class World {
   Real uniformDamping_ = 0;             ///< [1/s] the rate of every vertex when vertexDampFactor_ is empty.
   std::vector<Real> vertexDampFactor_;  ///< Per vertex: 1 / (1 + c_i dt); empty: all share uniformDamping_.
   std::string integratorChoice_;
+  std::string dtRule_;
   FrequencyEstimate frequency_;  ///< World(): the operator rule's estimate (stability.h).
   std::vector<PinSettings> pins_;
   PinSet pinSet_;

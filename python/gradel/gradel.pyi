@@ -167,6 +167,9 @@ class Simulation:
     @property
     def dt(self) -> float: ...
     @property
+    def dt_rule(self) -> str:
+        """Where dt came from: "given", "one frame (1/60 s)", or the rule (dt_period x dt_fraction) and its numbers."""
+    @property
     def integrator(self) -> str:
         """The integrator that runs (what "auto" resolved to)."""
     @property
