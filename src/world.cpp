@@ -1061,8 +1061,7 @@ void World::stepImplicit(bool largeStep) {
       scratch_->work = 0;
       state_.positions = x0, state_.velocities = v0, state_.rotations = q0;
       std::vector<Vec3> heldForces;
-      // Each hold with its surface's friction: a frictionless one, or one pushed out of its friction
-      // cone, slides (projective.h).
+      // Each hold with its surface's friction: a hold on a frictionless surface slides (projective.h).
       std::vector<Real> heldFriction(held.size());
       for (size_t j = 0; j < held.size(); ++j) {
         const size_t k = size_t(std::max(0, heldSurface[j]));
