@@ -1074,6 +1074,11 @@ void World::stepImplicit(bool largeStep) {
         const size_t k = size_t(std::max(0, heldSurface[j]));
         const Vec3 centre = k < manipulators_.size() ? manipulators_[k].position : Vec3::Zero();
         addImpulse(scratch_->impulse[k], heldForces[j] * dt_, heldAt[j], centre, model_->dim);
+        // The contacts' work (contact_work.h): the hold's impulse times its surface's velocity, so
+        // a manipulator that presses a body into a wall at a frame-size step supplies the energy
+        // the press stores (a fixed wall none).
+        if (k < manipulators_.size())
+          scratch_->work += heldForces[j].dot(manipulators_[k].position - manipulators_[k].previousPosition);
       }
       keepBodyPairLambdas(pairs, pairKeys);
       if (contacts) {
