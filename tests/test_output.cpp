@@ -150,7 +150,8 @@ TEST_F(OutputTest, WriteVtuBinaryDecodesToModelAndState) {
   const RestModel m = twoElements2d();
   const State s = stateOf(m);
   const std::vector<Real> vstress = {0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6}, estress = {1.5, 2.5};
-  writeVtu(root_ / "f.vtu", m, s, vstress, estress);
+  const std::vector<Real> vstrain = {7, 6, 5, 4, 3, 2, 1}, estrain = {0.25, 0.75};
+  writeVtu(root_ / "f.vtu", m, s, vstress, estress, VtkEncoding::Base64, vstrain, estrain);
   const std::string xml = readFile(root_ / "f.vtu");
   EXPECT_NE(xml.find("type=\"UnstructuredGrid\""), std::string::npos);
   EXPECT_NE(xml.find("NumberOfPoints=\"7\" NumberOfCells=\"2\""), std::string::npos);
@@ -165,6 +166,8 @@ TEST_F(OutputTest, WriteVtuBinaryDecodesToModelAndState) {
   EXPECT_EQ(vel[3 * 5 + 1], -1.0 / 3.0);  // exact: binary keeps every bit
   EXPECT_EQ(decodeBinary<double>(xml, "stress"), vstress);
   EXPECT_EQ(decodeBinary<double>(xml, "element_stress"), estress);
+  EXPECT_EQ(decodeBinary<double>(xml, "strain"), vstrain);  // the dimensionless measure, its own name
+  EXPECT_EQ(decodeBinary<double>(xml, "element_strain"), estrain);
   EXPECT_EQ(decodeBinary<uint8_t>(xml, "level"), (std::vector<uint8_t>{0, 1}));
   EXPECT_EQ(decodeBinary<int64_t>(xml, "element_id"), (std::vector<int64_t>{0, 1}));
   EXPECT_EQ(decodeBinary<int64_t>(xml, "offsets"), (std::vector<int64_t>{4, 9}));
@@ -182,6 +185,7 @@ TEST_F(OutputTest, WriteVtuAsciiMatchesBinary) {
   EXPECT_NE(xml.find("format=\"ascii\""), std::string::npos);
   EXPECT_EQ(xml.find("format=\"binary\""), std::string::npos);
   EXPECT_EQ(xml.find("Name=\"stress\""), std::string::npos);               // no stress given, none written
+  EXPECT_EQ(xml.find("Name=\"strain\""), std::string::npos);
   EXPECT_EQ(decodeAscii<double>(xml, "velocity")[3 * 2 + 1], -1.0 / 3.0);  // shortest round-trip text
   EXPECT_EQ(decodeAscii<int64_t>(xml, "connectivity"), (std::vector<int64_t>{0, 1, 3, 4, 1, 2, 4, 5, 6}));
   EXPECT_EQ(decodeAscii<int>(xml, "types"), (std::vector<int>{kVtkConvexPointSet, kVtkConvexPointSet}));
@@ -191,6 +195,7 @@ TEST_F(OutputTest, WriteVtuSizeMismatchThrows) {
   const RestModel m = twoElements2d();
   State s = stateOf(m);
   EXPECT_THROW(writeVtu(root_ / "x.vtu", m, s, {1.0, 2.0}), std::invalid_argument);
+  EXPECT_THROW(writeVtu(root_ / "x.vtu", m, s, {}, {}, VtkEncoding::Base64, {}, {1.0}), std::invalid_argument);
   s.velocities.pop_back();
   EXPECT_THROW(writeVtu(root_ / "x.vtu", m, s, {}), std::invalid_argument);
 }
