@@ -308,6 +308,8 @@ TEST_F(OutputTest, MetricsCsvHeaderAndRowsRoundTrip) {
   a.linearMomentum = Vec3(1, 2, 3);
   a.angularMomentum = Vec3(-4, 5e-300, 6);
   a.minElementDet = -0.5;
+  a.maxStress = 2500.0;
+  a.maxStrain = 0.25;
   {
     MetricsCsv csv(root_ / "metrics.csv");
     csv.append(a);
@@ -323,18 +325,20 @@ TEST_F(OutputTest, MetricsCsvHeaderAndRowsRoundTrip) {
   EXPECT_EQ(header,
             "time,kinetic_energy,elastic_energy,gravity_energy,px,py,pz,Lx,Ly,Lz,max_stress,max_penetration,"
             "max_contact_depth,min_element_det,wall_fx,wall_fy,wall_fz,wall_tx,wall_ty,wall_tz" +
-                std::string(kPerWallColumns));
+                std::string(kPerWallColumns) + ",max_strain");
   std::vector<double> values;
   std::istringstream cells(row1);
   for (std::string cell; std::getline(cells, cell, ',');) values.push_back(std::stod(cell));
-  ASSERT_EQ(values.size(), 20u + 36u);
+  ASSERT_EQ(values.size(), 20u + 36u + 1u);
+  EXPECT_EQ(values[10], 2500.0);  // max_stress [Pa]
+  EXPECT_EQ(values.back(), 0.25);  // max_strain [-], last
   EXPECT_EQ(values[0], 0.1);
   EXPECT_EQ(values[1], 1.0 / 3.0);  // full precision
   EXPECT_EQ(values[6], 3.0);
   EXPECT_EQ(values[8], 5e-300);
   EXPECT_EQ(values[13], -0.5);
   std::string zeros = "0";
-  for (int i = 1; i < 20 + 36; ++i) zeros += ",0";  // the per-wall forces too
+  for (int i = 1; i < 20 + 36 + 1; ++i) zeros += ",0";  // the per-wall forces and max_strain too
   EXPECT_EQ(row2, zeros);
 }
 

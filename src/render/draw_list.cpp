@@ -155,20 +155,23 @@ void addLegend(DrawList& list, Real scale, int width, int height) {
   const float x0 = float(width) - 46, x1 = float(width) - 26, y0 = 40, y1 = std::max(120.0f, float(height) * 0.45f);
   constexpr int kSteps = 24;
   const Color backdrop{0.97f, 0.97f, 0.98f};
-  const std::string top = pascalText(scale), mid = pascalText(scale / 2);
-  // Labels right-aligned to the left of the bar; the backdrop is as wide as the longest.
-  const float labelWidth = 9.6f * float(std::max(top.size(), std::size_t(12)));
-  addQuad2D(list, x0 - 14 - labelWidth, y0 - 28, float(width) - 4, y1 + 10, backdrop, backdrop);
+  const std::string top = pascalText(scale), mid = pascalText(scale / 2), title = "von Mises";
+  // Labels right-aligned to the left of the bar, the title above it ending at the bar's right
+  // edge; the backdrop as wide as they need (9.6 pixels a character at this font scale).
+  const auto textWidth = [](const std::string& t) { return 9.6f * float(t.size()); };
+  const float left = std::min(x0 - 14 - std::max({textWidth(top), textWidth(mid), textWidth("0 Pa")}),
+                              x1 - textWidth(title) - 4);
+  addQuad2D(list, left, y0 - 28, float(width) - 4, y1 + 10, backdrop, backdrop);
   for (int i = 0; i < kSteps; ++i) {
     // Top of the bar = high stress (dark).
     const float ya = y0 + (y1 - y0) * i / kSteps, yb = y0 + (y1 - y0) * (i + 1) / kSteps;
     addQuad2D(list, x0, ya, x1, yb, stressColor(scale * (1 - Real(i) / kSteps), scale),
               stressColor(scale * (1 - Real(i + 1) / kSteps), scale));
   }
-  addText(list, "von Mises stress", x0 - 10 - labelWidth, y0 - 22, 1.6f, kTextColor);
-  addText(list, top, x0 - 10 - 9.6f * float(top.size()), y0 - 4, 1.6f, kTextColor);
-  addText(list, mid, x0 - 10 - 9.6f * float(mid.size()), (y0 + y1) / 2 - 6, 1.6f, kTextColor);
-  addText(list, "0 Pa", x0 - 10 - 9.6f * 4, y1 - 8, 1.6f, kTextColor);
+  addText(list, title, x1 - textWidth(title), y0 - 22, 1.6f, kTextColor);
+  addText(list, top, x0 - 10 - textWidth(top), y0 - 4, 1.6f, kTextColor);
+  addText(list, mid, x0 - 10 - textWidth(mid), (y0 + y1) / 2 - 6, 1.6f, kTextColor);
+  addText(list, "0 Pa", x0 - 10 - textWidth("0 Pa"), y1 - 8, 1.6f, kTextColor);
 }
 
 // Each manipulator's contact force as an arrow from its centre (length |F| scale, a head of a
