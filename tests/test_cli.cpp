@@ -195,7 +195,7 @@ TEST_F(CliTest, RunWritesCompleteResultAndSummary) {
   EXPECT_TRUE(r.err.empty()) << r.err;  // no progress bar when stderr is not a terminal
   const json j = json::parse(r.out);
   for (const char* key : {"scene", "steps", "dt", "wall_seconds", "real_time_factor", "elements", "vertices", "pairs",
-                          "final_kinetic_energy", "max_penetration", "max_stress", "out"})
+                          "final_kinetic_energy", "max_penetration", "max_stress", "max_strain", "out"})
     EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_EQ(j.at("scene"), "tiny");
   EXPECT_EQ(j.at("out"), "res");
@@ -241,7 +241,8 @@ TEST_F(CliTest, RunMetricsHaveContactForceColumns) {
   std::vector<std::string> names, cells;
   for (std::istringstream h(header); std::getline(h, line, ',');) names.push_back(line);
   for (std::istringstream c(last); std::getline(c, line, ',');) cells.push_back(line);
-  ASSERT_EQ(names.size(), 14u + 12u + 36u);
+  ASSERT_EQ(names.size(), 14u + 12u + 36u + 1u);
+  EXPECT_EQ(names.back(), "max_strain");
   ASSERT_EQ(cells.size(), names.size());
   EXPECT_EQ(names[14], "m0_fx");
   EXPECT_EQ(names[19], "m0_tz");

@@ -239,7 +239,7 @@ TEST(ContactForces, MetricsCsvHasTheForceColumns) {
                                        "wall_ymin_fx,wall_ymin_fy,wall_ymin_fz,wall_ymin_tx,wall_ymin_ty,wall_ymin_tz,"
                                        "wall_ymax_fx,wall_ymax_fy,wall_ymax_fz,wall_ymax_tx,wall_ymax_ty,wall_ymax_tz,"
                                        "wall_zmin_fx,wall_zmin_fy,wall_zmin_fz,wall_zmin_tx,wall_zmin_ty,wall_zmin_tz,"
-                                       "wall_zmax_fx,wall_zmax_fy,wall_zmax_fz,wall_zmax_tx,wall_zmax_ty,wall_zmax_tz");
+                                       "wall_zmax_fx,wall_zmax_fy,wall_zmax_fz,wall_zmax_tx,wall_zmax_ty,wall_zmax_tz,max_strain");
   Metrics m;
   m.contactForces.manipulators = {ContactForce{Vec3(1, 2, 3), Vec3(4, 5, 6)}};
   m.contactForces.walls = ContactForce{Vec3(-7, 0, 0), Vec3::Zero()};
