@@ -25,7 +25,7 @@ struct Outcome {
   Real contactWork = 0;   ///< [J] at the end
   Real endElastic = 0;    ///< [J]
   Real endMinDet = 0;
-  Real endMaxStress = 0;  ///< [-] per-element deviation from a rigid fit (World::elementStress)
+  Real endMaxStress = 0;  ///< [-] per-element deviation from a rigid fit (World::elementStrain)
 };
 
 // Runs a scene's world for `duration`, checking the guard every `frame` seconds as `gradel run` does.
@@ -46,7 +46,7 @@ Outcome runGuarded(const std::string& json, Real duration, Real frame = 0.01) {
       o.diverged = true, o.message = *d;
       break;
     }
-    o.endElastic = m.elasticEnergy, o.endMinDet = m.minElementDet, o.endMaxStress = m.maxStress;
+    o.endElastic = m.elasticEnergy, o.endMinDet = m.minElementDet, o.endMaxStress = m.maxStrain;
   }
   o.contactWork = w.contactWork();
   return o;
