@@ -325,14 +325,16 @@ TEST_F(CliTest, LayoutSizeLimitsNameTheKeyAndEstimate) {
 // the layout or model is built, naming the key and the limit (issue 28: body.size 1000 took 42 s
 // and 3.3 GB before the refusal).
 TEST_F(CliTest, RunBodyTooBigForTheRunRefusedBeforeBuildingNamingTheKey) {
-  // 31007 vertices; 3000 s are at least 9.5e6 steps of the voxel probe's dt (3.1e-4 s).
+  // 31007 vertices; 4000 s are at least 7.3e6 steps of the voxel probe's dt (5.5e-4 s at the
+  // operator rule; 3000 s, at least 9.5e6 steps of the vertex rule's 3.1e-4 s, were refused
+  // early before and pass the probe at the larger dt).
   write("big.json", R"({"body": {"shape": "sphere", "size": 64},
-      "simulation": {"duration": 3000, "frame_interval": 100}})");
+      "simulation": {"duration": 4000, "frame_interval": 100}})");
   Result r = run("run big.json --out res");
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_EQ(r.err.rfind("gradel: big.json: body.size: the gradational layout of this body has ", 0), 0u) << r.err;
   EXPECT_NE(r.err.find("vertices, over the limit of "), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("that a run of 3000 s allows (dt at most about"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("that a run of 4000 s allows (dt at most about"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("--max-steps"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir_ / "res"));
   // The same body for a short run is fine.

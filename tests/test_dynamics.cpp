@@ -39,21 +39,30 @@ TEST_P(Isolated, SymplecticEnergyDoesNotDriftUnderRoughExcitation) {
   // Random per-vertex kicks excite the highest modes, where symplectic Euler's measured energy
   // oscillates by O(omega dt) around a conserved "shadow" energy: bounded, with no trend. The
   // mean over the last 1000 steps matches the mean over the first 1000 to 1%.
+  // The measured energy (Metrics::totalEnergy, whose modified-energy term is exact for linear
+  // forces) differs from the quantity symplectic Euler keeps by O((omega dt)^2) in the corotational
+  // (nonlinear) terms, and the excitation moves energy between modes: 1 % at the vertex rule's
+  // step (omega dt ~ 0.6), (1.10 / 0.63)^2 x 1 % = 3 % at the default operator rule's (omega_max dt
+  // = 1.10; measured: the 5-voxel 2D box's mean moved 1.22 %, the other cases less than 1 %).
   const Case c = GetParam();
   Body b = makeBody(c.shape, c.size, c.dim, c.kind);
-  World w(b.model, isolated(), {}, {});
-  perturb(w, 0.1 * b.model->voxelSize, 0.02, 5);
-  const Real e0 = totalEnergy(w);
-  Real first = 0, last = 0, peak = 0;
-  for (int s = 0; s < 10000; ++s) {
-    w.step();
-    const Real e = totalEnergy(w);
-    if (s < 1000) first += e / 1000;
-    if (s >= 9000) last += e / 1000;
-    peak = std::max(peak, e);
+  for (const PeriodRule rule : {PeriodRule::Vertex, PeriodRule::Operator}) {
+    SimulationSettings sim = isolated();
+    sim.dtPeriod = rule;
+    World w(b.model, sim, {}, {});
+    perturb(w, 0.1 * b.model->voxelSize, 0.02, 5);
+    const Real e0 = totalEnergy(w);
+    Real first = 0, last = 0, peak = 0;
+    for (int s = 0; s < 10000; ++s) {
+      w.step();
+      const Real e = totalEnergy(w);
+      if (s < 1000) first += e / 1000;
+      if (s >= 9000) last += e / 1000;
+      peak = std::max(peak, e);
+    }
+    EXPECT_NEAR(last / first, 1.0, rule == PeriodRule::Vertex ? 0.01 : 0.03) << periodRuleName(rule);
+    EXPECT_LT(peak, 1.5 * e0) << periodRuleName(rule);
   }
-  EXPECT_NEAR(last / first, 1.0, 0.01);
-  EXPECT_LT(peak, 1.5 * e0);
 }
 
 TEST_P(Isolated, RestStaysAtRest) {
