@@ -8,8 +8,9 @@ prints  set,n,vertices,steps,instructions_per_vertex_step[,ll_misses_per_vertex_
 
   bench/callgrind_step.py [--cache] [--bench build/gradel-bench] -- --sets paper --sizes 32 ...
 
---cache simulates the caches (32 KiB L1, 16 MiB 16-way last level, as in docs/speed.md) and
-reports last-level data misses (DLmr + DLmw) per vertex-step. Threads must be 1. The last column
+--cache simulates the caches (32 KiB L1, 16 MiB 16-way last level, as in docs/speed.md; --ll-mib
+sets the last level's size, 32 for this VM's L3) and reports last-level data misses (DLmr + DLmw)
+per vertex-step. Threads must be 1. The last column
 is the row's state hash: compare it with a run outside valgrind (see patch_vmovq below).
 """
 import argparse
@@ -67,6 +68,7 @@ def patch_vmovq(src, dst):
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--cache", action="store_true")
+    ap.add_argument("--ll-mib", type=int, default=16, help="last-level cache size of the model [MiB] (16-way)")
     ap.add_argument("--bench", default="build/gradel-bench")
     ap.add_argument("rest", nargs=argparse.REMAINDER)
     a = ap.parse_args()
@@ -78,7 +80,7 @@ def main():
         cmd = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
                "--toggle-collect=gradel::World::step()"]
         if a.cache:
-            cmd += ["--cache-sim=yes", "--I1=32768,8,64", "--D1=32768,8,64", "--LL=16777216,16,64"]
+            cmd += ["--cache-sim=yes", "--I1=32768,8,64", "--D1=32768,8,64", f"--LL={a.ll_mib << 20},16,64"]
         cmd += [bench, "--threads", "1", "--reps", "1", "--min-time", "0.001"] + rest
         r = subprocess.run(cmd, capture_output=True, text=True)
         if r.returncode != 0:

@@ -17,10 +17,11 @@
 // (P_i, 1) as four int16; the vertex id and R0 took 28 bytes) and forms the rows of
 // sum x_i (P_i, 1)^T, whose last lane is sum x_i; the factor h does not change the fitted
 // rotation, and sum P_i is an exact integer. Four
-// elements' rows are then transposed into the rotation fit's lanes, and the frames computed
-// four at a time and transposed back. Each vertex is one 4-wide register (x, y, z, 0); pass 1
-// prefetches the vertex of the pair kPrefetchPairs ahead, since large bodies are bound by these
-// indirect gathers. Every sum is formed in an order that does not depend on how ranges are
+// elements' rows are then transposed into the rotation fit's lanes (their constants are stored in
+// those lanes already, ElementConstantGroup), and the frames computed four at a time and
+// transposed back. Each vertex is one 4-wide register (x, y, z, 0); above kPrefetchAboveBytes of
+// positions pass 1 prefetches the vertex of the pair kPrefetchPairs ahead, since large bodies are
+// bound by these indirect gathers. Every sum is formed in an order that does not depend on how ranges are
 // split, so the result is the same at any thread count; it equals element.h's reference kernel to
 // rounding (tested).
 #pragma once
