@@ -606,6 +606,7 @@ void World::step() {
   else
     stepExplicit();
   if (bodyContactsOn()) stageBodyContacts();
+  finishContactImpulses();  // the ledger closes last: the body-contact stage's wall re-pass is in it
 }
 
 // Start overlaps (overlaps.h): the walls are moved out to the bodies, the manipulators shrunk
@@ -767,10 +768,18 @@ void World::stageBodyContacts() {
   }
   std::sort(moved.begin(), moved.end());
   moved.erase(std::unique(moved.begin(), moved.end()), moved.end());
+  const size_t K = manipulators_.size();
   for (uint32_t u : moved) {
     if (bodyContactInvMass_[u] == 0) continue;
     const StepStart start{bodyContactStartV_[u], dt_, sim_.integrator == IntegratorKind::SymplecticEuler};
-    resolveDomain(domain_, bodyContactStartX_[u], x[u], v[u], model_->dim, false, &start);
+    Vec3 wallDv[kWalls] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
+    resolveDomain(domain_, bodyContactStartX_[u], x[u], v[u], model_->dim, false, &start, wallDv);
+    // The walls' impulses go into the step's force ledger (closed after this stage, World::step).
+    for (int wall = 0; wall < kWalls; ++wall)
+      if (wallDv[wall] != Vec3::Zero()) {
+        addImpulse(scratch_->impulse[K + size_t(wall)], model_->mass[u] * wallDv[wall], x[u], Vec3::Zero(), model_->dim);
+        scratch_->work += model_->mass[u] * wallDv[wall].dot(wallVelocity_[size_t(wall)]);
+      }
   }
 }
 
@@ -924,7 +933,6 @@ void World::stepExplicit() {
     }
     governor_->report(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   }
-  finishContactImpulses();
   for (Manipulator& m : manipulators_) m.previousPosition = m.position;
   state_.time += dt_;
   if (!pinSet_.empty()) applyPins(state_.time);
@@ -975,9 +983,9 @@ void World::applyPins(Real t) {
   }
 }
 
-// The end of an implicit or large step: deepest contact, manipulators' sweep start, time, pins.
+// The end of an implicit or large step: deepest contact, manipulators' sweep start, time, pins
+// (the force ledger closes in World::step, after the body contacts).
 void World::finishFrameStep(Real tNext) {
-  finishContactImpulses();
   scratch_->maxContactDepth = scratch_->contactDepth.empty()
                                   ? 0
                                   : *std::max_element(scratch_->contactDepth.begin(), scratch_->contactDepth.end());
