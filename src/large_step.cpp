@@ -267,7 +267,7 @@ LargeStepReport LargeStepSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v
   const std::vector<Vec3> x0 = x;
   std::vector<Vec3> y(V);
   for (size_t i = 0; i < V; ++i) {
-    y[i] = x0[i] + h * v[i] + h * h * gravity;
+    y[i] = freeFlight(x0[i], v[i], h, 1, gravity);
     x[i] = x0[i] + h * v[i] + h * h * acceleration_[i];
   }
   for (size_t j = 0; j < pinned_.size(); ++j) y[pinned_[j]] = x[pinned_[j]] = 0.5 * (pinStart[j] + pinEnd[j]);

@@ -43,7 +43,7 @@
 //           fit, which keeps each body's linear and angular momentum; for a pinned body all of them). At a
 //           turning point (no such velocity) the excess waits for the next step.
 // Contacts are not in this solve: World::stepLargeStep runs a step that could touch anything as
-// a projective-dynamics (backward Euler) step with held contacts (stepImplicit, see world.cpp and
+// a projective-dynamics (backward Euler) step with held contacts (stepImplicit, see step_implicit.cpp and
 // projective.h: the held vertices are constraints of a filtered PCG there, no back-solve each).
 // So does a step in which two bodies may touch (body_contacts.h, BodyContacts::mayTouch): their
 // contacts are pair constraints of that solve (projective.h, PairConstraint).
