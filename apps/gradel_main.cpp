@@ -334,15 +334,15 @@ int runScene(const RunOptions& o) {
   const bool several = built.numBodies() > 1;
   gradel::MetricsCsv csv(dir.file("metrics.csv"), world.manipulators().size(), several);
   std::vector<gradel::PvdFrame> pvd;
-  Real maxPenetration = 0, maxStress = 0;
+  Real maxPenetration = 0, maxStress = 0, maxStrain = 0;
   gradel::Metrics last;
 
   gradel::DivergenceGuard guard(gradel::energyBudget(world, duration));
   const gradel::DivergenceFacts facts = gradel::divergenceFacts(world, duration);
   auto writeFrame = [&](size_t index) {
-    std::vector<gradel::Real> elementStress;
+    std::vector<gradel::Real> elementStress, elementStrain;
     // One pass over the elements per frame.
-    const std::vector<gradel::Metrics> each = world.bodyMetrics(&elementStress);
+    const std::vector<gradel::Metrics> each = world.bodyMetrics(&elementStress, &elementStrain);
     gradel::Metrics m = gradel::combineMetrics(each);
     m.contactForces = world.averageContactForces();  // what the bodies exert together (World::metrics)
     std::string warning;
@@ -356,12 +356,14 @@ int runScene(const RunOptions& o) {
       csv.append(m);
     }
     maxPenetration = std::max(maxPenetration, m.maxPenetration);
-    maxStress = std::max(maxStress, m.maxStress);
+    maxStress = std::max(maxStress, m.maxStress), maxStrain = std::max(maxStrain, m.maxStrain);
     last = m;
     const std::vector<gradel::Real> vertexStress = world.vertexStress(elementStress);
+    const std::vector<gradel::Real> vertexStrain = world.vertexStress(elementStrain);
     for (size_t i = 0; i < built.numBodies(); ++i) {
       const std::string name = gradel::frameFileName(index, several ? built.body(i).name : "");
-      gradel::writeVtu(dir.file(name), model, world.state(), built.range(i), vertexStress, elementStress);
+      gradel::writeVtu(dir.file(name), model, world.state(), built.range(i), vertexStress, elementStress,
+                       gradel::VtkEncoding::Base64, vertexStrain, elementStrain);
       pvd.push_back({world.time(), name, int(i), several ? built.body(i).name : ""});
     }
   };
@@ -408,7 +410,8 @@ int runScene(const RunOptions& o) {
   j["pairs"] = model.numPairs();
   j["final_kinetic_energy"] = last.kineticEnergy;
   j["max_penetration"] = maxPenetration;
-  j["max_stress"] = maxStress;
+  j["max_stress"] = maxStress;  // [Pa] von Mises
+  j["max_strain"] = maxStrain;  // [-]
   j["state_hash"] = hex64(world.stateHash());
   j["out"] = dir.target().string();
   std::cout << j.dump(2) << "\n";

@@ -18,6 +18,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <ctime>
 #include <deque>
 #include <filesystem>
 #include <iostream>
@@ -48,6 +50,23 @@ using namespace gradel::render;
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
+// [s] CPU time of the calling thread, and of the whole process (all threads: drawing, stepping
+// and the OpenGL driver's).
+double threadCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+double loadAverage() {
+  double l[1] = {0};
+  return getloadavg(l, 1) == 1 ? l[0] : -1.0;
+}
+double processCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+
 // The default scene: the paper's 12^3 sphere on the floor and one free sphere manipulator
 // beside it, ready to be grabbed. Symplectic Euler, not "auto": the viewer does not let a cost
 // estimate switch its sphere to the large step (at sizes 32 and up "auto" took the large step
@@ -58,13 +77,16 @@ constexpr const char* kPlayScene = R"({
   "dim": 3,
   "body": { "shape": "sphere", "size": 12, "voxel_size": 0.01, "layout": "gradational", "position": [0, 0, 0] },
   "material": { "scaling": "consistent", "youngs_modulus": 1e5, "density": 1000 },
-  "simulation": { "integrator": "symplectic", "dt": "auto", "damping": 1.0, "gravity": [0, -9.81, 0] },
+  "simulation": { "integrator": "symplectic", "dt": "auto", "dt_period": "operator", "damping": 1.0,
+                  "gravity": [0, -9.81, 0] },
   "domain": { "min": [-0.3, 0.0, -0.3], "max": [0.4, 0.5, 0.4], "restitution": 0.3, "friction": 0.5 },
   "manipulators": [ { "type": "sphere", "radius": 0.03, "restitution": 0.5, "friction": 0.5,
                       "path": [ { "t": 0, "position": [-0.1, 0.06, 0.06] } ] } ]
 })";
 
 constexpr double kFrameSeconds = 1.0 / 60;  // [s] the frame cap
+constexpr double kMaxFramePeriod = 0.1;      // [s] the longest wait the CPU budget makes a frame
+constexpr double kDrawCores = 1.0;           // cores the drawing may use on average (the stepping has the rest)
 constexpr double kSlowFactor = 0.1;         // sizes estimated below this real-time factor are flagged
 constexpr int kMinBodySize = 4, kMaxBodySize = 256;
 constexpr float kPanelWidth = 330;  // [pixels] the settings panel at the left
@@ -108,7 +130,9 @@ void section(const char* title) {
 // The figures the panel shows, copied from the world once a frame (the stepping thread owns it
 // between frames).
 struct Figures {
-  double time = 0, dt = 0, maxStress = 0;
+  double time = 0, dt = 0;
+  double maxStress = 0;    // [Pa] von Mises (World::elementStress)
+  double stressAt = -1e9;  // [s] wall time maxStress was taken (the stress costs a pass over the elements)
   std::string integrator, choice, dtRule;
   size_t elements = 0, vertices = 0, pairs = 0;
   std::vector<BodyRow> bodies;
@@ -226,9 +250,21 @@ class Viewer {
     figures_.dtRule = w.dtRule();
     figures_.elements = w.model().numElements(), figures_.vertices = w.model().numVertices();
     figures_.pairs = w.model().numPairs();
-    const std::vector<Real> es = w.elementStress();
-    figures_.maxStress = es.empty() ? 0.0 : *std::max_element(es.begin(), es.end());
-    figures_.bodies = built_.numBodies() > 1 ? bodyTable(built_) : std::vector<BodyRow>{};
+    // The stress: per vertex for the colour (every frame it is shown), else its maximum and the
+    // body table's figures four times a second (each a pass over the elements, holding the world).
+    std::vector<Real> vertexStress;
+    if (view_.stress) {
+      const std::vector<Real> es = w.elementStress();
+      figures_.maxStress = es.empty() ? 0.0 : *std::max_element(es.begin(), es.end());
+      figures_.stressAt = now;
+      vertexStress = w.vertexStress(es);
+    }
+    if (now - figures_.stressAt >= 0.25 || now < figures_.stressAt) {
+      const std::vector<Real> es = w.elementStress();
+      figures_.maxStress = es.empty() ? 0.0 : *std::max_element(es.begin(), es.end());
+      figures_.stressAt = now;
+      figures_.bodies = built_.numBodies() > 1 ? bodyTable(built_) : std::vector<BodyRow>{};
+    }
     figures_.bounds.clear();
     for (size_t b = 0; b < built_.numBodies(); ++b) {
       const BodyRange& range = built_.range(b);
@@ -242,17 +278,11 @@ class Viewer {
     if (follow_ && !figures_.bounds.empty()) {  // the camera keeps the bodies where they were on screen
       Vec3 lo = figures_.bounds[0].first, hi = figures_.bounds[0].second;
       for (const auto& [a, b] : figures_.bounds) lo = lo.cwiseMin(a), hi = hi.cwiseMax(b);
-      const Vec3 centre = (lo + hi) / 2;
-      const Real extent = (hi - lo).norm();
-      if (followCentre_ && mode_ != Mode::Drag) {
-        camera_.target += centre - *followCentre_;
-        // Bodies flying apart: step back as their bounds grow past the largest seen (never closer).
-        if (extent > followExtent_ && followExtent_ > 0) camera_.distance *= extent / followExtent_;
-      }
-      if (!followCentre_ || extent > followExtent_) followExtent_ = extent;
-      followCentre_ = centre;
+      followState_.update(camera_, lo, hi, mode_ == Mode::Drag);
     }
-    list_ = buildDrawList(body_, w, view_, width, height);
+    ViewOptions v = view_;
+    v.stressScale = stressFactor_ * autoStressScale_;
+    list_ = buildDrawList(body_, w, v, width, height, view_.stress ? &vertexStress : nullptr);
     w.restartForceAverage();  // the force arrows: averaged over the steps between two frames
   }
 
@@ -326,6 +356,9 @@ class Viewer {
   // ---- for main()'s timing runs and screenshots (call with lockState()) ----
   const Figures& figures() const { return figures_; }
   long totalSteps() const { return steps_; }
+  double stepCpuSeconds() const { return stepCpuSeconds_; }
+  double stepWallSeconds() const { return stepWallSeconds_; }
+  double vertexSteps() const { return vertexSteps_; }
   /// [s] how long the last frame held the world (figures + draw list); 0 when it was busy.
   double worldHeldSeconds() const { return worldHeldSeconds_; }
   size_t drawTriangles() const {
@@ -426,12 +459,15 @@ class Viewer {
       if (generation != generation_) continue;  // a rebuilt world came in meanwhile
       World& w = *built_.world;
       const auto t0 = Clock::now();
+      const double cpu0 = threadCpuSeconds();
       const double batchSim = double(n) * w.dt();
       for (long k = 0; k < n; ++k) {
         if (drag) feedDrag(w, *drag, double(k + 1) / double(n), batchSim);
         w.step();
       }
       const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+      const double cpu = threadCpuSeconds() - cpu0;
+      const size_t vertices = w.model().numVertices();
       const bool ok = finite(w);
       const double simTime = w.time();
       world.unlock();
@@ -440,6 +476,7 @@ class Viewer {
       if (drag && drag_ && drag_->index == drag->index) drag_->from = drag->to;  // reached
       pacer_.stepped(n, seconds);
       steps_ += n;
+      stepCpuSeconds_ += cpu, stepWallSeconds_ += seconds, vertexSteps_ += double(n) * double(vertices);
       const double end = builtScene_.output.duration, before = simTime_;
       simTime_ = simTime;
       if (!ok) diverged_ = true;
@@ -515,13 +552,15 @@ class Viewer {
     // noise (docs/viewer.md).
     built_.world->setThreads(std::max(1, int(std::thread::hardware_concurrency()) - 1));
     body_ = std::move(view);
+    autoStressScale_ = autoStressScale(built_.world->model());
+    figures_.stressAt = -1e9;  // the new world's figures at the next frame
     drag_.reset();
     steps_ = 0;
     rates_.reset();
     pacer_ = StepPacer(built_.world->dt(), speed_);
     pacer_.restart(wallNow());
     behind_ = false;
-    followCentre_.reset();
+    followState_.reset();
     if (load) {
       original_ = scene_;
       atEnd_ = int(scene_.name == "play" ? AtEnd::RunOn : AtEnd::Stop);
@@ -566,7 +605,7 @@ class Viewer {
 
   // Frames the scene in the part of the window right of the panel.
   void reframeCamera() {
-    followCentre_.reset();
+    followState_.reset();
     Vec3 lo, hi;
     sceneBounds(*built_.world, &lo, &hi);
     camera_ = frameBox(lo, hi, scene_.dim == 2);
@@ -630,7 +669,7 @@ class Viewer {
                                                                            (f.choice.size() > 44 ? "..." : ""));
     if (!f.choice.empty() && ImGui::IsItemHovered()) ImGui::SetTooltip("auto: %s", f.choice.c_str());
     ImGui::Text("%zu elements  %zu vertices  %zu pairs", f.elements, f.vertices, f.pairs);
-    ImGui::Text("max stress %.4f", f.maxStress);
+    ImGui::Text("max von Mises stress %s", pascalText(f.maxStress).c_str());
     // Several bodies: a row of figures per body (render/body_table.h); the lines above are all of them.
     if (f.bodies.size() > 1 &&
         ImGui::BeginTable("bodies", 5,
@@ -643,7 +682,7 @@ class Viewer {
         ImGui::TableNextColumn(), ImGui::Text("%zu", r.vertices);
         ImGui::TableNextColumn(), ImGui::Text("%.3g", r.kineticEnergy);
         ImGui::TableNextColumn(), ImGui::Text("%.3g", r.elasticEnergy);
-        ImGui::TableNextColumn(), ImGui::Text("%.4f", r.maxStress);
+        ImGui::TableNextColumn(), ImGui::TextUnformatted(pascalText(r.maxStress).c_str());
       }
       ImGui::EndTable();
     }
@@ -664,7 +703,7 @@ class Viewer {
       static const char* atEnd[] = {"run on", "stop", "loop"};  // AtEnd order
       ImGui::Combo(label, &atEnd_, atEnd, 3);
     }
-    if (ImGui::Checkbox("camera follows the bodies", &follow_)) followCentre_.reset();
+    if (ImGui::Checkbox("camera follows the bodies", &follow_)) followState_.reset();
 
     // ---- the paper's interactions, one click each ----
     section("Scenes");
@@ -705,10 +744,12 @@ class Viewer {
     ImGui::Checkbox("stress colour", &view_.stress);
     ImGui::SameLine();
     ImGui::Checkbox("tool forces", &view_.forces);
-    float scale = float(view_.stressScale);
     ImGui::BeginDisabled(!view_.stress);  // always there: the widgets below do not move
-    if (ImGui::SliderFloat("stress scale", &scale, 0.005f, 0.3f, "%.3f", ImGuiSliderFlags_Logarithmic))
-      view_.stressScale = scale;
+    {
+      // The darkest colour: a factor of the auto scale (5 % strain of the stiffest material), shown in Pa.
+      const std::string darkest = pascalText(stressFactor_ * autoStressScale_);
+      ImGui::SliderFloat("stress scale", &stressFactor_, 0.01f, 10.0f, darkest.c_str(), ImGuiSliderFlags_Logarithmic);
+    }
     ImGui::EndDisabled();
     if (ImGui::Button("Reframe camera (F)")) reframeCamera();
 
@@ -884,6 +925,8 @@ class Viewer {
   Figures figures_;
   Camera camera_;
   ViewOptions view_;
+  float stressFactor_ = 1;       // the stress colour's darkest, in units of autoStressScale_
+  double autoStressScale_ = 1;   // [Pa] draw_list.h autoStressScale of the running model
   std::optional<ManipulatorDrag> drag_;
   Mode mode_ = Mode::None;
   double lastX_ = 0, lastY_ = 0;
@@ -896,9 +939,11 @@ class Viewer {
   bool loopDue_ = false;  ///< The stepping thread passed the end with AtEnd::Loop: the next frame restarts.
   // The camera follows the bodies: its target moves with the centre of their bounds.
   bool follow_ = true;
-  std::optional<Vec3> followCentre_;  ///< The bodies' centre when the camera last moved with it.
-  Real followExtent_ = 0;             ///< [m] the largest diagonal of their bounds since then.
+  CameraFollow followState_;  ///< Where the bodies were when the camera last moved with them.
   long steps_ = 0;
+  // What the stepping thread spent (for --run-for): its CPU time, the wall time of its batches,
+  // and the vertex-steps they made.
+  double stepCpuSeconds_ = 0, stepWallSeconds_ = 0, vertexSteps_ = 0;
   double simTime_ = 0;  ///< [s] the world's time after the last batch
   double worldHeldSeconds_ = 0;
   /// The panel's shape settings of one body (the scene holds the rest).
@@ -1013,6 +1058,12 @@ int run(const Options& o) {
 
     FrameTimes times;
     double last = viewer.wallNow(), runStart = last;
+    double cpuStart = processCpuSeconds(), stepCpuStart = 0, vertexStepsStart = 0;
+    double lastCpu = cpuStart, lastStepCpu = 0, drawCpuAverage = -1;  // the frame cap's CPU budget
+    {
+      std::unique_lock<std::mutex> lock = viewer.lockState();
+      stepCpuStart = lastStepCpu = viewer.stepCpuSeconds(), vertexStepsStart = viewer.vertexSteps();
+    }
     bool rebuildAsked = false, rebuildSeen = false;
     double rebuildSeconds = 0;
     long frames = 0;
@@ -1041,10 +1092,25 @@ int run(const Options& o) {
         }
       }
       glfwSwapBuffers(window);
-      // The frame cap: the rest of the 1/60 s goes to the stepping thread.
+      // The frame cap: at most 60 frames a second, and the drawing's CPU (this thread and the
+      // OpenGL driver's: software GL rasterises on the CPU) held to the one core the stepping
+      // leaves it, on average: a frame that cost c seconds of CPU is at least c long (up to
+      // kMaxFramePeriod, so that the window still answers within 100 ms). The rest goes to the
+      // stepping thread. Without it a large body's frames (40-50 ms of CPU each at size 64)
+      // drawn 60 times a second would take both cores from the stepping.
       const double work = viewer.wallNow() - frameStart;
       if (o.screenshot.empty()) {
-        const double rest = kFrameSeconds - work;
+        const double cpuNow = processCpuSeconds();
+        double stepCpuNow;
+        {
+          std::unique_lock<std::mutex> lock = viewer.lockState();
+          stepCpuNow = viewer.stepCpuSeconds();
+        }
+        const double drawCpu = std::max(0.0, (cpuNow - lastCpu) - (stepCpuNow - lastStepCpu));
+        lastCpu = cpuNow, lastStepCpu = stepCpuNow;
+        drawCpuAverage = drawCpuAverage < 0 ? drawCpu : 0.7 * drawCpuAverage + 0.3 * drawCpu;
+        const double period = std::clamp(drawCpuAverage / kDrawCores, kFrameSeconds, kMaxFramePeriod);
+        const double rest = period - work;
         if (rest > 0) std::this_thread::sleep_for(std::chrono::duration<double>(rest));
       }
       const double now = viewer.wallNow();
@@ -1067,6 +1133,14 @@ int run(const Options& o) {
         const double wall = now - runStart;
         nlohmann::json j;
         j["frames_per_second"] = double(frames) / wall;
+        // CPU: the stepping thread's per vertex-step and share of a core; the rest of the process
+        // (drawing thread and the OpenGL driver's threads) per frame. Comparable on a loaded machine.
+        const double stepCpu = viewer.stepCpuSeconds() - stepCpuStart;
+        const double vertexSteps = viewer.vertexSteps() - vertexStepsStart;
+        j["step_cpu_ns_per_vertex_step"] = vertexSteps > 0 ? 1e9 * stepCpu / vertexSteps : 0.0;
+        j["step_thread_core_share"] = stepCpu / wall;
+        j["draw_cpu_ms_per_frame"] = frames > 0 ? 1e3 * (processCpuSeconds() - cpuStart - stepCpu) / double(frames) : 0.0;
+        j["load_average_1min"] = loadAverage();
         j["frame_ms_median"] = 1e3 * FrameTimes::median(times.all);
         j["frame_work_ms_median"] = 1e3 * FrameTimes::median(times.work);
         j["world_held_ms_median"] = 1e3 * FrameTimes::median(times.worldHeld);

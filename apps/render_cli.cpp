@@ -13,7 +13,8 @@ CLI::App* addRenderCommand(CLI::App& app, RenderCommandOptions& o) {
        "auto | smooth | voxel | embedded | none (auto: none with --section; the body's own mesh, embedded, when it "
        "comes from a mesh file; else smooth)")
       ->capture_default_str();
-  r->add_flag("--stress", o.stress, "Colour the surface by stress (darker = higher), with a legend");
+  r->add_flag("--stress", o.stress,
+              "Colour the surface by von Mises stress (darker = higher), with a legend in Pa");
   r->add_flag("--wireframe", o.wireframe, "Draw the element outlines coloured by level");
   r->add_flag("--forces", o.forces,
               "Draw the contact force on each manipulator (averaged over the frame) as an arrow, with a legend in N");
@@ -23,7 +24,9 @@ CLI::App* addRenderCommand(CLI::App& app, RenderCommandOptions& o) {
   r->add_option("--yaw", o.yaw, "Camera yaw about +y [rad] (0 = looking along -z)");
   r->add_option("--pitch", o.pitch, "Camera pitch above the horizon [rad]");
   r->add_option("--zoom", o.zoom, "Camera zoom factor (> 1 = closer)")->capture_default_str();
-  r->add_option("--stress-scale", o.stressScale, "Stress drawn darkest [-]")->capture_default_str();
+  r->add_option("--stress-scale", o.stressScale,
+                "Von Mises stress drawn darkest [Pa]; 0 = auto (5 % strain of the stiffest material)")
+      ->capture_default_str();
   r->add_option(
        "--export", o.exportFormat,
        "Also write the drawn surface per frame (the embedded mesh when it is drawn, else the display surface): "

@@ -11,6 +11,7 @@ set(GRADEL_CORE_SOURCES
   src/contact_work.cpp
   src/divergence.cpp
   src/element.cpp
+  src/element_strain.cpp
   src/coarse_space.cpp
   src/element_stiffness.cpp
   src/element_stage.cpp
@@ -110,6 +111,7 @@ set(GRADEL_TEST_SOURCES
   tests/test_start_overlap.cpp
   tests/test_dynamics.cpp
   tests/test_element.cpp
+  tests/test_element_strain.cpp
   tests/test_element_stiffness.cpp
   tests/test_element_stage.cpp
   tests/test_embedding.cpp

@@ -52,7 +52,7 @@ def main():
         sim.advance_to(t)
         centre = positions.mean(axis=0)
         print(f"t = {sim.time:5.3f} s  centre = ({centre[0]:+.3f}, {centre[1]:+.3f}, {centre[2]:+.3f}) m  "
-              f"max stress = {sim.stress.max():.4f}")
+              f"max von Mises stress = {sim.stress.max():.1f} Pa")
 
     vertices, triangles, normals = sim.surface("smooth")
     m = sim.metrics()

@@ -360,7 +360,8 @@ const BodyRange& bodyRange(Simulation& s, size_t body) {
 py::dict metricsDict(Metrics x, bool finite) {
   if (!finite) {  // NaN spreads honestly: no min/max over NaN that hides it
     const Real nan = std::numeric_limits<Real>::quiet_NaN();
-    x.kineticEnergy = x.elasticEnergy = x.gravityEnergy = x.maxStress = x.maxPenetration = x.minElementDet = nan;
+    x.kineticEnergy = x.elasticEnergy = x.gravityEnergy = x.maxStress = x.maxStrain = x.maxPenetration = x.minElementDet =
+        nan;
   }
   py::dict d;
   d["time"] = x.time;
@@ -369,7 +370,8 @@ py::dict metricsDict(Metrics x, bool finite) {
   d["gravity_energy"] = x.gravityEnergy;
   d["linear_momentum"] = std::vector<double>{x.linearMomentum.x(), x.linearMomentum.y(), x.linearMomentum.z()};
   d["angular_momentum"] = std::vector<double>{x.angularMomentum.x(), x.angularMomentum.y(), x.angularMomentum.z()};
-  d["max_stress"] = x.maxStress;
+  d["max_stress"] = x.maxStress;  // [Pa] von Mises
+  d["max_strain"] = x.maxStrain;  // [-]
   d["max_penetration"] = x.maxPenetration;
   d["min_element_det"] = x.minElementDet;
   return d;
@@ -861,12 +863,30 @@ PYBIND11_MODULE(gradel, m) {
             WorldLock lock(s);
             return realArray(s.world().vertexStress());
           },
-          "Per-vertex stress [-] (mean of its elements' stress).")
-      .def_property_readonly("element_stress",
-                             [](Simulation& s) {
-                               WorldLock lock(s);
-                               return realArray(s.world().elementStress());
-                             })
+          "Per-vertex von Mises stress [Pa] (mean of its elements'; Poisson's ratio 0, the engine's material).")
+      .def_property_readonly(
+          "element_stress",
+          [](Simulation& s) {
+            WorldLock lock(s);
+            return realArray(s.world().elementStress());
+          },
+          "Per-element von Mises stress [Pa]: the element's small strain about its best-fit rotation in its "
+          "region's material (Young's modulus, Poisson's ratio 0).")
+      .def_property_readonly(
+          "strain",
+          [](Simulation& s) {
+            WorldLock lock(s);
+            return realArray(s.world().vertexStrain());
+          },
+          "Per-vertex strain measure [-] (mean of its elements' element_strain).")
+      .def_property_readonly(
+          "element_strain",
+          [](Simulation& s) {
+            WorldLock lock(s);
+            return realArray(s.world().elementStrain());
+          },
+          "Per-element strain measure [-]: RMS of |M R0_i - r_i| over its vertices divided by the element's size "
+          "(the paper's fig. 1 measure).")
       .def_property_readonly("state_hash",
                              [](Simulation& s) {
                                WorldLock lock(s);

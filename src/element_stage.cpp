@@ -21,12 +21,15 @@ struct ElementRows {
   d4 r0, r1, r2;
 };
 
+template <bool Prefetch>
 inline ElementRows elementRows(const char* x, const StagePair* pair, uint32_t n) {
   d4 a0 = splat(0), a1 = a0, a2 = a0, b0 = a0, b1 = a0, b2 = a0;
   uint32_t i = 0;
   for (; i + 1 < n; i += 2) {
-    __builtin_prefetch(x + pair[i + kPrefetchPairs].offset);
-    __builtin_prefetch(x + pair[i + 1 + kPrefetchPairs].offset);
+    if constexpr (Prefetch) {
+      __builtin_prefetch(x + pair[i + kPrefetchPairs].offset);
+      __builtin_prefetch(x + pair[i + 1 + kPrefetchPairs].offset);
+    }
     const Real* p = reinterpret_cast<const Real*>(x + pair[i].offset);
     const Real* q = reinterpret_cast<const Real*>(x + pair[i + 1].offset);
     const d4 u = loadInt16x4(pair[i].lattice), w = loadInt16x4(pair[i + 1].lattice);
@@ -34,7 +37,7 @@ inline ElementRows elementRows(const char* x, const StagePair* pair, uint32_t n)
     b0 += q[0] * w, b1 += q[1] * w, b2 += q[2] * w;
   }
   if (i < n) {
-    __builtin_prefetch(x + pair[i + kPrefetchPairs].offset);
+    if constexpr (Prefetch) __builtin_prefetch(x + pair[i + kPrefetchPairs].offset);
     const Real* p = reinterpret_cast<const Real*>(x + pair[i].offset);
     const d4 u = loadInt16x4(pair[i].lattice);
     a0 += p[0] * u, a1 += p[1] * u, a2 += p[2] * u;
@@ -45,7 +48,7 @@ inline ElementRows elementRows(const char* x, const StagePair* pair, uint32_t n)
 }  // namespace
 
 ElementStageRest::ElementStageRest(const RestModel& m)
-    : elements(m.numElements()), pairs(m.numPairs() + kPrefetchPairs, StagePair{{0, 0, 0, 0}, 0}) {
+    : groups((m.numElements() + 3) / 4, ElementConstantGroup{}), pairs(m.numPairs() + kPrefetchPairs, StagePair{{0, 0, 0, 0}, 0}) {
   const size_t V = m.numVertices(), E = m.numElements();
   // Pairs and the vertex gather hold 32-bit byte offsets (vertex * 24, element * 128).
   if (V > UINT32_MAX / sizeof(Vec3) || E > UINT32_MAX / sizeof(ElementFrame))
@@ -78,11 +81,12 @@ ElementStageRest::ElementStageRest(const RestModel& m)
     c /= Real(n);
     for (uint32_t p = b; p < b + n; ++p) residue += m.restPositions[m.elemVerts[p]] - c;
     residue /= Real(n);
-    ElementConstants& k = elements[e];
-    for (int a = 0; a < 3; ++a) k.sumLattice[a] = sum[a], k.restCentroid[a] = c[a], k.meanRestOffset[a] = residue[a];
-    k.meanRestOffset[3] = 0;
-    k.invCount = 1.0 / Real(n);
-    k.stiffness = m.stiffness[e];
+    ElementConstantGroup& k = groups[e / 4];
+    const size_t l = e % 4;
+    for (int a = 0; a < 3; ++a)
+      k.sumLattice[a][l] = sum[a], k.restCentroid[a][l] = c[a], k.meanRestOffset[a][l] = residue[a];
+    k.invCount[l] = 1.0 / Real(n);
+    k.stiffness[l] = m.stiffness[e];
   }
   // Transpose element -> vertex into vertex -> elements, ascending per vertex.
   vertexStart.assign(V + 1, 0);
@@ -95,42 +99,56 @@ ElementStageRest::ElementStageRest(const RestModel& m)
       vertexFrames[fill[m.elemVerts[p]]++] = uint32_t(e * sizeof(ElementFrame));
 }
 
+ElementConstants ElementStageRest::constants(size_t e) const {
+  const ElementConstantGroup& k = groups.at(e / 4);
+  const size_t l = e % 4;
+  ElementConstants c;
+  for (int a = 0; a < 3; ++a)
+    c.sumLattice[a] = k.sumLattice[a][l], c.restCentroid[a] = k.restCentroid[a][l], c.meanRestOffset[a] = k.meanRestOffset[a][l];
+  c.invCount = k.invCount[l], c.stiffness = k.stiffness[l];
+  return c;
+}
+
 size_t ElementStageRest::memoryBytes() const {
-  return elements.capacity() * sizeof(ElementConstants) + pairs.capacity() * sizeof(StagePair) +
+  return groups.capacity() * sizeof(ElementConstantGroup) + pairs.capacity() * sizeof(StagePair) +
          (vertexStart.capacity() + vertexFrames.capacity()) * sizeof(uint32_t);
 }
 
-void computeElementFrames(const RestModel& m, const ElementStageRest& rest, size_t begin, size_t end, const Vec3* x,
-                          Quat* rotations, ElementFrame* frames, int maxIterations) {
+namespace {
+
+template <bool Prefetch>
+void elementFrames(const RestModel& m, const ElementStageRest& rest, size_t begin, size_t end, const Vec3* x,
+                   Quat* rotations, ElementFrame* frames, int maxIterations) {
   static_assert(kRotationLanes == 4, "the transposes below are 4 x 4");
   constexpr int L = kRotationLanes;
-  const ElementConstants* constants = rest.elements.data();
+  if (begin % L != 0) throw std::logic_error("computeElementFrames: begin is not a multiple of kRotationLanes");
   RotationBatch batch;
   for (size_t e0 = begin; e0 < end; e0 += L) {
     const int lanes = int(std::min<size_t>(L, end - e0));
     // 1. Rows of sum x_i (P_i, 1)^T per element, then transposed into lanes (one element per
     //    lane): S[j][k] = sum x_i[j] P_i[k], S[j][3] = sum x_i[j]. A padding lane gets rows
     //    (I, 0), sum P = 0 and q = I: A = I, which the fit leaves alone.
-    d4 S[3][4], K[12], Q[4];
+    d4 S[3][4], Q[4];
     for (int l = 0; l < L; ++l) {
       if (l >= lanes) {
         S[0][l] = d4{1, 0, 0, 0}, S[1][l] = d4{0, 1, 0, 0}, S[2][l] = d4{0, 0, 1, 0};
-        K[l] = K[4 + l] = K[8 + l] = splat(0), Q[l] = d4{0, 0, 0, 1};
+        Q[l] = d4{0, 0, 0, 1};
         continue;
       }
       const size_t e = e0 + l;
       const uint32_t b = m.elemStart[e];
-      const ElementRows r = elementRows(reinterpret_cast<const char*>(x), &rest.pairs[b], m.elemStart[e + 1] - b);
+      const ElementRows r = elementRows<Prefetch>(reinterpret_cast<const char*>(x), &rest.pairs[b], m.elemStart[e + 1] - b);
       S[0][l] = r.r0, S[1][l] = r.r1, S[2][l] = r.r2;
-      K[l] = load4(constants[e].sumLattice), K[4 + l] = load4(constants[e].restCentroid);
-      K[8 + l] = load4(constants[e].meanRestOffset);
       Q[l] = load4(rotations[e].coeffs().data());  // x, y, z, w
     }
     for (int j = 0; j < 3; ++j) transpose(S[j][0], S[j][1], S[j][2], S[j][3]);
-    transpose(K[0], K[1], K[2], K[3]);    // sum P (3 lanes), 1 / n
-    transpose(K[4], K[5], K[6], K[7]);    // C (3 lanes), k
-    transpose(K[8], K[9], K[10], K[11]);  // mean R0 (3 lanes), 0
-    transpose(Q[0], Q[1], Q[2], Q[3]);    // x, y, z, w
+    transpose(Q[0], Q[1], Q[2], Q[3]);  // x, y, z, w
+    // The constants are stored in lanes already (a padding lane's are zero).
+    const ElementConstantGroup& g = rest.groups[e0 / L];
+    d4 K[11];  // sum P (3), 1 / n, C (3), k, mean R0 (3)
+    for (int j = 0; j < 3; ++j)
+      K[j] = load4(g.sumLattice[j]), K[4 + j] = load4(g.restCentroid[j]), K[8 + j] = load4(g.meanRestOffset[j]);
+    K[3] = load4(g.invCount), K[7] = load4(g.stiffness);
     // 2. Centroid c = sum x / n and A / h = sum x P^T - c (sum P)^T.
     d4 c[3];
     for (int j = 0; j < 3; ++j) {
@@ -173,6 +191,16 @@ void computeElementFrames(const RestModel& m, const ElementStageRest& rest, size
       store4(rotations[e0 + l].coeffs().data(), q[l]);
     }
   }
+}
+
+}  // namespace
+
+void computeElementFrames(const RestModel& m, const ElementStageRest& rest, size_t begin, size_t end, const Vec3* x,
+                          Quat* rotations, ElementFrame* frames, int maxIterations) {
+  if (m.numVertices() * sizeof(Vec3) > kPrefetchAboveBytes)
+    elementFrames<true>(m, rest, begin, end, x, rotations, frames, maxIterations);
+  else
+    elementFrames<false>(m, rest, begin, end, x, rotations, frames, maxIterations);
 }
 
 }  // namespace gradel

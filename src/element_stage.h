@@ -39,13 +39,22 @@ struct alignas(32) ElementFrame {
   Real c0[4], c1[4], c2[4], t[4];
 };
 
-/// Per element, read by pass 1 four at a time (transposed into lanes): (sum_i P_i, 1 / n),
-/// (C_e [m], k_e [N/m]) and (sum_i R0_i / n [m], 0), the mean rest offset as pass 2 forms it
-/// (R0_i = X_i - C_e in floating point: a rounding residue, ~1e-16 |X|).
-struct alignas(32) ElementConstants {
+/// Per element, read by pass 1 four at a time: (sum_i P_i, 1 / n), (C_e [m], k_e [N/m]) and
+/// (sum_i R0_i / n [m], 0), the mean rest offset as pass 2 forms it (R0_i = X_i - C_e in floating
+/// point: a rounding residue, ~1e-16 |X|).
+struct ElementConstants {
   Real sumLattice[3], invCount;
   Real restCentroid[3], stiffness;
-  Real meanRestOffset[4];
+  Real meanRestOffset[3];
+};
+
+/// ElementConstants of four consecutive elements 4g .. 4g + 3, stored as pass 1 uses them: one
+/// row of four lanes (one element each) per quantity, so a batch loads its lanes without
+/// transposing. Lanes past the last element are zero.
+struct alignas(32) ElementConstantGroup {
+  Real sumLattice[3][4], invCount[4];
+  Real restCentroid[3][4], stiffness[4];
+  Real meanRestOffset[3][4];
 };
 
 /// Per element-vertex pair, in the model's pair order: the vertex (as the byte offset of its
@@ -64,12 +73,16 @@ struct StagePair {
 /// the step keeps 1e-12 (docs/speed.md, "A leaner step (issue 31)").
 constexpr Real kFrameRotationTolerance = 1e-12;
 
-/// Pass 1 prefetches the vertex of the pair this many pairs ahead (~2 batches of 4 elements).
+/// Pass 1 prefetches the vertex of the pair this many pairs ahead (~2 batches of 4 elements)...
 constexpr size_t kPrefetchPairs = 128;
+/// ... when the positions take more than this many bytes: smaller ones stay in the caches, where
+/// the out-of-order core overlaps the gathers by itself and a prefetch is three instructions a
+/// pair for nothing (paper setting, sphere n = 32, 7,037 vertices).
+constexpr size_t kPrefetchAboveBytes = size_t(2) << 20;
 
 /// Rest data of the two passes, derived once from the RestModel.
 struct ElementStageRest {
-  std::vector<ElementConstants> elements;
+  std::vector<ElementConstantGroup> groups;  ///< Element e's constants: lane e % 4 of groups[e / 4].
   /// The model's pairs, then kPrefetchPairs padding pairs (vertex 0) for the prefetch to read.
   /// std::logic_error when a rest position is off the model's voxel lattice, or when the model
   /// is too large for 32-bit byte offsets (over ~178 M vertices or ~33 M elements).
@@ -78,11 +91,13 @@ struct ElementStageRest {
   std::vector<uint32_t> vertexFrames;  ///< The elements of each vertex, ascending, as frame byte offsets (e * 128).
 
   explicit ElementStageRest(const RestModel& model);
+  ElementConstants constants(size_t e) const;  ///< Element e's lane, gathered (tests).
   size_t memoryBytes() const;
 };
 
 /// Pass 1 over elements [begin, end): updates their rotations (warm start in, fit out) and writes
-/// their frames. maxIterations bounds the 3D rotation refinement (as fitRotation3).
+/// their frames. maxIterations bounds the 3D rotation refinement (as fitRotation3). begin must be
+/// a multiple of kRotationLanes (the constants' groups; std::logic_error otherwise).
 void computeElementFrames(const RestModel& model, const ElementStageRest& rest, size_t begin, size_t end,
                           const Vec3* positions, Quat* rotations, ElementFrame* frames, int maxIterations);
 

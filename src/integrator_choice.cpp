@@ -36,7 +36,7 @@ const char* periodRuleName(PeriodRule r) {
   return r == PeriodRule::Element ? "element" : "vertex";
 }
 
-Real defaultDtFraction(PeriodRule r) { return r == PeriodRule::Operator ? 0.2 : 0.1; }
+Real defaultDtFraction(PeriodRule r) { return r == PeriodRule::Operator ? 0.175 : 0.1; }
 Real maxDtFraction(PeriodRule r) { return r == PeriodRule::Element ? 0.1 : 0.3; }
 
 

@@ -130,12 +130,15 @@ std::string frameFileName(size_t index, const std::string& body) {
 }
 
 void writeVtu(const fs::path& file, const RestModel& model, const State& state, const std::vector<Real>& vertexStress,
-              const std::vector<Real>& elementStress, VtkEncoding encoding) {
-  writeVtu(file, model, state, wholeModelBody(model), vertexStress, elementStress, encoding);
+              const std::vector<Real>& elementStress, VtkEncoding encoding, const std::vector<Real>& vertexStrain,
+              const std::vector<Real>& elementStrain) {
+  writeVtu(file, model, state, wholeModelBody(model), vertexStress, elementStress, encoding, vertexStrain,
+           elementStrain);
 }
 
 void writeVtu(const fs::path& file, const RestModel& model, const State& state, const BodyRange& body,
-              const std::vector<Real>& vertexStress, const std::vector<Real>& elementStress, VtkEncoding encoding) {
+              const std::vector<Real>& vertexStress, const std::vector<Real>& elementStress, VtkEncoding encoding,
+              const std::vector<Real>& vertexStrain, const std::vector<Real>& elementStrain) {
   const size_t NV = model.numVertices(), NE = model.numElements();
   if (state.positions.size() != NV || state.velocities.size() != NV)
     throw std::invalid_argument("writeVtu: state does not match the model's vertex count");
@@ -143,6 +146,10 @@ void writeVtu(const fs::path& file, const RestModel& model, const State& state, 
     throw std::invalid_argument("writeVtu: vertexStress must be empty or have one value per vertex");
   if (!elementStress.empty() && elementStress.size() != NE)
     throw std::invalid_argument("writeVtu: elementStress must be empty or have one value per element");
+  if (!vertexStrain.empty() && vertexStrain.size() != NV)
+    throw std::invalid_argument("writeVtu: vertexStrain must be empty or have one value per vertex");
+  if (!elementStrain.empty() && elementStrain.size() != NE)
+    throw std::invalid_argument("writeVtu: elementStrain must be empty or have one value per element");
   if (model.elemStart.size() != NE + 1 || model.level.size() != NE)
     throw std::invalid_argument("writeVtu: inconsistent rest model");
   if (body.vertexBegin > body.vertexEnd || body.vertexEnd > NV || body.elementBegin > body.elementEnd ||
@@ -183,6 +190,7 @@ void writeVtu(const fs::path& file, const RestModel& model, const State& state, 
     return all.empty() ? std::vector<double>() : std::vector<double>(all.begin() + from, all.begin() + from + n);
   };
   const std::vector<double> pointStress = slice(vertexStress, v0, nv), cellStress = slice(elementStress, e0, ne);
+  const std::vector<double> pointStrain = slice(vertexStrain, v0, nv), cellStrain = slice(elementStrain, e0, ne);
   const std::vector<uint8_t> level(model.level.begin() + e0, model.level.begin() + e0 + ne);
 
   std::string out;
@@ -195,6 +203,7 @@ void writeVtu(const fs::path& file, const RestModel& model, const State& state, 
                               : "      <PointData Scalars=\"stress\" Vectors=\"velocity\">\n";
   appendDataArray(out, "velocity", 3, velocity, encoding);
   if (!vertexStress.empty()) appendDataArray(out, "stress", 1, pointStress, encoding);
+  if (!vertexStrain.empty()) appendDataArray(out, "strain", 1, pointStrain, encoding);
   out += "      </PointData>\n";
   out += "      <CellData Scalars=\"level\">\n";
   appendDataArray(out, "level", 1, level, encoding);
@@ -206,6 +215,7 @@ void writeVtu(const fs::path& file, const RestModel& model, const State& state, 
     appendDataArray(out, "region", 1, region, encoding);
   }
   if (!elementStress.empty()) appendDataArray(out, "element_stress", 1, cellStress, encoding);
+  if (!elementStrain.empty()) appendDataArray(out, "element_strain", 1, cellStrain, encoding);
   out += "      </CellData>\n";
   out += "      <Points>\n";
   appendDataArray(out, "position", 3, points, encoding);
@@ -249,7 +259,7 @@ std::string MetricsCsv::header(size_t manipulators, bool bodyColumn) {
   for (size_t k = 0; k < manipulators; ++k) forceColumns("m" + std::to_string(k) + "_");
   forceColumns("wall_");
   for (int w = 0; w < kWalls; ++w) forceColumns(std::string("wall_") + wallName(w) + "_");  // per wall (contacts.h)
-  return h;
+  return h + ",max_strain";  // last: the columns before it kept their places when it came (issue 28)
 }
 
 std::string MetricsCsv::row(const std::string& body, const Metrics& m, size_t manipulators, bool forces) {
@@ -286,11 +296,12 @@ std::string MetricsCsv::row(const Metrics& m, size_t manipulators, bool forces) 
   };
   if (!forces) {
     out.append(6 * (manipulators + 1 + kWalls), ',');
-    return out;
+  } else {
+    for (const ContactForce& f : cf.manipulators) appendForce(f);
+    appendForce(cf.walls);
+    for (const ContactForce& f : cf.wall) appendForce(f);
   }
-  for (const ContactForce& f : cf.manipulators) appendForce(f);
-  appendForce(cf.walls);
-  for (const ContactForce& f : cf.wall) appendForce(f);
+  out += ',', appendNumber(out, m.maxStrain);
   return out;
 }
 

@@ -103,7 +103,7 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   adviseHugePages(m.elemVerts), adviseHugePages(m.restOffsets), adviseHugePages(m.elemStart),
       adviseHugePages(m.stiffness);
   adviseHugePages(stageRest_->vertexFrames), adviseHugePages(stageRest_->vertexStart);
-  adviseHugePages(stageRest_->elements), adviseHugePages(stageRest_->pairs);
+  adviseHugePages(stageRest_->groups), adviseHugePages(stageRest_->pairs);
 
   vertexStiffness_ = vertexStiffness(m);  // the contacts' work (contact_work.h)
   for (ManipulatorSettings& s : manipulators) addManipulator(std::move(s));

@@ -1,15 +1,22 @@
-// World's figures (world.h Metrics): energies, momenta, stress, penetration, per body and
-// combined, and the per-element and per-vertex stress.
+// World's figures (world.h Metrics): energies, momenta, stress, strain, penetration, per body
+// and combined, and the per-element and per-vertex stress and strain.
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
 #include "gradel/element.h"
+#include "gradel/element_strain.h"
 #include "step_context.h"
 
 namespace gradel {
 
-std::vector<Real> World::elementStress() const {
+std::vector<Real> World::elementStress(Real poissonRatio) const {
+  return elementVonMisesStress(*model_, state_.positions, state_.rotations, poissonRatio);
+}
+
+std::vector<Real> World::vertexStrain() const { return vertexStress(elementStrain()); }
+
+std::vector<Real> World::elementStrain() const {
   const RestModel& m = *model_;
   std::vector<Real> s(m.numElements());
   std::vector<Vec3> f;
@@ -38,8 +45,8 @@ std::vector<Real> World::vertexStress(const std::vector<Real>& elementStress) co
   return sum;
 }
 
-Metrics World::metrics(std::vector<Real>* elementStress) const {
-  Metrics r = combineMetrics(bodyMetrics(elementStress));
+Metrics World::metrics(std::vector<Real>* elementStress, std::vector<Real>* elementStrain) const {
+  Metrics r = combineMetrics(bodyMetrics(elementStress, elementStrain));
   r.contactForces = averageContactForces();  // the world's: what all bodies exert together
   return r;
 }
@@ -52,20 +59,23 @@ Metrics combineMetrics(const std::vector<Metrics>& each) {
     r.kineticEnergy += b.kineticEnergy, r.elasticEnergy += b.elasticEnergy, r.gravityEnergy += b.gravityEnergy;
     r.shadowEnergy += b.shadowEnergy;
     r.linearMomentum += b.linearMomentum, r.angularMomentum += b.angularMomentum;
-    r.maxStress = std::max(r.maxStress, b.maxStress), r.maxPenetration = std::max(r.maxPenetration, b.maxPenetration);
+    r.maxStress = std::max(r.maxStress, b.maxStress), r.maxStrain = std::max(r.maxStrain, b.maxStrain);
+    r.maxPenetration = std::max(r.maxPenetration, b.maxPenetration);
     r.minElementDet = std::min(r.minElementDet, b.minElementDet);
   }
   return r;
 }
 
-std::vector<Metrics> World::bodyMetrics(std::vector<Real>* elementStress) const {
+std::vector<Metrics> World::bodyMetrics(std::vector<Real>* elementStress, std::vector<Real>* elementStrain) const {
   if (elementStress) elementStress->assign(model_->numElements(), 0.0);
+  if (elementStrain) elementStrain->assign(model_->numElements(), 0.0);
   std::vector<Metrics> r;
-  for (const BodyRange& b : model_->bodies) r.push_back(metricsOf(b, elementStress));
+  for (const BodyRange& b : model_->bodies) r.push_back(metricsOf(b, elementStress, elementStrain));
   return r;
 }
 
-Metrics World::metricsOf(const BodyRange& body, std::vector<Real>* elementStress) const {
+Metrics World::metricsOf(const BodyRange& body, std::vector<Real>* elementStress,
+                         std::vector<Real>* elementStrain) const {
   const RestModel& m = *model_;
   Metrics r;
   r.time = state_.time;
@@ -84,7 +94,10 @@ Metrics World::metricsOf(const BodyRange& body, std::vector<Real>* elementStress
                                            m.stiffness[e], q, f.data(), 20);
     for (uint32_t i = 0; i < n; ++i) forces[m.elemVerts[b + i] - v0] += f[i];
     r.elasticEnergy += er.energy;
-    const Real stress = std::sqrt(er.sumSqDisp / n) / m.size[e];
+    const Real strain = std::sqrt(er.sumSqDisp / n) / m.size[e];
+    if (elementStrain) (*elementStrain)[e] = strain;
+    r.maxStrain = std::max(r.maxStrain, strain);
+    const Real stress = elementVonMises(m, state_.positions.data(), e, q, 0);  // q: the fit just made
     if (elementStress) (*elementStress)[e] = stress;
     r.maxStress = std::max(r.maxStress, stress);
     r.minElementDet = std::min(r.minElementDet, elementDeterminant(m.dim, state_.positions.data(), &m.elemVerts[b],

@@ -324,8 +324,10 @@ TEST(MultiBodyScene, RunWritesPerBodyFramesPvdPartsAndMetricsRows) {
     EXPECT_EQ(rows[3 * f + 1][0], "body1");
     EXPECT_EQ(rows[3 * f + 2][0], "all");
     // The walls' force columns: filled on the "all" row only (forces are the world's).
-    EXPECT_EQ(rows[3 * f + 2].size(), 21u + 36u);  // the walls together, then each of the six
-    for (size_t c = 15; c < rows[3 * f].size(); ++c) EXPECT_EQ(rows[3 * f][c], "") << c;
+    EXPECT_EQ(rows[3 * f + 2].size(), 21u + 36u + 1u);  // the walls together, each of the six, max_strain
+    ASSERT_EQ(rows[3 * f].size(), rows[3 * f + 2].size());
+    for (size_t c = 15; c + 1 < rows[3 * f].size(); ++c) EXPECT_EQ(rows[3 * f][c], "") << c;
+    EXPECT_GE(std::stod(rows[3 * f].back()), 0);  // max_strain: every row has its own
     // px (column 5): the ball moves at +0.5 m/s, the box is pinned on one face and moves at -0.5
     // m/s elsewhere; the total is their sum.
     const double a = std::stod(rows[3 * f][5]), b = std::stod(rows[3 * f + 1][5]), all = std::stod(rows[3 * f + 2][5]);

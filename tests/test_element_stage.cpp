@@ -124,7 +124,7 @@ TEST(ElementStageRest, RestCentroidsAndLatticeOffsetsReproduceTheRestOffsets) {
     size_t mismatches = 0;
     Real worst = 0;
     for (size_t e = 0; e < m.numElements(); ++e) {
-      const ElementConstants& k = rest.elements[e];
+      const ElementConstants k = rest.constants(e);
       const Vec3 C(k.restCentroid[0], k.restCentroid[1], k.restCentroid[2]);
       const Vec3 meanP = Vec3(k.sumLattice[0], k.sumLattice[1], k.sumLattice[2]) * k.invCount;
       EXPECT_EQ(k.stiffness, m.stiffness[e]);

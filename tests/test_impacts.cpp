@@ -145,7 +145,10 @@ void expectSafe(const Impact& c, Real allowance, const char* what) {
 
 // The issue's scene: two 16^3 balls (5 mm voxels, E = 1e5 Pa) head on at 4, 10 and 20 m/s, at the
 // default step (dt_fraction 0.1 of the vertex period) and at 2.5x it (0.25). Before the fix the
-// energy rose x1e5 at 4 m/s and the run diverged.
+// energy rose x1e5 at 4 m/s and the run diverged. 10 m/s (measured 2026-11-27): peak 1.0000x and
+// 0.9951x, momentum 2e-14, min det 0.64 once parted, 2 and 9 steps taken back; before every
+// finding deeper than kTakeBackDepth was asked of the winding number the last resort took the
+// balls back in 688 of 776 steps and an element ended inverted (this file's earlier note).
 class HeadOn : public ::testing::TestWithParam<std::tuple<Real, Real>> {};
 TEST_P(HeadOn, NeverInventsEnergy) {
   Impact c;
@@ -153,13 +156,16 @@ TEST_P(HeadOn, NeverInventsEnergy) {
   c.dtFraction = std::get<1>(GetParam());
   expectSafe(c, 0.02, "head on");
 }
-INSTANTIATE_TEST_SUITE_P(Impacts, HeadOn, ::testing::Combine(::testing::Values(4.0), ::testing::Values(0.1, 0.25)));
+INSTANTIATE_TEST_SUITE_P(Impacts, HeadOn,
+                         ::testing::Combine(::testing::Values(4.0, 10.0), ::testing::Values(0.1, 0.25)));
 
-// Not met yet (issue 26; disabled): at 10 m/s (dt_fraction 0.1) the energy holds (peak 1.0000x,
-// momentum 5e-15) but the pair's staircases interlock deeper than kTakeBackDepth and the last
-// resort takes them back every step (688 of 776): stuck, an element inverted (det -0.08). 20 m/s,
-// the stiff box into the soft ball (8 m/s: peak 1.001x, stuck the same way) and the glancing hit
-// were not measured to the end; the property below runs them all.
+// Not met yet (issue 26; disabled): at 20 m/s (dt_fraction 0.1) the energy holds (0.91x at
+// 40 ms) but elements invert within 1.5 ms of the touch (min det -0.65, before any take-back), and
+// from 6 ms on the last resort takes the balls back to the step's start in every step: the
+// inverted elements drive the same vertices 2 voxels into the other ball from the same start, the
+// winding number confirms it, and the state no longer moves (stuck; impulses on the tried
+// contacts at the start's positions did not free it). The stiff box into the soft ball and the
+// glancing hit were not measured to the end; the property below runs them all.
 class HeadOnFast : public ::testing::TestWithParam<std::tuple<Real, Real>> {};
 TEST_P(HeadOnFast, DISABLED_NeverInventsEnergy) {
   Impact c;
@@ -168,7 +174,7 @@ TEST_P(HeadOnFast, DISABLED_NeverInventsEnergy) {
   expectSafe(c, 0.02, "head on");
 }
 INSTANTIATE_TEST_SUITE_P(Impacts, HeadOnFast,
-                         ::testing::Combine(::testing::Values(10.0, 20.0), ::testing::Values(0.1, 0.25)));
+                         ::testing::Combine(::testing::Values(20.0), ::testing::Values(0.1, 0.25)));
 
 // A stiff box (E = 1e7) thrown at a soft ball at rest (E = 1e4), and a glancing hit of two balls
 // (offset half the sum of the radii, with friction).

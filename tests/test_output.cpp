@@ -150,7 +150,8 @@ TEST_F(OutputTest, WriteVtuBinaryDecodesToModelAndState) {
   const RestModel m = twoElements2d();
   const State s = stateOf(m);
   const std::vector<Real> vstress = {0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6}, estress = {1.5, 2.5};
-  writeVtu(root_ / "f.vtu", m, s, vstress, estress);
+  const std::vector<Real> vstrain = {7, 6, 5, 4, 3, 2, 1}, estrain = {0.25, 0.75};
+  writeVtu(root_ / "f.vtu", m, s, vstress, estress, VtkEncoding::Base64, vstrain, estrain);
   const std::string xml = readFile(root_ / "f.vtu");
   EXPECT_NE(xml.find("type=\"UnstructuredGrid\""), std::string::npos);
   EXPECT_NE(xml.find("NumberOfPoints=\"7\" NumberOfCells=\"2\""), std::string::npos);
@@ -165,6 +166,8 @@ TEST_F(OutputTest, WriteVtuBinaryDecodesToModelAndState) {
   EXPECT_EQ(vel[3 * 5 + 1], -1.0 / 3.0);  // exact: binary keeps every bit
   EXPECT_EQ(decodeBinary<double>(xml, "stress"), vstress);
   EXPECT_EQ(decodeBinary<double>(xml, "element_stress"), estress);
+  EXPECT_EQ(decodeBinary<double>(xml, "strain"), vstrain);  // the dimensionless measure, its own name
+  EXPECT_EQ(decodeBinary<double>(xml, "element_strain"), estrain);
   EXPECT_EQ(decodeBinary<uint8_t>(xml, "level"), (std::vector<uint8_t>{0, 1}));
   EXPECT_EQ(decodeBinary<int64_t>(xml, "element_id"), (std::vector<int64_t>{0, 1}));
   EXPECT_EQ(decodeBinary<int64_t>(xml, "offsets"), (std::vector<int64_t>{4, 9}));
@@ -182,6 +185,7 @@ TEST_F(OutputTest, WriteVtuAsciiMatchesBinary) {
   EXPECT_NE(xml.find("format=\"ascii\""), std::string::npos);
   EXPECT_EQ(xml.find("format=\"binary\""), std::string::npos);
   EXPECT_EQ(xml.find("Name=\"stress\""), std::string::npos);               // no stress given, none written
+  EXPECT_EQ(xml.find("Name=\"strain\""), std::string::npos);
   EXPECT_EQ(decodeAscii<double>(xml, "velocity")[3 * 2 + 1], -1.0 / 3.0);  // shortest round-trip text
   EXPECT_EQ(decodeAscii<int64_t>(xml, "connectivity"), (std::vector<int64_t>{0, 1, 3, 4, 1, 2, 4, 5, 6}));
   EXPECT_EQ(decodeAscii<int>(xml, "types"), (std::vector<int>{kVtkConvexPointSet, kVtkConvexPointSet}));
@@ -191,6 +195,7 @@ TEST_F(OutputTest, WriteVtuSizeMismatchThrows) {
   const RestModel m = twoElements2d();
   State s = stateOf(m);
   EXPECT_THROW(writeVtu(root_ / "x.vtu", m, s, {1.0, 2.0}), std::invalid_argument);
+  EXPECT_THROW(writeVtu(root_ / "x.vtu", m, s, {}, {}, VtkEncoding::Base64, {}, {1.0}), std::invalid_argument);
   s.velocities.pop_back();
   EXPECT_THROW(writeVtu(root_ / "x.vtu", m, s, {}), std::invalid_argument);
 }
@@ -303,6 +308,8 @@ TEST_F(OutputTest, MetricsCsvHeaderAndRowsRoundTrip) {
   a.linearMomentum = Vec3(1, 2, 3);
   a.angularMomentum = Vec3(-4, 5e-300, 6);
   a.minElementDet = -0.5;
+  a.maxStress = 2500.0;
+  a.maxStrain = 0.25;
   {
     MetricsCsv csv(root_ / "metrics.csv");
     csv.append(a);
@@ -318,18 +325,20 @@ TEST_F(OutputTest, MetricsCsvHeaderAndRowsRoundTrip) {
   EXPECT_EQ(header,
             "time,kinetic_energy,elastic_energy,gravity_energy,px,py,pz,Lx,Ly,Lz,max_stress,max_penetration,"
             "max_contact_depth,min_element_det,wall_fx,wall_fy,wall_fz,wall_tx,wall_ty,wall_tz" +
-                std::string(kPerWallColumns));
+                std::string(kPerWallColumns) + ",max_strain");
   std::vector<double> values;
   std::istringstream cells(row1);
   for (std::string cell; std::getline(cells, cell, ',');) values.push_back(std::stod(cell));
-  ASSERT_EQ(values.size(), 20u + 36u);
+  ASSERT_EQ(values.size(), 20u + 36u + 1u);
+  EXPECT_EQ(values[10], 2500.0);  // max_stress [Pa]
+  EXPECT_EQ(values.back(), 0.25);  // max_strain [-], last
   EXPECT_EQ(values[0], 0.1);
   EXPECT_EQ(values[1], 1.0 / 3.0);  // full precision
   EXPECT_EQ(values[6], 3.0);
   EXPECT_EQ(values[8], 5e-300);
   EXPECT_EQ(values[13], -0.5);
   std::string zeros = "0";
-  for (int i = 1; i < 20 + 36; ++i) zeros += ",0";  // the per-wall forces too
+  for (int i = 1; i < 20 + 36 + 1; ++i) zeros += ",0";  // the per-wall forces and max_strain too
   EXPECT_EQ(row2, zeros);
 }
 

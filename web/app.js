@@ -177,7 +177,8 @@ void main() {
       resetRates();
     }
     function applyView() {
-      demo.setView(Number($('surface').value), $('stress').checked, $('wireframe').checked, 0.05);
+      // Stress scale 0: auto (the legend in Pa, 5 % strain of the stiffest material darkest).
+      demo.setView(Number($('surface').value), $('stress').checked, $('wireframe').checked, 0);
     }
 
     for (const name of ['strike', 'grasp-wall', 'grasp-two', 'play'])
@@ -185,6 +186,8 @@ void main() {
     $('reset').addEventListener('click', () => loadScene(sceneName));
     $('pause').addEventListener('click', () => setPaused(!paused));
     $('reframe').addEventListener('click', () => reframe());
+    $('follow').addEventListener('change', () => demo.setFollow($('follow').checked));
+    demo.setFollow($('follow').checked);
     window.addEventListener('keydown', (e) => {
       if ((e.key === 'f' || e.key === 'F') && !(e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement)) reframe();
     });
@@ -230,7 +233,7 @@ void main() {
       $('fig-elements').textContent = demo.elements();
       $('fig-vertices').textContent = demo.vertices();
       $('fig-time').textContent = demo.time().toFixed(3) + ' s / ' + (demo.dt() * 1e3).toFixed(3) + ' ms';
-      $('fig-stress').textContent = demo.maxStress().toFixed(4);
+      $('fig-stress').textContent = demo.maxStressText();
       $('fig-com').textContent = Array.from(c, (v) => v.toFixed(4)).join(' ');
       if (behind && !paused) status('cannot keep up: the simulation runs slower than real time', 'behind');
       else if ($('status').className === 'behind') status('');

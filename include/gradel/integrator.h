@@ -26,26 +26,24 @@ IntegratorKind parseIntegratorKind(const std::string& name);
 const char* integratorKindName(IntegratorKind k);
 
 /// What "the smallest period" means for dt = auto.
-/// Operator (opt-in, dt_period "operator"): 2 pi / omega_max, the fastest vibration of the assembled body at rest
+/// Operator (default): 2 pi / omega_max, the fastest vibration of the assembled body at rest
 ///   (stability.h: Lanczos on M^-1 K, hanging vertices and regions included). Symplectic Euler is
-///   stable while omega_max dt < 2, i.e. dt_fraction < 1/pi = 0.318; the default 0.2 keeps
-///   omega_max dt = 1.26, 2.00-2.10x the vertex rule's steps on the shipped scenes. Not yet the
-///   default (docs/scenes.md): at 0.2 every shipped scene and the validation suite hold (energy
-///   measured with symplectic Euler's modified energy, Metrics::totalEnergy), but of the 161 of 388
-///   tests run at it (the suites up to LargeStep), 4 fail besides the golden hashes:
-///   kept body-contact tracks part from detection from scratch (they hold when the tracks are
-///   rebuilt in every round after the first), pressed balls need the last resort, one case of the
-///   contact-energy property rises, and the floor's force on a resting cube misses its first-order
-///   c dt tolerance.
-/// Vertex (default): the period of the stiffest vertex with all its elements (a bound 0-15 % above
-///   the operator's omega_max); dt = T/10 keeps omega dt ~ 0.6 for every mode.
+///   stable while omega_max dt < 2, i.e. dt_fraction < 1/pi = 0.318 of a linear body at rest; the
+///   default 0.175 keeps omega_max dt = 1.10, ~1.8x the vertex rule's steps on the shipped scenes.
+///   0.175 by measurement (docs/scenes.md, dt_fraction): a body squeezed between obstacles and
+///   walls stiffens above its rest operator, and the contact-energy property's worst case found
+///   pumps energy from 0.2 (holds to 0.19); 100 property cases hold at 0.175.
+/// Vertex: the period of the stiffest vertex with all its elements (a bound 0-15 % above the
+///   operator's omega_max); dt = T/10 keeps omega dt ~ 0.6 for every mode (the default before
+///   issue 25).
 /// Element: the paper's rule (sec. 3.4), the period of the smallest element on its own. A vertex
 ///   shared by n elements vibrates ~sqrt(n) times faster, so dt = T/10 lands at omega dt ~ 1.8,
-///   just inside symplectic Euler's stability limit of 2: stable but with large energy swings.
+///   just inside symplectic Euler's stability limit of 2: stable but with large energy swings
+///   (scenes/paper-table1.json asks for it).
 enum class PeriodRule { Operator, Vertex, Element };
 PeriodRule parsePeriodRule(const std::string& name);  ///< "operator" | "vertex" | "element"
 const char* periodRuleName(PeriodRule r);
-/// dt_fraction when none is given (SimulationSettings::dtFraction = 0): operator 0.2, vertex and element the
+/// dt_fraction when none is given (SimulationSettings::dtFraction = 0): operator 0.175, vertex and element the
 /// paper's 0.1.
 Real defaultDtFraction(PeriodRule r);
 /// The largest dt_fraction accepted with a rule: where symplectic Euler is still stable with a
@@ -87,7 +85,7 @@ struct SimulationSettings {
   IntegratorKind integrator = IntegratorKind::SymplecticEuler;
   Real dt = 0;  ///< [s] time step; 0 = auto: dtFraction of the smallest period (dtPeriod).
   Real dtFraction = 0;  ///< [-] used when dt is auto, up to maxDtFraction(dtPeriod); 0 = defaultDtFraction(dtPeriod).
-  PeriodRule dtPeriod = PeriodRule::Vertex;  ///< Which smallest period dt = auto refers to (docs/scenes.md).
+  PeriodRule dtPeriod = PeriodRule::Operator;  ///< Which smallest period dt = auto refers to (docs/scenes.md).
   Real damping = 0.0;         ///< [1/s] velocity damping rate c: v <- v / (1 + c dt) every step (never adds energy).
   Vec3 gravity{0, -9.81, 0};  ///< [m/s^2]
   int threads = hardwareThreads();  ///< Worker threads (results are identical at any count).

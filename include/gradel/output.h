@@ -30,20 +30,24 @@ inline constexpr uint8_t kVtkConvexPointSet = 41;  ///< 3D elements.
 ///                VTK_POLYGON with the vertices in angular order about the element's rest
 ///                centroid, which traces the region's outline (every vertex of a 2D element
 ///                lies on its outline, layout.h).
-///   point data   "velocity" [m/s] (3 components), "stress" [-] (vertexStress, may be empty)
-///   cell data    "level", "element_id", and "stress" [-] when elementStress is given
+///   point data   "velocity" [m/s] (3 components), "stress" [Pa] (von Mises, World::vertexStress)
+///                and "strain" [-] (World::vertexStrain), each when given
+///   cell data    "level", "element_id", "region" (several materials), and "element_stress" [Pa]
+///                and "element_strain" [-] when given
 /// Throws std::invalid_argument on size mismatches, IoError (path and reason) on I/O errors.
 void writeVtu(const std::filesystem::path& file, const RestModel& model, const State& state,
               const std::vector<Real>& vertexStress, const std::vector<Real>& elementStress = {},
-              VtkEncoding encoding = VtkEncoding::Base64);
+              VtkEncoding encoding = VtkEncoding::Base64, const std::vector<Real>& vertexStrain = {},
+              const std::vector<Real>& elementStrain = {});
 
 /// The same for one body of a model of several (RestModel::bodies, bodies.h): its vertices and
 /// elements only, vertex ids from 0 within the body, "element_id" the element's index within the
-/// body. vertexStress / elementStress hold every vertex / element of the model (or are empty).
+/// body. vertexStress / elementStress (and the strains) hold every vertex / element of the model (or are empty).
 /// writeVtu above is this with one body covering the whole model.
 void writeVtu(const std::filesystem::path& file, const RestModel& model, const State& state, const BodyRange& body,
               const std::vector<Real>& vertexStress, const std::vector<Real>& elementStress = {},
-              VtkEncoding encoding = VtkEncoding::Base64);
+              VtkEncoding encoding = VtkEncoding::Base64, const std::vector<Real>& vertexStrain = {},
+              const std::vector<Real>& elementStrain = {});
 
 /// "frame_00012.vtu": zero-padded so that file listings sort in time order. With a body name
 /// (several bodies): "<body>_00012.vtu".
@@ -69,12 +73,13 @@ class MetricsCsv {
  public:
   /// The header line (no newline):
   /// time,kinetic_energy,elastic_energy,gravity_energy,px,py,pz,Lx,Ly,Lz,max_stress,
-  /// max_penetration,max_contact_depth,min_element_det, then the frame-averaged contact forces
+  /// max_penetration,max_contact_depth,min_element_det (max_stress [Pa]: von Mises), then the frame-averaged contact forces
   /// (Metrics::contactForces) the bodies exert: per manipulator k = 0, 1, ...
   /// m<k>_fx,m<k>_fy,m<k>_fz [N],m<k>_tx,m<k>_ty,m<k>_tz [N m] (about its centre), then the walls
   /// wall_fx,wall_fy,wall_fz,wall_tx,wall_ty,wall_tz (all walls together, torque about the
   /// origin), then the same six per wall, wall_<w>_fx .. wall_<w>_tz for w = xmin, xmax, ymin,
-  /// ymax, zmin, zmax (contacts.h kWalls; zero for a wall no vertex touched). With a body
+  /// ymax, zmin, zmax (contacts.h kWalls; zero for a wall no vertex touched), then max_strain [-]
+  /// (Metrics::maxStrain, last so that the columns before it kept their places). With a body
   /// column, "body," first.
   static std::string header(size_t manipulators = 0, bool bodyColumn = false);
   /// One data line (no newline); std::invalid_argument if m has forces for another number of

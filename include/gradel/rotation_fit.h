@@ -20,7 +20,9 @@ int fitRotation3(const Mat3& A, Quat& q, int maxIterations = 20, Real tolerance 
 
 /// Four 3D fits at once (structure of arrays, one lane per element): exactly fitRotation3's
 /// iteration in every lane (Newton or Mueller step, trust region, the same stopping rules), with
-/// sin/cos of the step from their series (exact to rounding for the trust region's angles).
+/// sin/cos of the step from their series (exact to rounding for the trust region's angles; a
+/// shorter series when every lane turns by < 0.01 rad) and the renormalisation to first order
+/// (exact to rounding for a unit warm start; root and division for one further from unit).
 /// Lanes stop independently; a lane's result does not depend on the other lanes. A lane with
 /// A = identity and q = identity is a no-op (use it to pad a short batch).
 constexpr int kRotationLanes = 4;

@@ -75,7 +75,8 @@ struct Metrics {
   Real totalEnergy() const { return kineticEnergy + elasticEnergy + gravityEnergy + shadowEnergy; }
   Vec3 linearMomentum{0, 0, 0};   ///< [kg m/s]
   Vec3 angularMomentum{0, 0, 0};  ///< [kg m^2/s] about the world origin.
-  Real maxStress = 0;             ///< [-] max per-element stress (strain-like, see stress()).
+  Real maxStress = 0;             ///< [Pa] max per-element von Mises stress (World::elementStress, nu = 0).
+  Real maxStrain = 0;             ///< [-] max per-element strain measure (World::elementStrain).
   Real maxPenetration = 0;        ///< [m] deepest vertex inside a manipulator or outside the walls now (should be 0).
   Real maxContactDepth = 0;       ///< [m] deepest vertex found (and corrected) in the last step.
   Real minElementDet = 0;         ///< [-] min det of the elements' deformation estimate (< 0: inverted).
@@ -83,7 +84,7 @@ struct Metrics {
 };
 
 /// The figures of several bodies together: energies and momenta summed in order, the largest
-/// stress and penetration, the smallest determinant; time and maxContactDepth the first's.
+/// stress, strain and penetration, the smallest determinant; time and maxContactDepth the first's.
 Metrics combineMetrics(const std::vector<Metrics>& bodies);
 
 class World {
@@ -187,21 +188,29 @@ class World {
   const std::vector<PinSettings>& pins() const { return pins_; }
   const PinSet& pinned() const { return pinSet_; }
 
-  /// Per-element stress (sec. 3, fig. 1): RMS over its vertices of |M R0_i - r_i|, divided by the
-  /// element size [-]. Per-vertex stress: mean over the vertex's elements.
-  std::vector<Real> elementStress() const;
+  /// Per-element von Mises stress [Pa] (element_strain.h): from the element's small strain about
+  /// its best-fit rotation and its region's Young's modulus. The engine's material has no Poisson's
+  /// ratio (material.h: a nu = 0 model), so the default is 0. Per-vertex: mean over its elements.
+  std::vector<Real> elementStress(Real poissonRatio = 0) const;
   std::vector<Real> vertexStress() const;
-  /// The same from an elementStress() result already at hand.
-  std::vector<Real> vertexStress(const std::vector<Real>& elementStress) const;
+  /// Per-element strain measure (sec. 3, fig. 1) [-]: RMS over its vertices of |M R0_i - r_i|,
+  /// divided by the element size. Per-vertex: mean over the vertex's elements.
+  std::vector<Real> elementStrain() const;
+  std::vector<Real> vertexStrain() const;
+  /// Per vertex, the mean over its elements of a per-element field (elementStress(),
+  /// elementStrain()) already at hand.
+  std::vector<Real> vertexStress(const std::vector<Real>& perElement) const;
 
   Metrics metrics() const { return metrics(nullptr); }
-  /// The same, and, when elementStress is given, elementStress() from the same pass over the
-  /// elements (what a written frame needs: one reference-kernel pass per frame, not two).
-  Metrics metrics(std::vector<Real>* elementStress) const;
+  /// The same, and, when elementStress / elementStrain are given, elementStress() and
+  /// elementStrain() from the same pass over the elements (what a written frame needs: one
+  /// reference-kernel pass per frame, not two).
+  Metrics metrics(std::vector<Real>* elementStress, std::vector<Real>* elementStrain = nullptr) const;
   /// The same figures per body (RestModel::bodies, bodies.h), over its vertices and elements;
   /// metrics() is their sum (energies, momenta) and extremes. maxContactDepth is the world's;
   /// contactForces is left empty (forces are the world's: metrics()). elementStress as metrics().
-  std::vector<Metrics> bodyMetrics(std::vector<Real>* elementStress = nullptr) const;
+  std::vector<Metrics> bodyMetrics(std::vector<Real>* elementStress = nullptr,
+                                   std::vector<Real>* elementStrain = nullptr) const;
   /// FNV-1a hash of the positions and velocities (bitwise): equal states give equal hashes.
   uint64_t stateHash() const;
   /// Bytes held by the world: rest model, state, scratch and manipulators (capacities).
@@ -215,7 +224,7 @@ class World {
   void stageElementFrames(size_t begin, size_t end);
   Real stageVertices(size_t begin, size_t end, const ContactBounds* contacts);
   ContactBounds contactBounds() const;
-  Metrics metricsOf(const BodyRange& body, std::vector<Real>* elementStress) const;
+  Metrics metricsOf(const BodyRange& body, std::vector<Real>* elementStress, std::vector<Real>* elementStrain) const;
   void prepareTeam(int members);
   int stepMembers() const;
   ThreadTeam* frameStepTeam();

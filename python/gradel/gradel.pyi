@@ -17,7 +17,8 @@ class _Metrics(TypedDict):
     gravity_energy: float
     linear_momentum: list[float]
     angular_momentum: list[float]
-    max_stress: float
+    max_stress: float  # [Pa] von Mises
+    max_strain: float  # [-]
     max_penetration: float
     min_element_det: float
 
@@ -190,9 +191,17 @@ class Simulation:
     @property
     def masses(self) -> npt.NDArray[np.float64]: ...
     @property
-    def stress(self) -> npt.NDArray[np.float64]: ...
+    def stress(self) -> npt.NDArray[np.float64]:
+        """Per-vertex von Mises stress [Pa] (mean of its elements'; Poisson's ratio 0)."""
     @property
-    def element_stress(self) -> npt.NDArray[np.float64]: ...
+    def element_stress(self) -> npt.NDArray[np.float64]:
+        """Per-element von Mises stress [Pa] from the element's strain and its region's E."""
+    @property
+    def strain(self) -> npt.NDArray[np.float64]:
+        """Per-vertex strain measure [-] (the paper's fig. 1 measure)."""
+    @property
+    def element_strain(self) -> npt.NDArray[np.float64]:
+        """Per-element strain measure [-]: RMS of |M R0_i - r_i| over the element's size."""
     @property
     def state_hash(self) -> int: ...
     @property

@@ -252,6 +252,7 @@ def run_scene(scene: Mapping[str, Any], label: str = "scene") -> Dict[str, Any]:
     frames = max(1, math.ceil(duration / interval - 1e-9))
     max_penetration = 0.0
     max_stress = 0.0
+    max_strain = 0.0
     start = time.perf_counter()
     m = sim.metrics()
     for f in range(frames + 1):
@@ -264,6 +265,7 @@ def run_scene(scene: Mapping[str, Any], label: str = "scene") -> Dict[str, Any]:
             m = sim.metrics()
         max_penetration = max(max_penetration, m["max_penetration"])
         max_stress = max(max_stress, m["max_stress"])
+        max_strain = max(max_strain, m["max_strain"])
     wall = time.perf_counter() - start
     masses = sim.masses
     com = (masses[:, None] * sim.positions).sum(axis=0) / masses.sum()
@@ -279,6 +281,7 @@ def run_scene(scene: Mapping[str, Any], label: str = "scene") -> Dict[str, Any]:
         "final_kinetic_energy": m["kinetic_energy"],
         "max_penetration": max_penetration,
         "max_stress": max_stress,
+        "max_strain": max_strain,
         "state_hash": f"{sim.state_hash:016x}",
     }
     for k, v in m.items():
@@ -351,7 +354,8 @@ class _Bar:
 
 # The summary figures in `gradel run`'s order; the final metrics follow in name order.
 _SUMMARY = ["steps", "dt", "simulated_seconds", "frames", "wall_seconds", "real_time_factor", "elements", "vertices",
-            "final_kinetic_energy", "max_penetration", "max_stress", "state_hash"]
+            "final_kinetic_energy", "max_penetration", "max_stress", "max_strain",
+            "state_hash"]
 
 
 def _columns(study: Study, rows: List[Dict[str, Any]]) -> List[str]:

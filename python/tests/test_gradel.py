@@ -65,7 +65,21 @@ def test_simulation_views_share_memory_and_step():
     assert sim.time == pytest.approx(0.01)
     assert np.allclose(p - rest, [0.001, 0, 0], atol=1e-9)  # the same view saw the motion
     assert sim.masses.sum() == pytest.approx(1000 * body.filled * 0.01 ** 3)
-    assert sim.stress.shape == (sim.num_vertices,) and np.allclose(sim.stress, 0, atol=1e-9)
+    assert sim.stress.shape == (sim.num_vertices,) and np.allclose(sim.stress, 0, atol=1e-6)  # [Pa]: moved, not strained
+    assert sim.strain.shape == (sim.num_vertices,) and np.allclose(sim.strain, 0, atol=1e-9)
+
+
+def test_stress_is_von_mises_in_pascal():
+    body = gradel.Body.from_shape("box", 6)
+    sim = gradel.Simulation(body, gravity=[0, 0, 0], youngs_modulus=2e5)
+    rest = sim.rest_positions
+    stretched = rest.copy()
+    stretched[:, 0] = rest[:, 0].mean() + 1.01 * (rest[:, 0] - rest[:, 0].mean())  # 1 % uniaxial, no lateral strain
+    sim.positions = stretched
+    assert np.allclose(sim.element_stress, 0.01 * 2e5, rtol=1e-6)  # nu = 0: sigma = E eps, von Mises = sigma
+    assert np.allclose(sim.stress, 0.01 * 2e5, rtol=1e-6)
+    assert sim.metrics()["max_stress"] == pytest.approx(0.01 * 2e5, rel=1e-6)
+    assert 0 < sim.metrics()["max_strain"] < 0.05 and sim.element_strain.max() == pytest.approx(sim.metrics()["max_strain"])
 
 
 def test_manipulator_pushes_the_body():

@@ -105,4 +105,16 @@ Camera frameBox(const Vec3& lo, const Vec3& hi, bool flat) {
   return c;
 }
 
+void CameraFollow::update(Camera& camera, const Vec3& lo, const Vec3& hi, bool hold) {
+  const Vec3 c = (lo + hi) / 2;
+  const Real size = (hi - lo).norm();
+  if (!c.allFinite() || !std::isfinite(size)) return;
+  if (centre && !hold) {
+    camera.target += c - *centre;
+    if (size > extent && extent > 0) camera.distance *= size / extent;
+  }
+  if (!centre || size > extent) extent = size;
+  centre = c;
+}
+
 }  // namespace gradel::render

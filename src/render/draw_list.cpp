@@ -1,5 +1,6 @@
 #include "gradel/render/draw_list.h"
 
+#include "gradel/element_strain.h"
 #include "gradel/isosurface.h"
 
 #include <algorithm>
@@ -154,18 +155,23 @@ void addLegend(DrawList& list, Real scale, int width, int height) {
   const float x0 = float(width) - 46, x1 = float(width) - 26, y0 = 40, y1 = std::max(120.0f, float(height) * 0.45f);
   constexpr int kSteps = 24;
   const Color backdrop{0.97f, 0.97f, 0.98f};
-  addQuad2D(list, x0 - 56, y0 - 28, float(width) - 4, y1 + 10, backdrop, backdrop);
+  const std::string top = pascalText(scale), mid = pascalText(scale / 2), title = "von Mises";
+  // Labels right-aligned to the left of the bar, the title above it ending at the bar's right
+  // edge; the backdrop as wide as they need (9.6 pixels a character at this font scale).
+  const auto textWidth = [](const std::string& t) { return 9.6f * float(t.size()); };
+  const float left = std::min(x0 - 14 - std::max({textWidth(top), textWidth(mid), textWidth("0 Pa")}),
+                              x1 - textWidth(title) - 4);
+  addQuad2D(list, left, y0 - 28, float(width) - 4, y1 + 10, backdrop, backdrop);
   for (int i = 0; i < kSteps; ++i) {
     // Top of the bar = high stress (dark).
     const float ya = y0 + (y1 - y0) * i / kSteps, yb = y0 + (y1 - y0) * (i + 1) / kSteps;
     addQuad2D(list, x0, ya, x1, yb, stressColor(scale * (1 - Real(i) / kSteps), scale),
               stressColor(scale * (1 - Real(i + 1) / kSteps), scale));
   }
-  char top[32];
-  std::snprintf(top, sizeof top, "%.3g", scale);
-  addText(list, "stress", x0 - 24, y0 - 22, 1.6f, kTextColor);
-  addText(list, top, x0 - 10 - 9.6f * float(std::strlen(top)), y0 - 4, 1.6f, kTextColor);
-  addText(list, "0", x0 - 20, y1 - 8, 1.6f, kTextColor);
+  addText(list, title, x1 - textWidth(title), y0 - 22, 1.6f, kTextColor);
+  addText(list, top, x0 - 10 - textWidth(top), y0 - 4, 1.6f, kTextColor);
+  addText(list, mid, x0 - 10 - textWidth(mid), (y0 + y1) / 2 - 6, 1.6f, kTextColor);
+  addText(list, "0 Pa", x0 - 10 - textWidth("0 Pa"), y1 - 8, 1.6f, kTextColor);
 }
 
 // Each manipulator's contact force as an arrow from its centre (length |F| scale, a head of a
@@ -204,6 +210,25 @@ void addForceArrows(DrawList& list, const World& world, Real scale, int height) 
 }
 
 }  // namespace
+
+Real autoStressScale(const RestModel& m) {
+  Real e = 0;
+  for (size_t k = 0; k < m.numElements(); ++k) e = std::max(e, elementYoungsModulus(m, k));
+  return 0.05 * (e > 0 ? e : m.material.youngsModulus);
+}
+
+std::string pascalText(Real pa) {
+  if (!std::isfinite(pa)) return "- Pa";
+  const Real a = std::abs(pa);
+  const char* unit = "Pa";
+  Real v = pa;
+  if (a >= 1e9) v = pa / 1e9, unit = "GPa";
+  else if (a >= 1e6) v = pa / 1e6, unit = "MPa";
+  else if (a >= 1e3) v = pa / 1e3, unit = "kPa";
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "%.3g %s", v, unit);
+  return buf;
+}
 
 std::array<float, 3> stressColor(Real s, Real scale) {
   // Cream -> orange -> dark red-brown: luminance falls monotonically with stress.
@@ -365,12 +390,15 @@ void sceneBounds(const World& world, Vec3* lo, Vec3* hi) {
   *hi = b;
 }
 
-DrawList buildDrawList(const BodyView& body, const World& world, const ViewOptions& o, int width, int height) {
+DrawList buildDrawList(const BodyView& body, const World& world, const ViewOptions& o, int width, int height,
+                       const std::vector<Real>* vertexStress) {
   DrawList list;
   const std::vector<Vec3>& x = world.state().positions;
   const int dim = world.model().dim;
-  std::vector<Real> stress;
-  if (o.stress) stress = world.vertexStress();
+  std::vector<Real> own;
+  if (o.stress && !(vertexStress && vertexStress->size() == x.size())) own = world.vertexStress();
+  const std::vector<Real>& stress = own.empty() && vertexStress ? *vertexStress : own;
+  const Real stressScale = o.stressScale > 0 ? o.stressScale : (o.stress ? autoStressScale(world.model()) : 0);
 
   // ---- the body's surface ----
   const bool embedded = o.surface == SurfaceMode::Embedded && body.embedded.has_value();
@@ -383,7 +411,7 @@ DrawList buildDrawList(const BodyView& body, const World& world, const ViewOptio
         Real s = 0;
         for (uint32_t k = em.weightStart[v]; k < em.weightStart[v + 1]; ++k)
           s += em.weight[k] * stress[em.weightVertex[k]];
-        colors[v] = stressColor(std::max(s, 0.0), o.stressScale);
+        colors[v] = stressColor(std::max(s, 0.0), stressScale);
       }
     addIndexedMesh(list, m, colors, body.embeddedIndices ? body.embeddedIndices : indexList(m.triangles));
   } else if (o.surface != SurfaceMode::None) {
@@ -391,7 +419,7 @@ DrawList buildDrawList(const BodyView& body, const World& world, const ViewOptio
     const TriangleMesh m = surfaceMesh(s, x);
     std::vector<Color> colors(m.vertices.size(), kBodyColor);
     if (o.stress)
-      for (size_t v = 0; v < colors.size(); ++v) colors[v] = stressColor(stress[s.modelVertex[v]], o.stressScale);
+      for (size_t v = 0; v < colors.size(); ++v) colors[v] = stressColor(stress[s.modelVertex[v]], stressScale);
     if (o.surface == SurfaceMode::Voxel)
       addFlatMesh(list, m, colors);  // a vertex per triangle corner
     else
@@ -419,7 +447,7 @@ DrawList buildDrawList(const BodyView& body, const World& world, const ViewOptio
   if (o.forces && !world.manipulators().empty()) addForceArrows(list, world, o.forceScale, height);
 
   // ---- overlay ----
-  if (o.stress) addLegend(list, o.stressScale, width, height);
+  if (o.stress) addLegend(list, stressScale, width, height);
   if (o.wireframe) {
     float y = float(height) - 14.0f * float(body.levels) - 10;
     for (int l = 0; l < body.levels; ++l, y += 14) {

@@ -60,8 +60,8 @@ int runRenderCommand(const RenderCommandOptions& o) {
   for (const auto& [name, angle] : {std::pair{"--yaw", o.yaw}, {"--pitch", o.pitch}})
     if (angle && (!std::isfinite(*angle) || std::abs(*angle) > 10))
       throw InputError(std::string(name) + ": must be an angle in radians");
-  if (!(o.stressScale > 0) || !std::isfinite(o.stressScale))
-    throw InputError("--stress-scale: must be a positive number");
+  if (!(o.stressScale >= 0) || !std::isfinite(o.stressScale))
+    throw InputError("--stress-scale: must be a stress in Pa >= 0 (0: auto)");
   view.stressScale = o.stressScale;
   if (o.exportFormat != "none" && o.exportFormat != "obj" && o.exportFormat != "ply")
     throw InputError("--export: \"" + o.exportFormat + "\" (expected none, obj or ply)");

@@ -111,8 +111,24 @@ class Demo {
     view_.wireframe = wireframe;
     view_.stressScale = stressScale;
   }
-  /// Builds this frame's draw list for a width x height (CSS pixels) canvas.
-  void buildFrame(int width, int height) { list_ = buildDrawList(body_, *built_.world, view_, width, height); }
+  /// Builds this frame's draw list for a width x height (CSS pixels) canvas; with follow on, the
+  /// camera first moves with the bodies (render/camera.h CameraFollow, as gradel-view's).
+  void buildFrame(int width, int height) {
+    if (follow_) {
+      const std::vector<Vec3>& x = built_.world->state().positions;
+      if (!x.empty()) {
+        Vec3 lo = x.front(), hi = lo;
+        for (const Vec3& p : x) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+        followState_.update(camera_, lo, hi, mode_ == Mode::Drag);
+      }
+    }
+    list_ = buildDrawList(body_, *built_.world, view_, width, height);
+  }
+  /// The camera follows the bodies (on by default, as in gradel-view).
+  void setFollow(bool on) {
+    follow_ = on;
+    followState_.reset();
+  }
   val triangles() const { return floats(list_.triangles); }  ///< 10 floats a vertex: position, normal, RGBA.
   val lines() const { return floats(list_.lines); }
   val overlay() const { return floats(list_.overlay); }  ///< Pixels, y down.
@@ -168,6 +184,7 @@ class Demo {
     sceneBounds(*built_.world, &lo, &hi);
     camera_ = frameBox(lo, hi, scene_.dim == 2);
     camera_.pan(panX, 0, std::max(height, 1));
+    followState_.reset();
   }
   bool dragging() const { return drag_.has_value(); }
   int manipulators() const { return int(built_.world->manipulators().size()); }
@@ -191,10 +208,13 @@ class Demo {
   int levels() const { return body_.levels; }
   bool behind() const { return behind_; }
   bool takeDiverged() { return std::exchange(diverged_, false); }
+  /// [Pa] the largest von Mises stress of the elements (World::elementStress).
   double maxStress() const {
     const std::vector<Real> s = built_.world->elementStress();
     return s.empty() ? 0.0 : *std::max_element(s.begin(), s.end());
   }
+  /// maxStress() as the legend writes it ("12.5 kPa").
+  std::string maxStressText() const { return pascalText(maxStress()); }
   /// Mass-weighted centre of the body [m].
   val centreOfMass() const {
     const World& w = *built_.world;
@@ -225,6 +245,7 @@ class Demo {
     body_ = makeBodyView(built_);
     drag_.reset();
     if (mode_ == Mode::Drag) mode_ = Mode::None;
+    followState_.reset();
   }
 
   Scene scene_, original_;
@@ -232,6 +253,8 @@ class Demo {
   BodyView body_;
   DrawList list_;
   Camera camera_;
+  CameraFollow followState_;
+  bool follow_ = true;
   ViewOptions view_;
   std::optional<ManipulatorDrag> drag_;
   Mode mode_ = Mode::None;
@@ -313,6 +336,8 @@ EMSCRIPTEN_BINDINGS(gradel) {
       .function("behind", &Demo::behind)
       .function("takeDiverged", &Demo::takeDiverged)
       .function("maxStress", &Demo::maxStress)
+      .function("maxStressText", &Demo::maxStressText)
+      .function("setFollow", &Demo::setFollow)
       .function("centreOfMass", &Demo::centreOfMass)
       .function("finite", &Demo::finite);
   function("bench", &bench);

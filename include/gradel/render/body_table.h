@@ -16,7 +16,7 @@ struct BodyRow {
   Real mass = 0;           ///< [kg]
   Real kineticEnergy = 0;  ///< [J]
   Real elasticEnergy = 0;  ///< [J]
-  Real maxStress = 0;      ///< [-] largest stress of the body's elements.
+  Real maxStress = 0;      ///< [Pa] largest von Mises stress of the body's elements.
   Vec3 centre{0, 0, 0};    ///< [m] centre of mass.
   Vec3 velocity{0, 0, 0};  ///< [m/s] of the centre of mass (momentum / mass).
 };

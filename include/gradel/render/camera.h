@@ -2,6 +2,8 @@
 // 3D; a flat orthographic view of the z = 0 plane in 2D. Pure maths, no OpenGL.
 #pragma once
 
+#include <optional>
+
 #include <Eigen/Core>
 
 #include "gradel/types.h"
@@ -37,5 +39,17 @@ struct Camera {
 
 /// A camera that frames the axis-aligned box [lo, hi] [m] from the default angle.
 Camera frameBox(const Vec3& lo, const Vec3& hi, bool flat);
+
+/// A camera that follows the bodies (gradel-view and the web page): each frame the target moves
+/// with the centre of the bodies' bounds, so the bodies stay where they were on screen, and the
+/// camera steps back as the bounds grow past the largest seen (bodies flying apart), never
+/// closer; orbit, pan and zoom stay the user's. reset() after a reframe or a new scene.
+struct CameraFollow {
+  std::optional<Vec3> centre;  ///< [m] the bounds' centre at the last update.
+  Real extent = 0;             ///< [m] the largest bounds diagonal seen.
+  /// `hold`: the user is dragging a manipulator (the camera keeps still under the mouse).
+  void update(Camera& camera, const Vec3& lo, const Vec3& hi, bool hold);
+  void reset() { centre.reset(), extent = 0; }
+};
 
 }  // namespace gradel::render

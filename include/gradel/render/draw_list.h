@@ -41,7 +41,8 @@ struct ViewOptions {
   /// [m/N] arrow length per newton; 0 = auto: the body's weight under 9.81 m/s^2 is drawn half
   /// the body's largest extent long (the same scale in every frame of a run).
   Real forceScale = 0;
-  Real stressScale = 0.05;  ///< [-] stress drawn darkest (World::vertexStress units).
+  /// [Pa] von Mises stress drawn darkest (World::vertexStress); 0 = auto (autoStressScale).
+  Real stressScale = 0;
   std::string caption;      ///< Text drawn at the top left (empty = none).
 };
 
@@ -84,14 +85,23 @@ struct DrawList {
   std::array<float, 3> background{0.93f, 0.94f, 0.96f};
 };
 
+/// The stress scale `auto` draws darkest [Pa]: the von Mises stress of a 5 % uniaxial strain in
+/// the model's stiffest element (0.05 x its Young's modulus, element_strain.h).
+Real autoStressScale(const RestModel& model);
+/// A stress for a legend or panel: "0 Pa", "850 Pa", "12.5 kPa", "3.2 MPa", "1.1 GPa".
+std::string pascalText(Real pa);
+
 /// Colour of stress s for the legend and the surface: light cream at 0, dark red-brown at
 /// `scale` and above (fig. 1: darker where the stress is high).
 std::array<float, 3> stressColor(Real s, Real scale);
 /// Distinct colour of layout level L (the wireframe of fig. 4).
 std::array<float, 3> levelColor(int level);
 
-/// The draw list of one picture of `world` (whose model `body` was made from).
-DrawList buildDrawList(const BodyView& body, const World& world, const ViewOptions& options, int width, int height);
+/// The draw list of one picture of `world` (whose model `body` was made from). With the stress
+/// colour on, `vertexStress` (World::vertexStress, [Pa]) when the caller has it at hand (the
+/// viewer computes it off the drawing thread), else the world's now.
+DrawList buildDrawList(const BodyView& body, const World& world, const ViewOptions& options, int width, int height,
+                       const std::vector<Real>* vertexStress = nullptr);
 
 /// Adds text in pixels at (x, y) (top left), `scale` pixels per font unit (stb_easy_font).
 void addText(DrawList& list, const std::string& text, float x, float y, float scale, std::array<float, 3> color);

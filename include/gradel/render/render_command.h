@@ -25,7 +25,7 @@ struct RenderCommandOptions {
   double start = 0;                   ///< [s] simulated time of the first frame.
   std::optional<double> yaw, pitch;   ///< [rad] camera angles (default: framing's 0.6, 0.35).
   double zoom = 1;                    ///< > 1 moves the camera closer.
-  double stressScale = 0.05;          ///< [-] stress drawn darkest.
+  double stressScale = 0;             ///< [Pa] von Mises stress drawn darkest; 0 = auto (draw_list.h).
   std::string exportFormat = "none";  ///< none | obj | ply
   bool noPictures = false;            ///< Export only (no OpenGL needed).
   bool noVideo = false;
