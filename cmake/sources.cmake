@@ -39,7 +39,15 @@ set(GRADEL_CORE_SOURCES
   src/surface.cpp
   src/thread_team.cpp
   src/volume.cpp
-  src/world.cpp
+  src/world.cpp                  # World: creation, the step's list of stages (step_context.h), pins
+  src/world_metrics.cpp          # World's figures (energies, momenta, stress) per body and combined
+  src/integrator_choice.cpp      # integrator / period-rule names, "auto"'s cost model
+  src/start_overlap_release.cpp  # start overlaps released step by step
+  src/step_explicit.cpp          # stage: explicit advance (element frames, the fused vertex pass), the team
+  src/step_implicit.cpp          # stage: implicit advance (two solves, held contacts, pair constraints)
+  src/step_large.cpp             # stage: large-step advance (midpoint substeps away from contacts)
+  src/step_obstacles.cpp         # stage: manipulator and wall contacts, the sweep, the force ledger
+  src/step_body_contacts.cpp     # stage: body contacts after the advance, the walls' re-pass
   # Scene files (JSON, nlohmann_json as a private build dependency) and the scene builder.
   src/scene_build.cpp
   src/scene_io.cpp)

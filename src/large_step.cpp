@@ -18,13 +18,15 @@ struct RigidFit {
   Mat3 inertia = Mat3::Zero();
 };
 
-// Centre of mass, its velocity, angular momentum about it, inertia tensor and angular velocity.
-RigidFit rigidFit(const RestModel& m, const std::vector<Vec3>& x, const std::vector<Vec3>& v) {
+// Centre of mass, its velocity, angular momentum about it, inertia tensor and angular velocity
+// of the vertices [begin, end) (one body).
+RigidFit rigidFit(const RestModel& m, const std::vector<Vec3>& x, const std::vector<Vec3>& v, size_t begin,
+                  size_t end) {
   RigidFit r;
   Real mass = 0;
-  for (size_t i = 0; i < x.size(); ++i) mass += m.mass[i], r.centre += m.mass[i] * x[i], r.velocity += m.mass[i] * v[i];
+  for (size_t i = begin; i < end; ++i) mass += m.mass[i], r.centre += m.mass[i] * x[i], r.velocity += m.mass[i] * v[i];
   r.centre /= mass, r.velocity /= mass;
-  for (size_t i = 0; i < x.size(); ++i) {
+  for (size_t i = begin; i < end; ++i) {
     const Vec3 d = x[i] - r.centre;
     r.momentum += m.mass[i] * d.cross(v[i] - r.velocity);
     r.inertia += m.mass[i] * (d.squaredNorm() * Mat3::Identity() - d * d.transpose());
@@ -34,6 +36,21 @@ RigidFit rigidFit(const RestModel& m, const std::vector<Vec3>& x, const std::vec
   r.omega = lu.rank() == 3 ? Vec3(lu.solve(r.momentum)) : Vec3::Zero();
   if (m.dim == 2) r.omega.x() = r.omega.y() = 0;
   return r;
+}
+
+// The rigid motions the guards keep: one per body (a model made by hand without bodies is one),
+// its vertices [begin, end); a body holding a pinned vertex has none.
+struct GuardBody {
+  uint32_t begin = 0, end = 0;
+  bool pinned = false;
+};
+std::vector<GuardBody> guardBodies(const RestModel& m, const std::vector<uint32_t>& pinned) {
+  std::vector<GuardBody> bodies;
+  if (m.bodies.empty()) bodies.push_back({0, uint32_t(m.numVertices()), false});
+  for (const BodyRange& b : m.bodies) bodies.push_back({b.vertexBegin, b.vertexEnd, false});
+  for (uint32_t u : pinned)
+    for (GuardBody& b : bodies) b.pinned = b.pinned || (u >= b.begin && u < b.end);
+  return bodies;
 }
 
 // Runs perElement(begin, end) over element ranges, then (after a barrier) perVertex(begin, end)
@@ -241,13 +258,16 @@ LargeStepReport LargeStepSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v
   const bool pinsMove = pinStart != pinEnd;
   if (pinsMove) budgetValid_ = false;
   if (!budgetValid_) budget_ = energy(x, v, q, gravity), budgetValid_ = true;
-  const RigidFit before = pinned_.empty() ? rigidFit(m, x, v) : RigidFit{};
+  const std::vector<GuardBody> guard = guardBodies(m, pinned_);
+  std::vector<RigidFit> before(guard.size());
+  for (size_t b = 0; b < guard.size(); ++b)
+    if (!guard[b].pinned) before[b] = rigidFit(m, x, v, guard[b].begin, guard[b].end);
   const int fitIterations = std::max(rotationIterations, 20);
 
   const std::vector<Vec3> x0 = x;
   std::vector<Vec3> y(V);
   for (size_t i = 0; i < V; ++i) {
-    y[i] = x0[i] + h * v[i] + h * h * gravity;
+    y[i] = freeFlight(x0[i], v[i], h, 1, gravity);
     x[i] = x0[i] + h * v[i] + h * h * acceleration_[i];
   }
   for (size_t j = 0; j < pinned_.size(); ++j) y[pinned_[j]] = x[pinned_[j]] = 0.5 * (pinStart[j] + pinEnd[j]);
@@ -269,13 +289,15 @@ LargeStepReport LargeStepSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v
   }
   for (size_t j = 0; j < pinned_.size(); ++j)
     x[pinned_[j]] = pinEnd[j], v[pinned_[j]] = (pinEnd[j] - pinStart[j]) / dt_;
-  if (pinned_.empty()) {
-    const RigidFit after = rigidFit(m, x, v);
+  // The momentum guard, per free body (each keeps its own angular momentum about its centre).
+  for (size_t b = 0; b < guard.size(); ++b) {
+    if (guard[b].pinned) continue;
+    const RigidFit after = rigidFit(m, x, v, guard[b].begin, guard[b].end);
     const Eigen::FullPivLU<Mat3> lu(after.inertia);
     if (lu.rank() == 3 || m.dim == 2) {
-      Vec3 dOmega = m.dim == 2 ? Vec3(0, 0, (before.momentum.z() - after.momentum.z()) / after.inertia(2, 2))
-                               : Vec3(lu.solve(before.momentum - after.momentum));
-      for (size_t i = 0; i < V; ++i) v[i] += dOmega.cross(x[i] - after.centre);
+      Vec3 dOmega = m.dim == 2 ? Vec3(0, 0, (before[b].momentum.z() - after.momentum.z()) / after.inertia(2, 2))
+                               : Vec3(lu.solve(before[b].momentum - after.momentum));
+      for (size_t i = guard[b].begin; i < guard[b].end; ++i) v[i] += dOmega.cross(x[i] - after.centre);
       report.momentumKept = true;
     }
   }
@@ -289,18 +311,24 @@ LargeStepReport LargeStepSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v
   }
   const Real e = energy(x, v, q, gravity);
   if (e > budget_) {
-    const RigidFit r = pinned_.empty() ? rigidFit(m, x, v) : RigidFit{};  // a pinned body has no free rigid motion
+    // Each body's rigid fit (a pinned body has no free rigid motion: all its velocity is deformation).
+    std::vector<RigidFit> rigid(guard.size());
+    for (size_t b = 0; b < guard.size(); ++b)
+      if (!guard[b].pinned) rigid[b] = rigidFit(m, x, v, guard[b].begin, guard[b].end);
+    auto rigidVelocity = [&](const RigidFit& r, size_t i) { return Vec3(r.velocity + r.omega.cross(x[i] - r.centre)); };
     Real kDef = 0;
-    for (size_t i = 0; i < V; ++i)
-      if (half_.isFree(uint32_t(i)))
-        kDef += 0.5 * m.mass[i] * (v[i] - r.velocity - r.omega.cross(x[i] - r.centre)).squaredNorm();
+    for (size_t b = 0; b < guard.size(); ++b)
+      for (size_t i = guard[b].begin; i < guard[b].end; ++i)
+        if (half_.isFree(uint32_t(i)))  // (as written: the same rounding as a single body's before)
+          kDef += 0.5 * m.mass[i] * (v[i] - rigid[b].velocity - rigid[b].omega.cross(x[i] - rigid[b].centre)).squaredNorm();
     const Real excess = e - budget_;
     const Real s = kDef > 0 ? std::sqrt(std::max(Real(0), 1 - excess / kDef)) : 1;
-    for (size_t i = 0; i < V; ++i) {
-      if (!half_.isFree(uint32_t(i))) continue;
-      const Vec3 rigid = r.velocity + r.omega.cross(x[i] - r.centre);
-      v[i] = rigid + s * (v[i] - rigid);
-    }
+    for (size_t b = 0; b < guard.size(); ++b)
+      for (size_t i = guard[b].begin; i < guard[b].end; ++i) {
+        if (!half_.isFree(uint32_t(i))) continue;
+        const Vec3 r = rigidVelocity(rigid[b], i);
+        v[i] = r + s * (v[i] - r);
+      }
     report.energyRemoved = std::min(excess, kDef);
   }
   return report;

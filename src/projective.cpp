@@ -413,7 +413,7 @@ void ProjectiveSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vec
   // more than its equilibrium (a clamped bar 4x its static sag); this start has the equilibrium
   // as its fixed point. Rigid motion is still exact (one pass). Pinned vertices go to their targets.
   std::vector<Vec3> y(V);
-  for (size_t i = 0; i < V; ++i) y[i] = x[i] + dt * v[i] + dt * dt * gravity;
+  for (size_t i = 0; i < V; ++i) y[i] = freeFlight(x[i], v[i], dt, 1, gravity);
   for (size_t j = 0; j < s.pinned.size(); ++j) y[s.pinned[j]] = pinTargets.at(j);
   for (size_t i = 0; i < V; ++i) x[i] += dt * v[i];
   for (size_t j = 0; j < s.pinned.size(); ++j) x[s.pinned[j]] = pinTargets.at(j);

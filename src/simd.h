@@ -1,6 +1,6 @@
 // Four doubles in one register (GCC / clang vector extensions): AVX2 where the build has it,
 // plain scalar code elsewhere. A Vec3 travels as (x, y, z, 0). Used by the hot kernels only
-// (element_stage.cpp, rotation_fit.cpp, world.cpp).
+// (element_stage.cpp, rotation_fit.cpp, step_explicit.cpp).
 #pragma once
 
 #include <cmath>

@@ -1,5 +1,9 @@
 // Golden regression: the state hash (World::stateHash, every position and velocity bit) of a few
-// shipped scenes after 50 steps at 1 thread, against tests/golden/state_hashes.json. Any change
+// shipped scenes after a few steps at 1 thread (50 unless the case says otherwise), against
+// tests/golden/state_hashes.json. The cases cover every integrator path of World::step: the
+// explicit vertex pass with manipulators, walls and pins (strike, grasp-two, drop, strike-2d,
+// paper-table1, box-realtime's 17k-vertex body), body contacts after each integrator (two-balls
+// symplectic, implicit and large step; the stack, explicit and large step). Any change
 // to the arithmetic of a step changes these hashes; the test makes that visible, and updating
 // the file is a deliberate act with its reason in the commit (tests/golden/README.md):
 //   GRADEL_UPDATE_GOLDEN=1 build/gradel_tests --gtest_filter='Golden*'
@@ -21,8 +25,29 @@
 namespace gradel {
 namespace {
 
-const char* const kGoldenScenes[] = {"strike", "grasp-two", "drop", "strike-2d", "paper-table1"};
 constexpr int kGoldenSteps = 50;
+
+struct GoldenCase {
+  const char* key;    ///< Its name in state_hashes.json: the scene, and "/integrator" when overridden.
+  const char* scene;  ///< scenes/<scene>.json
+  const char* integrator;  ///< nullptr: the scene's own.
+  int steps;
+};
+// Frame-size integrators run at 1/60 s: a few steps reach the contacts. box-realtime is 17k
+// vertices: 5 steps keep the test fast.
+const GoldenCase kGoldenCases[] = {
+    {"strike", "strike", nullptr, kGoldenSteps},
+    {"grasp-two", "grasp-two", nullptr, kGoldenSteps},
+    {"drop", "drop", nullptr, kGoldenSteps},
+    {"strike-2d", "strike-2d", nullptr, kGoldenSteps},
+    {"paper-table1", "paper-table1", nullptr, kGoldenSteps},
+    {"two-balls/symplectic", "two-balls", "symplectic", 100},
+    {"two-balls/implicit", "two-balls", "implicit", 12},
+    {"two-balls/large_step", "two-balls", "large_step", 12},
+    {"stack", "stack", nullptr, 300},
+    {"stack/large_step", "stack", "large_step", 20},
+    {"box-realtime", "box-realtime", nullptr, 5},
+};
 
 std::string goldenPath() { return std::string(GRADEL_SOURCE_DIR) + "/tests/golden/state_hashes.json"; }
 
@@ -41,11 +66,12 @@ std::string flavour() {
 #endif
 }
 
-std::string hashOf(const std::string& name) {
-  Scene scene = loadScene(std::string(GRADEL_SOURCE_DIR) + "/scenes/" + name + ".json");
+std::string hashOf(const GoldenCase& c) {
+  Scene scene = loadScene(std::string(GRADEL_SOURCE_DIR) + "/scenes/" + c.scene + ".json");
   scene.simulation.threads = 1;
+  if (c.integrator) scene.simulation.integrator = parseIntegratorKind(c.integrator);
   BuiltScene built = buildScene(scene);
-  for (int i = 0; i < kGoldenSteps; ++i) built.world->step();
+  for (int i = 0; i < c.steps; ++i) built.world->step();
   char text[19];
   std::snprintf(text, sizeof text, "0x%016llx", static_cast<unsigned long long>(built.world->stateHash()));
   return text;
@@ -63,7 +89,10 @@ TEST(Golden, StateHashesOfShortScenes) {
   const std::string key = flavour();
   if (update) {
     nlohmann::json& table = golden["hashes"][key];
-    for (const char* name : kGoldenScenes) table[name] = hashOf(name);
+    for (const GoldenCase& c : kGoldenCases) {
+      table[c.key] = hashOf(c);
+      if (c.steps != kGoldenSteps) golden["case_steps"][c.key] = c.steps;
+    }
     golden["steps"] = kGoldenSteps;
     golden["threads"] = 1;
     const std::string tmp = goldenPath() + ".tmp";
@@ -77,10 +106,13 @@ TEST(Golden, StateHashesOfShortScenes) {
     GTEST_SKIP() << "no golden hashes for build flavour " << key << " in " << goldenPath()
                  << "; record them with GRADEL_UPDATE_GOLDEN=1 gradel_tests --gtest_filter='Golden*'";
   const nlohmann::json& table = golden["hashes"][key];
-  for (const char* name : kGoldenScenes) {
+  for (const GoldenCase& c : kGoldenCases) {
+    const std::string name = c.key;
     ASSERT_TRUE(table.contains(name)) << name << " missing from " << goldenPath() << " [" << key << "]";
-    EXPECT_EQ(hashOf(name), table[name].get<std::string>())
-        << "scene " << name << ", " << kGoldenSteps << " steps, 1 thread, flavour " << key
+    const int recorded = golden.contains("case_steps") ? golden["case_steps"].value(name, kGoldenSteps) : kGoldenSteps;
+    ASSERT_EQ(recorded, c.steps) << name << ": recorded at another number of steps (" << goldenPath() << ")";
+    EXPECT_EQ(hashOf(c), table[name].get<std::string>())
+        << "case " << name << ", " << c.steps << " steps, 1 thread, flavour " << key
         << ": the step's arithmetic changed. If that is intended, run GRADEL_UPDATE_GOLDEN=1 gradel_tests "
            "--gtest_filter='Golden*' and give the reason in the commit (tests/golden/README.md).";
   }

@@ -32,17 +32,18 @@
 // x_m^0 = x_n + h v_n + h^2 a_{n-1} (the last step's acceleration: a body at rest starts at its
 // equilibrium); the rotations are warm-started from the last fit.
 // Guards, after the extrapolation:
-//   momentum  with no pins, the angular momentum about the centre of mass is restored to its
+//   momentum  per body without pins (RestModel::bodies: bodies apart exert nothing on each other), the
+//           angular momentum about its centre of mass is restored to its
 //           start-of-step value by a rigid rotation increment (uniform gravity exerts no torque
 //           about it; an unconverged solve does): the free spin keeps it to 1e-4.
 //   energy    kinetic + elastic + gravity energy never exceeds the budget: the energy when the
 //           budget was set (first step, or after contacts or moving pins did work, reset by the
 //           caller), less what velocity damping took out. An excess is taken from the
-//           deformation part of the velocities (for a free body the velocities minus their rigid
-//           fit, which keeps linear and angular momentum; for a pinned body all of them). At a
+//           deformation part of the velocities (for a free body the velocities minus its own rigid
+//           fit, which keeps each body's linear and angular momentum; for a pinned body all of them). At a
 //           turning point (no such velocity) the excess waits for the next step.
 // Contacts are not in this solve: World::stepLargeStep runs a step that could touch anything as
-// a projective-dynamics (backward Euler) step with held contacts (stepImplicit, see world.cpp and
+// a projective-dynamics (backward Euler) step with held contacts (stepImplicit, see step_implicit.cpp and
 // projective.h: the held vertices are constraints of a filtered PCG there, no back-solve each).
 // So does a step in which two bodies may touch (body_contacts.h, BodyContacts::mayTouch): their
 // contacts are pair constraints of that solve (projective.h, PairConstraint).

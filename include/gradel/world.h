@@ -1,9 +1,11 @@
 // A simulated world of one or more bodies (bodies.h: one combined rest model): rest model
-// (shared, immutable) + runtime state + manipulators + walls, advanced by named stages (Box2D
-// style): element frames (eq. 1, per element) -> per vertex: gather the elastic force, integrate
-// (eqs. 2-3), contacts (element_stage.h). Every stage runs over an index range; threads only split
-// ranges and never change the order in which any sum is formed (a vertex sums its elements in id
-// order), so results are identical at any thread count.
+// (shared, immutable) + runtime state + manipulators + walls, advanced by a list of named stages
+// (Box2D style; src/step_context.h): begin (the step's constants, the force ledger opened) ->
+// integrator advance (explicit: element frames, eq. 1, then per vertex the elastic force,
+// eqs. 2-3, and the obstacle contacts, element_stage.h; implicit; or large step), pins -> body
+// contacts -> the walls' re-pass -> finish (the ledger closed last). Every stage runs over an
+// index range; threads only split ranges and never change the order in which any sum is formed
+// (a vertex sums its elements in id order), so results are identical at any thread count.
 #pragma once
 
 #include <algorithm>
@@ -29,6 +31,7 @@ class ThreadTeam;
 class ChunkQueue;
 class ThreadGovernor;
 struct ElementStageRest;
+struct StepContext;
 
 /// Runtime state: what changes every step.
 struct State {
@@ -215,7 +218,9 @@ class World {
 
  private:
   struct ContactBounds;
-  struct StepScratch;
+  struct HeldContacts;
+  void beginStep();
+  void advanceIntegrator();
   void stageElementFrames(size_t begin, size_t end);
   Real stageVertices(size_t begin, size_t end, const ContactBounds* contacts);
   ContactBounds contactBounds() const;
@@ -238,7 +243,13 @@ class World {
   void keepBodyPairLambdas(const std::vector<PairConstraint>& pairs, const std::vector<uint64_t>& keys);
   bool bodyContactsMayTouch() const;
   void stepImplicit(bool largeStep);
+  HeldContacts heldObstacleContacts(const std::vector<Vec3>& freeEnd, bool largeStep);
+  std::vector<PairConstraint> stepBodyPairs(const std::vector<Vec3>& x0, const std::vector<Vec3>& freeEnd,
+                                            std::vector<uint64_t>& keys);
+  void solveHeld(const State& start, const std::vector<Vec3>& targets, const HeldContacts& held,
+                 std::vector<PairConstraint>& pairs);
   void stepLargeStep();
+  bool largeStepNearObstacles() const;
   void finishFrameStep(Real tNext);
   void sweepManipulatorPaths(Real t0);
   void chooseIntegrator(Real period);
@@ -253,7 +264,7 @@ class World {
   DomainSettings domain_;
   std::vector<Manipulator> manipulators_;
   State state_;
-  std::unique_ptr<StepScratch> scratch_;  ///< Per-step scratch (world.cpp).
+  std::unique_ptr<StepContext> scratch_;  ///< The step's context: constants, start state, ledger (step_context.h).
   Real dt_ = 0;
   // Velocity damping of the explicit step (integration.h): one rate for every vertex (today's
   // path), or per vertex when regions set different rates (model.h RestModel::vertexDamping).

@@ -1,0 +1,136 @@
+// World's figures (world.h Metrics): energies, momenta, stress, strain, penetration, per body
+// and combined, and the per-element and per-vertex stress and strain.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "gradel/element.h"
+#include "gradel/element_strain.h"
+#include "step_context.h"
+
+namespace gradel {
+
+std::vector<Real> World::elementStress(Real poissonRatio) const {
+  return elementVonMisesStress(*model_, state_.positions, state_.rotations, poissonRatio);
+}
+
+std::vector<Real> World::vertexStrain() const { return vertexStress(elementStrain()); }
+
+std::vector<Real> World::elementStrain() const {
+  const RestModel& m = *model_;
+  std::vector<Real> s(m.numElements());
+  std::vector<Vec3> f;
+  for (size_t e = 0; e < m.numElements(); ++e) {
+    const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
+    f.resize(n);
+    Quat q = state_.rotations[e];
+    const ElementResult r = elementForces(m.dim, state_.positions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n),
+                                          m.stiffness[e], q, f.data(), 20);
+    s[e] = std::sqrt(r.sumSqDisp / n) / m.size[e];
+  }
+  return s;
+}
+
+std::vector<Real> World::vertexStress() const { return vertexStress(elementStress()); }
+
+std::vector<Real> World::vertexStress(const std::vector<Real>& elementStress) const {
+  const RestModel& m = *model_;
+  // Mean over each vertex's elements, summed in element order (deterministic).
+  std::vector<Real> sum(m.numVertices(), 0.0);
+  std::vector<uint32_t> count(m.numVertices(), 0);
+  for (size_t e = 0; e < m.numElements(); ++e)
+    for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p)
+      sum[m.elemVerts[p]] += elementStress[e], ++count[m.elemVerts[p]];
+  for (size_t i = 0; i < sum.size(); ++i) sum[i] = count[i] ? sum[i] / count[i] : 0;
+  return sum;
+}
+
+Metrics World::metrics(std::vector<Real>* elementStress, std::vector<Real>* elementStrain) const {
+  Metrics r = combineMetrics(bodyMetrics(elementStress, elementStrain));
+  r.contactForces = averageContactForces();  // the world's: what all bodies exert together
+  return r;
+}
+
+Metrics combineMetrics(const std::vector<Metrics>& each) {
+  if (each.empty()) throw std::invalid_argument("combineMetrics: no bodies");
+  Metrics r = each[0];
+  for (size_t k = 1; k < each.size(); ++k) {
+    const Metrics& b = each[k];
+    r.kineticEnergy += b.kineticEnergy, r.elasticEnergy += b.elasticEnergy, r.gravityEnergy += b.gravityEnergy;
+    r.shadowEnergy += b.shadowEnergy;
+    r.linearMomentum += b.linearMomentum, r.angularMomentum += b.angularMomentum;
+    r.maxStress = std::max(r.maxStress, b.maxStress), r.maxStrain = std::max(r.maxStrain, b.maxStrain);
+    r.maxPenetration = std::max(r.maxPenetration, b.maxPenetration);
+    r.minElementDet = std::min(r.minElementDet, b.minElementDet);
+  }
+  return r;
+}
+
+std::vector<Metrics> World::bodyMetrics(std::vector<Real>* elementStress, std::vector<Real>* elementStrain) const {
+  if (elementStress) elementStress->assign(model_->numElements(), 0.0);
+  if (elementStrain) elementStrain->assign(model_->numElements(), 0.0);
+  std::vector<Metrics> r;
+  for (const BodyRange& b : model_->bodies) r.push_back(metricsOf(b, elementStress, elementStrain));
+  return r;
+}
+
+Metrics World::metricsOf(const BodyRange& body, std::vector<Real>* elementStress,
+                         std::vector<Real>* elementStrain) const {
+  const RestModel& m = *model_;
+  Metrics r;
+  r.time = state_.time;
+  const Vec3 g = sim_.gravity;
+  const size_t v0 = body.vertexBegin;
+
+  // Elastic forces and energy at the current positions (the body's elements touch only its vertices).
+  std::vector<Vec3> forces(body.numVertices(), Vec3::Zero());
+  std::vector<Vec3> f;
+  r.minElementDet = std::numeric_limits<Real>::infinity();
+  for (size_t e = body.elementBegin; e < body.elementEnd; ++e) {
+    const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
+    f.resize(n);
+    Quat q = state_.rotations[e];
+    const ElementResult er = elementForces(m.dim, state_.positions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n),
+                                           m.stiffness[e], q, f.data(), 20);
+    for (uint32_t i = 0; i < n; ++i) forces[m.elemVerts[b + i] - v0] += f[i];
+    r.elasticEnergy += er.energy;
+    const Real strain = std::sqrt(er.sumSqDisp / n) / m.size[e];
+    if (elementStrain) (*elementStrain)[e] = strain;
+    r.maxStrain = std::max(r.maxStrain, strain);
+    const Real stress = elementVonMises(m, state_.positions.data(), e, q, 0);  // q: the fit just made
+    if (elementStress) (*elementStress)[e] = stress;
+    r.maxStress = std::max(r.maxStress, stress);
+    r.minElementDet = std::min(r.minElementDet, elementDeterminant(m.dim, state_.positions.data(), &m.elemVerts[b],
+                                                                   &m.restOffsets[b], int(n)));
+  }
+
+  // Symplectic Euler's stored velocity belongs half a step before its positions (it is the
+  // leapfrog v_{n-1/2}); the kinetic energy at time t uses v + a(x) dt / 2, as Stormer-Verlet
+  // does. This is what makes the measured energy of an undamped run flat to O(dt^2) rather
+  // than swing by O(omega dt). Forward Euler's velocity is already synchronous.
+  // The modified energy's term -dt^2/8 m |a|^2 (Metrics::shadowEnergy) makes the total the
+  // quantity symplectic Euler keeps: 1/2 m v_{n-1/2} . v_{n+1/2} = 1/2 m |v_n|^2 - dt^2/8 m |a|^2.
+  const bool staggered = sim_.integrator == IntegratorKind::SymplecticEuler;
+  for (size_t i = body.vertexBegin; i < body.vertexEnd; ++i) {
+    const Vec3& x = state_.positions[i];
+    Vec3 v = state_.velocities[i];
+    if (staggered) {
+      const Vec3 a = forces[i - v0] * m.invMass[i] + g;
+      v += 0.5 * dt_ * a;
+      r.shadowEnergy -= 0.125 * dt_ * dt_ * m.mass[i] * a.squaredNorm();
+    }
+    r.kineticEnergy += 0.5 * m.mass[i] * v.squaredNorm();
+    r.gravityEnergy -= m.mass[i] * g.dot(x);
+    r.linearMomentum += m.mass[i] * v;
+    r.angularMomentum += m.mass[i] * x.cross(v);
+    Real pen = 0;
+    for (const Manipulator& mp : manipulators_) pen = std::max(pen, -mp.signedDistance(x, nullptr));
+    if (domain_.enabled)
+      for (int a = 0; a < m.dim; ++a) pen = std::max({pen, domain_.min[a] - x[a], x[a] - domain_.max[a]});
+    r.maxPenetration = std::max(r.maxPenetration, pen);
+  }
+  r.maxContactDepth = scratch_->maxContactDepth;
+  return r;
+}
+
+}  // namespace gradel
