@@ -12,15 +12,6 @@
 namespace gradel {
 namespace {
 
-// A pin holding the bar's face x = x0 (a slab half a voxel thick around it).
-PinSettings facePin(const BarSpec& bar, Real x0) {
-  const Real h = bar.voxelSize();
-  PinSettings p;
-  p.min = Vec3(x0 - 0.25 * h, -0.25 * h, -0.25 * h);
-  p.max = Vec3(x0 + 0.25 * h, bar.width + 0.25 * h, bar.width + 0.25 * h);
-  return p;
-}
-
 // The bar with both end faces pinned, the far one moved by strain L along x, in static
 // equilibrium (as validation.h stretchModulus): a uniform uniaxial stretch of the element model.
 BuiltScene stretchedBar(const BarSpec& bar, Real strain) {
@@ -28,7 +19,7 @@ BuiltScene stretchedBar(const BarSpec& bar, Real strain) {
   sim.gravity.setZero();
   Scene scene = barScene(bar, sim, true);
   const Real L = bar.length();
-  PinSettings far = facePin(bar, L);
+  PinSettings far = barFacePin(bar, L);
   far.path.keys = {Keyframe{0, Vec3(strain * L, 0, 0), std::nullopt}};
   scene.pins.push_back(far);
   BuiltScene b = buildScene(scene);

@@ -8,16 +8,13 @@
 
 namespace gradel {
 
-namespace {
-// A pin holding the face x = x0 of the bar (a slab half a voxel thick around it).
-PinSettings facePin(const BarSpec& bar, Real x0) {
+PinSettings barFacePin(const BarSpec& bar, Real x0) {
   const Real h = bar.voxelSize();
   PinSettings p;
   p.min = Vec3(x0 - 0.25 * h, -0.25 * h, -0.25 * h);
   p.max = Vec3(x0 + 0.25 * h, bar.width + 0.25 * h, bar.width + 0.25 * h);
   return p;
 }
-}  // namespace
 
 Scene barScene(const BarSpec& bar, const SimulationSettings& sim, bool clamped) {
   Scene s;
@@ -44,7 +41,7 @@ Scene barScene(const BarSpec& bar, const SimulationSettings& sim, bool clamped) 
   s.body.layout = bar.layout;
   s.body.material = bar.material;
   s.simulation = sim;
-  if (clamped) s.pins = {facePin(bar, 0)};
+  if (clamped) s.pins = {barFacePin(bar, 0)};
   return s;
 }
 
@@ -80,7 +77,7 @@ Real stretchModulus(const BarSpec& bar, Real strain) {
   sim.gravity.setZero();
   Scene scene = barScene(bar, sim, true);
   const Real L = bar.length(), dL = strain * L;
-  PinSettings far = facePin(bar, L);
+  PinSettings far = barFacePin(bar, L);
   far.path.keys = {Keyframe{0, Vec3(dL, 0, 0), std::nullopt}};
   scene.pins.push_back(far);
   BuiltScene b = buildScene(scene);

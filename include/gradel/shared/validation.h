@@ -27,6 +27,9 @@ struct BarSpec {
   Real length() const { return along * voxelSize(); }  ///< [m] L.
 };
 
+/// A pin holding the bar's face x = x0 (every vertex in a slab half a voxel thick around it).
+PinSettings barFacePin(const BarSpec& bar, Real x0);
+
 /// The bar at rest from (0, 0, 0) to (L, a, a), no walls, gravity -9.81 y, clamped at x = 0
 /// (every vertex on that face pinned) unless `clamped` is false.
 Scene barScene(const BarSpec& bar, const SimulationSettings& sim, bool clamped = true);
