@@ -1123,28 +1123,24 @@ bool BodyContacts::detectAll(const BodyContactState& s, BodyContactStats& stats)
 // surface (elements at a third of their volume), and there a vertex that never came near was read
 // inside by up to a voxel: pushed out along a far face, it set the bodies ringing (a stiff 9^3 ball
 // at 1.45 m/s into a soft 6^3 one: energy x1.8 in one step, then x28 once the last resort took the
-// bodies back over such "contacts"). So in an explicit step (s.leapfrog: a step moves a surface a
-// fraction of a voxel) every finding deeper than the last resort tolerates (kTakeBackDepth of a
-// voxel, plus the skin) is asked of the winding number of the other body's closed surface (exact,
-// O(faces); the pressed 64^3 balls find none that deep) and dropped when that says outside. (A
-// bound on how deep the step's motion can have taken a vertex that started outside let through
-// what the rounds' own pushes had carried deeper: near the fold of a soft 12^3 ball crushed by a
-// stiff 10^3 box at 2.7 m/s, scripts/soak, the rounds pushed a box vertex 1.6 voxels along far
-// faces, then read it 2.6 voxels "inside" where the winding number said outside; the energy rose
-// x3.2, and the last resort took the bodies back to the step's start in every step from 58 ms on:
-// the state never moved again.) Not in frame-size steps: where such a step crushed a ball to half
-// its size within the step, its surface folds through itself and the winding number is no better
-// a judge than the pseudo-normal (two balls at 10 m/s each, dt = 1/60 s: dropping such findings
-// left one more step with a vertex inside).
+// bodies back over such "contacts"). A contact deeper than the vertex and the other body's surface
+// can have come towards each other in the step (plus what a step may leave: kTakeBackDepth) cannot
+// be from a vertex that was outside at the step's start; such a one is asked of the winding number
+// of the other body's closed surface (exact, O(faces), rare) and dropped when that says outside.
+// Explicit steps only (s.leapfrog: a step moves a surface a fraction of a voxel): where a frame-size
+// step crushed a ball to half its size within the step, its surface folds through itself and the
+// winding number is no better a judge than the pseudo-normal (two balls at 10 m/s each, dt = 1/60 s:
+// dropping such findings left one more step with a vertex inside).
 void BodyContacts::dropUnreachable(const BodyContactState& s, BodyContactStats& stats) {
-  if (!s.previousPositions || !s.leapfrog) return;
+  const Vec3* x0 = s.previousPositions;
+  if (!x0 || !s.leapfrog) return;
   const Vec3* x = s.positions;
   size_t kept = 0;
   for (size_t k = 0; k < round_.size(); ++k) {
     const Contact& c = round_[k];
     const uint32_t b = bodyOf_[c.face[0]];
-    const Real tolerated = kTakeBackDepth * bodies_[b].thickness + skin_;
-    if (!(c.depth > tolerated) || !(std::abs(windingNumber(x[c.vertex], bodies_[b].triangles, x)) < 0.5)) {
+    const Real reach = (x[c.vertex] - x0[c.vertex]).norm() + moved_[b] + kTakeBackDepth * bodies_[b].thickness + skin_;
+    if (!(c.depth > reach) || !(std::abs(windingNumber(x[c.vertex], bodies_[b].triangles, x)) < 0.5)) {
       round_[kept++] = c;
     } else {
       ++stats.unreachable;
