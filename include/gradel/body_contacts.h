@@ -51,11 +51,10 @@
 //                deep case is missed, whatever the step (a frame step too). Found is not undone:
 //                see the last resort below. The converse fails where a soft body is crushed and
 //                its surface folds (elements at 40 % of their volume): there the test read
-//                vertices that had moved 0.02 voxel as a voxel inside. In an explicit step every
-//                finding deeper than the last resort tolerates (kTakeBackDepth of a voxel plus
-//                the skin) is asked of the winding number of the other surface and dropped when
-//                that says outside (dropUnreachable; a bound on how deep the step's motion can
-//                take a vertex let through what the rounds' own pushes had carried along a fold).
+//                vertices that had moved 0.02 voxel as a voxel inside. In an explicit step a
+//                finding deeper than the step's motion can reach is asked of the winding number
+//                of the other surface and dropped when that says outside (dropUnreachable; two
+//                64^3 balls pressed together: none, the same state bits).
 //   response     the vertex and the point of the touched face (barycentric weights w) are pushed
 //                apart along the normal until the vertex is `skin` outside: the correction is
 //                split by inverse mass (generalised inverse mass W = 1/m_p + sum w_k^2 / m_k),
@@ -282,7 +281,7 @@ struct BodyContactStats {
   int takeBacks = 0;      ///< Times the last resort took bodies back towards the step's start (0: not needed).
   size_t warm = 0;        ///< Contacts of the last stage that the warm start applied (found inside their plane).
   Real takenBackTo = 1;   ///< [-] the fraction of the step's motion the taken-back bodies kept.
-  /// "Inside" findings deeper than the last resort tolerates that the winding number of the
+  /// "Inside" findings deeper than the step's motion can reach that the winding number of the
   /// other body's surface said were outside (a folded surface misleads the pseudo-normal test):
   /// dropped, not pushed (dropUnreachable).
   size_t unreachable = 0;
