@@ -136,6 +136,7 @@ const Bound kVoxelSize{1e-9, 1e3, false, false};
 constexpr Real kMaxPositionVoxels = 1e9;
 const Bound kNonNegative{0, std::numeric_limits<Real>::infinity(), false, false};
 const Bound kUnit{0, 1, false, false};  // [0, 1]
+const Bound kPoissonRatio{0, 0.5, false, true};  // [0, 0.5) (material.h)
 
 std::string expectNumber(const Bound& b, const char* unit) {
   std::string s = "a number";
@@ -695,6 +696,7 @@ void readMaterial(Fields f, MaterialSettings& m) {
   m.youngsModulus = f.number("youngs_modulus", m.youngsModulus, kPositive, "Pa");
   m.density = f.number("density", m.density, kPositive, "kg/m^3");
   m.paperK = f.number("k", m.paperK, kPositive, "N");
+  m.poissonRatio = f.number("poisson_ratio", m.poissonRatio, kPoissonRatio, "");
   // Per-label materials; a field an entry leaves out is the body's (read above).
   std::vector<Fields> regions = f.objectArray("regions", false);
   for (size_t i = 0; i < regions.size(); ++i) {
@@ -708,6 +710,7 @@ void readMaterial(Fields f, MaterialSettings& m) {
     r.youngsModulus = rf.number("youngs_modulus", m.youngsModulus, kPositive, "Pa");
     r.density = rf.number("density", m.density, kPositive, "kg/m^3");
     r.paperK = rf.number("k", m.paperK, kPositive, "N");
+    r.poissonRatio = rf.number("poisson_ratio", m.poissonRatio, kPoissonRatio, "");
     r.damping = rf.optNumber("damping", kNonNegative, "1/s");
     rf.finish();
     m.regions.push_back(r);
