@@ -266,7 +266,7 @@ Squeeze squeezeBox(Real nu, LayoutKind kind, int n, Real strain, IntegratorKind 
 
 }  // namespace
 
-// Uniaxial compression: lateral / axial strain = -nu within 10 %; at nu = 0 no bulge; at nu =
+// Uniaxial compression: lateral / axial strain = -nu within 3 % (issue 29 asks 10 %); at nu = 0 no bulge; at nu =
 // 0.49 the volume is kept within 0.5 % where nu = 0 loses the whole 2 % of the squeeze.
 TEST(PoissonValidation, BoxPressedBetweenWallsBulgesByNu) {
   const Real strain = 0.02;
@@ -279,7 +279,7 @@ TEST(PoissonValidation, BoxPressedBetweenWallsBulgesByNu) {
     for (Real nu : {0.3, 0.45, 0.49}) {
       const Squeeze q = squeezeBox(nu, kind, 8, strain);
       SCOPED_TRACE("nu " + std::to_string(nu));
-      EXPECT_NEAR(-q.lateral / q.axial, nu, 0.1 * nu);
+      EXPECT_NEAR(-q.lateral / q.axial, nu, 0.03 * nu);  // measured: nu to 4 digits (docs/validation/report.md)
       if (nu == 0.49) {
         EXPECT_NEAR(q.volume, 1, 0.005);
       }
