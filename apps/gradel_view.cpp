@@ -7,6 +7,8 @@
 // batches, so drawing and the panel never wait for it; it says so on screen when it cannot keep
 // up. A rebuild (a new size, shape, material ...) runs on a background thread with its progress
 // shown; a size estimated below 0.1x real time is flagged before it is built (shared/realtime_size.h).
+// A body whose smooth surface is over the display budget (render/display_budget.h) is drawn with
+// a coarser embedded isosurface, so a frame's drawing stays bounded at any size.
 // Frames are capped at 60 per second; no multisampling on a software OpenGL (llvmpipe).
 #include <GLFW/glfw3.h>
 #include <backends/imgui_impl_glfw.h>
@@ -34,6 +36,7 @@
 #include <nlohmann/json.hpp>
 
 #include "gradel/render/body_table.h"
+#include "gradel/render/display_budget.h"
 #include "gradel/render/draw_list.h"
 #include "gradel/render/manipulator_drag.h"
 #include "gradel/render/render_command.h"
@@ -85,8 +88,8 @@ constexpr const char* kPlayScene = R"({
 })";
 
 constexpr double kFrameSeconds = 1.0 / 60;  // [s] the frame cap
-constexpr double kMaxFramePeriod = 0.1;      // [s] the longest wait the CPU budget makes a frame
-constexpr double kDrawCores = 1.0;           // cores the drawing may use on average (the stepping has the rest)
+constexpr double kMaxFramePeriod = 0.1;     // [s] the longest wait the CPU budget makes a frame
+constexpr double kDrawCores = 1.0;          // cores the drawing may use on average (the stepping has the rest)
 constexpr double kSlowFactor = 0.1;         // sizes estimated below this real-time factor are flagged
 constexpr int kMinBodySize = 4, kMaxBodySize = 256;
 constexpr float kPanelWidth = 330;  // [pixels] the settings panel at the left
@@ -106,12 +109,14 @@ struct Options {
   int bodySize = 0;              // the first body's size [voxels] as the panel sets it (0 = the scene's)
   int rebuildSize = 0;           // with --run-for: ask for this size as the panel would ...
   double rebuildAt = 1.0;        // ... at this wall time [s]
+  bool fullSurface = false;      // the panel's "full-resolution surface" on from the start
 };
 
 // Frame times [s] of a timing run (--run-for): their median and maximum, and the longest frame
 // while a rebuild ran.
 struct FrameTimes {
-  std::vector<double> all, work, worldHeld;  // frame to frame; a frame's own work (events, panel, drawing), cap excluded
+  // frame to frame; a frame's own work (events, panel, drawing), cap excluded; the world held
+  std::vector<double> all, work, worldHeld;
   double longestDuringRebuild = 0;
   static double median(std::vector<double> v) {
     if (v.empty()) return 0;
@@ -142,10 +147,10 @@ struct Figures {
 // A world being built on a background thread, and what the panel asked for.
 struct Rebuild {
   Scene scene;
-  bool load = false;     // a new scene: camera, surface mode and body edits start afresh
-  bool reframe = false;  // frame the camera on it
-  std::string what;      // shown while it builds, e.g. "size 128"
-  double start = 0;      // [s] wall
+  bool load = false;          // a new scene: camera, surface mode and body edits start afresh
+  bool reframe = false;       // frame the camera on it
+  std::string what;           // shown while it builds, e.g. "size 128"
+  double start = 0;           // [s] wall
   std::atomic<int> phase{0};  // 0 volume + layout + model + world, 1 display surfaces, 2 done
   std::optional<BuiltScene> built;
   std::optional<BodyView> view;
@@ -161,12 +166,12 @@ class Viewer {
   Viewer(GLFWwindow* window, Scene scene, bool threaded, Clock::time_point start, int bodySize)
       : window_(window), start_(start) {
     BuiltScene built = buildScene(scene);
-    BodyView view = makeBodyView(built);
+    BodyView view = makeBodyView(built, nullptr, kDisplayTriangleBudget);
     install(std::move(scene), std::move(built), std::move(view), true, true);
     if (bodySize > 0) {
       resizeBody(0, bodySize);
       built = buildScene(scene_);
-      view = makeBodyView(built);
+      view = makeBodyView(built, nullptr, kDisplayTriangleBudget);
       install(scene_, std::move(built), std::move(view), false, true);
     }
     if (threaded) stepper_ = std::thread([this] { stepLoop(); });
@@ -368,6 +373,7 @@ class Viewer {
   bool rebuilding() const { return rebuild_ != nullptr; }
   double lastRebuildSeconds() const { return lastRebuildSeconds_; }
   const ViewOptions& view() const { return view_; }
+  const BodyView& bodyView() const { return body_; }
   void setView(const ViewOptions& v) { view_ = v; }
   /// Body 0's size as the panel's slider sets it, rebuilt in the background.
   void setBodySize(int size) {
@@ -513,7 +519,7 @@ class Viewer {
         }
         p->built = buildScene(p->scene);
         p->phase = 1;
-        p->view = makeBodyView(*p->built);
+        p->view = makeBodyView(*p->built, nullptr, kDisplayTriangleBudget);
       } catch (const InputError& e) {
         p->error = e.what();
       } catch (const std::exception& e) {
@@ -665,8 +671,8 @@ class Viewer {
     ImGui::Text("t = %.3f s  dt = %.3g s  %s", f.time, f.dt, f.integrator.c_str());
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("dt: %s", f.dtRule.c_str());
     // The auto choice's reason: one line (the full text as a tooltip).
-    reservedLine(!f.choice.empty(), ImGui::GetStyleColorVec4(ImGuiCol_Text), "auto: " + f.choice.substr(0, 44) +
-                                                                           (f.choice.size() > 44 ? "..." : ""));
+    reservedLine(!f.choice.empty(), ImGui::GetStyleColorVec4(ImGuiCol_Text),
+                 "auto: " + f.choice.substr(0, 44) + (f.choice.size() > 44 ? "..." : ""));
     if (!f.choice.empty() && ImGui::IsItemHovered()) ImGui::SetTooltip("auto: %s", f.choice.c_str());
     ImGui::Text("%zu elements  %zu vertices  %zu pairs", f.elements, f.vertices, f.pairs);
     ImGui::Text("max von Mises stress %s", pascalText(f.maxStress).c_str());
@@ -738,6 +744,24 @@ class Viewer {
     ImGui::SameLine();
     ImGui::RadioButton("none", &surface, int(SurfaceMode::None));
     view_.surface = SurfaceMode(surface);
+    // A body over the display budget (render/display_budget.h) is drawn with a coarser mesh that
+    // follows the same elements; the full one on request (its frames then cost what they cost).
+    ImGui::BeginDisabled(!body_.coarse);  // always there: the widgets below do not move
+    ImGui::Checkbox("full-resolution surface", &view_.fullResolution);
+    ImGui::EndDisabled();
+    {
+      char text[160] = "";
+      if (body_.coarse && !view_.fullResolution)
+        std::snprintf(text, sizeof text, "coarse surface%s: %zu of %zu triangles",
+                      body_.coarseStep > 1 ? (" (every " + std::to_string(body_.coarseStep) + " voxels)").c_str() : "",
+                      body_.coarse->triangles.size(), body_.fullTriangles);
+      reservedLine(text[0] != 0, ImGui::GetStyleColorVec4(ImGuiCol_TextDisabled), text);
+      if (text[0] != 0 && ImGui::IsItemHovered())
+        ImGui::SetTooltip(
+            "The smooth surface has more triangles than a frame's budget (%zu): the isosurface sampled "
+            "every %d voxels is drawn, carried by the same elements. The physics is the full body's.",
+            kDisplayTriangleBudget, body_.coarseStep);
+    }
     ImGui::Checkbox("wireframe (levels)", &view_.wireframe);
     ImGui::SameLine();
     ImGui::Checkbox("vertices", &view_.vertices);
@@ -830,8 +854,7 @@ class Viewer {
       ImGui::TextWrapped("%zu materials (one per region label)%s", materials,
                          label1Listed ? "" : "; E and density above are label 1's");
       for (const RegionMaterial& r : body.material.regions)
-        ImGui::TextDisabled("  label %u: E %.3g Pa, density %.0f kg/m3", unsigned(r.label), r.youngsModulus,
-                            r.density);
+        ImGui::TextDisabled("  label %u: E %.3g Pa, density %.0f kg/m3", unsigned(r.label), r.youngsModulus, r.density);
     }
     float damping = float(scene_.simulation.damping);
     if (ImGui::SliderFloat("damping [1/s]", &damping, 0.f, 20.f, "%.2f")) scene_.simulation.damping = damping;
@@ -925,8 +948,8 @@ class Viewer {
   Figures figures_;
   Camera camera_;
   ViewOptions view_;
-  float stressFactor_ = 1;       // the stress colour's darkest, in units of autoStressScale_
-  double autoStressScale_ = 1;   // [Pa] draw_list.h autoStressScale of the running model
+  float stressFactor_ = 1;      // the stress colour's darkest, in units of autoStressScale_
+  double autoStressScale_ = 1;  // [Pa] draw_list.h autoStressScale of the running model
   std::optional<ManipulatorDrag> drag_;
   Mode mode_ = Mode::None;
   double lastX_ = 0, lastY_ = 0;
@@ -948,9 +971,9 @@ class Viewer {
   double worldHeldSeconds_ = 0;
   /// The panel's shape settings of one body (the scene holds the rest).
   struct BodyEdit {
-    int shapeIndex = 0, sizeVoxels = 12;  ///< kShapes index (kAsLoaded: the loaded volume)
-    Real extent = 0.12;                   ///< [m] kept when the resolution changes.
-    ShapeSpec loadedShape;                ///< As loaded: scaled for other sizes.
+    int shapeIndex = 0, sizeVoxels = 12;               ///< kShapes index (kAsLoaded: the loaded volume)
+    Real extent = 0.12;                                ///< [m] kept when the resolution changes.
+    ShapeSpec loadedShape;                             ///< As loaded: scaled for other sizes.
     std::shared_ptr<const VolumeSource> loadedSource;  ///< As loaded from a file (null: a shape).
     std::string origin;                                ///< "from <file>", "a preset shape", ... and the grid.
   };
@@ -1055,6 +1078,11 @@ int run(const Options& o) {
       v.stress = true;
       viewer.setView(v);
     }
+    if (o.fullSurface) {
+      ViewOptions v = viewer.view();
+      v.fullResolution = true;
+      viewer.setView(v);
+    }
 
     FrameTimes times;
     double last = viewer.wallNow(), runStart = last;
@@ -1085,9 +1113,9 @@ int run(const Options& o) {
         std::unique_lock<std::mutex> lock = viewer.lockState();
         if (viewer.figures().time >= o.screenshotTime) {
           writePng(o.screenshot, readPixels(fbw, fbh));
-          std::cout << nlohmann::json{{"screenshot", o.screenshot}, {"size", {fbw, fbh}}, {"t", viewer.figures().time}}
-                           .dump()
-                    << "\n";
+          std::cout
+              << nlohmann::json{{"screenshot", o.screenshot}, {"size", {fbw, fbh}}, {"t", viewer.figures().time}}.dump()
+              << "\n";
           break;
         }
       }
@@ -1120,7 +1148,8 @@ int run(const Options& o) {
         times.work.push_back(work);
         times.worldHeld.push_back(viewer.worldHeldSeconds());
         if (viewer.rebuilding()) times.longestDuringRebuild = std::max(times.longestDuringRebuild, now - last);
-        if (rebuildAsked && !viewer.rebuilding() && !rebuildSeen) rebuildSeen = true, rebuildSeconds = viewer.lastRebuildSeconds();
+        if (rebuildAsked && !viewer.rebuilding() && !rebuildSeen)
+          rebuildSeen = true, rebuildSeconds = viewer.lastRebuildSeconds();
         if (o.rebuildSize > 0 && !rebuildAsked && now - runStart >= o.rebuildAt) {
           viewer.setBodySize(o.rebuildSize);
           rebuildAsked = true;
@@ -1139,7 +1168,8 @@ int run(const Options& o) {
         const double vertexSteps = viewer.vertexSteps() - vertexStepsStart;
         j["step_cpu_ns_per_vertex_step"] = vertexSteps > 0 ? 1e9 * stepCpu / vertexSteps : 0.0;
         j["step_thread_core_share"] = stepCpu / wall;
-        j["draw_cpu_ms_per_frame"] = frames > 0 ? 1e3 * (processCpuSeconds() - cpuStart - stepCpu) / double(frames) : 0.0;
+        j["draw_cpu_ms_per_frame"] =
+            frames > 0 ? 1e3 * (processCpuSeconds() - cpuStart - stepCpu) / double(frames) : 0.0;
         j["load_average_1min"] = loadAverage();
         j["frame_ms_median"] = 1e3 * FrameTimes::median(times.all);
         j["frame_work_ms_median"] = 1e3 * FrameTimes::median(times.work);
@@ -1161,6 +1191,9 @@ int run(const Options& o) {
           j["frame_ms_max_during_rebuild"] = 1e3 * times.longestDuringRebuild;
         }
         j["draw_triangles"] = viewer.drawTriangles();
+        j["full_surface_triangles"] = viewer.bodyView().fullTriangles;
+        j["coarse_surface"] = viewer.bodyView().coarse.has_value() && !viewer.view().fullResolution;
+        j["coarse_step"] = viewer.bodyView().coarseStep;
         j["gl_renderer"] = Renderer::glRenderer();
         std::cout << j.dump(2) << "\n";
         break;
@@ -1192,6 +1225,8 @@ int main(int argc, char** argv) {
                  "With --run-for: ask for this body size (as the panel would) at --rebuild-at; the JSON gives "
                  "the rebuild's time and the longest frame during it");
   app.add_option("--rebuild-at", o.rebuildAt, "[s] wall time of --rebuild-size")->capture_default_str();
+  app.add_flag("--full-surface", o.fullSurface,
+               "Draw the full-resolution surface of a body over the display budget (the panel's checkbox)");
   try {
     app.parse(argc, argv);
     return run(o);
