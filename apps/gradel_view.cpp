@@ -110,6 +110,7 @@ struct Options {
   int rebuildSize = 0;           // with --run-for: ask for this size as the panel would ...
   double rebuildAt = 1.0;        // ... at this wall time [s]
   bool fullSurface = false;      // the panel's "full-resolution surface" on from the start
+  bool framePieces = false;      // no window: time the frame loop's CPU pieces and exit
 };
 
 // Frame times [s] of a timing run (--run-for): their median and maximum, and the longest frame
@@ -1021,10 +1022,76 @@ GLFWwindow* openWindow(int width, int height, int samples) {
   return window;
 }
 
+// --frame-pieces: the frame loop's CPU pieces without a window (no display, no OpenGL), on the
+// calling thread's CPU clock so that a loaded machine stretches them less than wall time: the
+// build, one step on one thread (what the stepping thread pays; dt / that = the real-time factor
+// one free core would give), and what a frame does holding the world: the draw list as the
+// viewer builds it (the coarse mesh over the budget) and at full resolution, the stress pass (4 a
+// second, or every frame while the stress colour shows) and the bodies' bounds. JSON on stdout.
+int framePieces(const Options& o, Scene scene) {
+  auto cpuOf = [](auto&& f, int reps) {
+    const double t0 = threadCpuSeconds();
+    for (int r = 0; r < reps; ++r) f();
+    return (threadCpuSeconds() - t0) / reps;
+  };
+  if (o.bodySize > 0) {
+    BodySettings& b = scene.bodyAt(0);
+    const Real extent = b.shape.voxelSize * b.shape.dims[0];
+    b.shape = presetShape("sphere", o.bodySize, scene.dim, extent / o.bodySize);
+    b.source = nullptr;
+  }
+  int width = 0, height = 0;
+  parseSize(o.size, &width, &height);
+  double t0 = threadCpuSeconds();
+  BuiltScene built = buildScene(scene);
+  const double buildCpu = threadCpuSeconds() - t0;
+  t0 = threadCpuSeconds();
+  const BodyView view = makeBodyView(built, nullptr, kDisplayTriangleBudget);
+  const double viewCpu = threadCpuSeconds() - t0;
+  World& w = *built.world;
+  w.setThreads(1);
+  for (int k = 0; k < 5; ++k) w.step();  // warm
+  const int steps = std::max(5, int(2e6 / double(w.model().numVertices())));
+  const double step = cpuOf([&] { w.step(); }, steps);
+  ViewOptions v;
+  const double drawList = cpuOf([&] { (void)buildDrawList(view, w, v, width, height); }, 10);
+  v.fullResolution = true;
+  const double drawListFull = cpuOf([&] { (void)buildDrawList(view, w, v, width, height); }, 10);
+  const double stress = cpuOf([&] { (void)w.elementStress(); }, 5);
+  const double bounds = cpuOf(
+      [&] {
+        Vec3 lo = w.state().positions[0], hi = lo;
+        for (const Vec3& x : w.state().positions) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+        volatile double sink = lo.x() + hi.x();
+        (void)sink;
+      },
+      10);
+  nlohmann::json j;
+  j["body_size"] = o.bodySize > 0 ? o.bodySize : scene.bodyAt(0).shape.dims[0];
+  j["vertices"] = w.model().numVertices();
+  j["dt"] = w.dt();
+  j["build_cpu_s"] = buildCpu;
+  j["body_view_cpu_s"] = viewCpu;
+  j["step_cpu_ms_1_thread"] = 1e3 * step;
+  j["step_cpu_ns_per_vertex_step"] = 1e9 * step / double(w.model().numVertices());
+  j["real_time_factor_one_free_core"] = w.dt() / step;
+  j["draw_triangles"] = (view.coarse ? view.coarse->triangles.size() : view.smooth.triangles.size());
+  j["full_surface_triangles"] = view.fullTriangles;
+  j["coarse_step"] = view.coarseStep;
+  j["draw_list_cpu_ms"] = 1e3 * drawList;
+  j["draw_list_full_cpu_ms"] = 1e3 * drawListFull;
+  j["stress_pass_cpu_ms"] = 1e3 * stress;
+  j["bounds_cpu_ms"] = 1e3 * bounds;
+  j["load_average_1min"] = loadAverage();
+  std::cout << j.dump(2) << "\n";
+  return 0;
+}
+
 int run(const Options& o) {
   int width = 0, height = 0;
   parseSize(o.size, &width, &height);
   Scene scene = o.scene.empty() ? parseScene(kPlayScene, "play") : loadScene(o.scene);
+  if (o.framePieces) return framePieces(o, std::move(scene));
   if (!(o.runFor >= 0) || !std::isfinite(o.runFor)) throw InputError("--run-for: must be >= 0 seconds");
   if (o.bodySize != 0 && (o.bodySize < kMinBodySize || o.bodySize > kMaxBodySize))
     throw InputError("--body-size: must be " + std::to_string(kMinBodySize) + " ... " + std::to_string(kMaxBodySize));
@@ -1225,6 +1292,9 @@ int main(int argc, char** argv) {
                  "With --run-for: ask for this body size (as the panel would) at --rebuild-at; the JSON gives "
                  "the rebuild's time and the longest frame during it");
   app.add_option("--rebuild-at", o.rebuildAt, "[s] wall time of --rebuild-size")->capture_default_str();
+  app.add_flag("--frame-pieces", o.framePieces,
+               "No window: time the frame loop's CPU pieces (step, draw list, stress pass) at --body-size, print "
+               "JSON and exit");
   app.add_flag("--full-surface", o.fullSurface,
                "Draw the full-resolution surface of a body over the display budget (the panel's checkbox)");
   try {

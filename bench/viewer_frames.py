@@ -7,6 +7,10 @@ after each run (the machine is shared: wall-clock figures are loaded, the CPU on
 
 Usage: bench/viewer_frames.py [--view build/gradel-view] [--sizes 32,64,128] [--seconds 12]
                               [--reps 1] [--full-surface] [--rebuild 12:128]
+       bench/viewer_frames.py --pieces [--sizes ...] [--reps N]
+With --pieces no window is opened: `gradel-view --frame-pieces` times the frame loop's CPU pieces
+(one step on one thread and the real-time factor one free core gives, the draw list coarse and
+full, the stress pass) on the thread's CPU clock.
 """
 import argparse
 import json
@@ -27,10 +31,13 @@ def main():
     p.add_argument("--reps", type=int, default=1)
     p.add_argument("--full-surface", action="store_true", help="draw the full surface over the budget too")
     p.add_argument("--rebuild", default="", help="FROM:TO: start at FROM, ask for TO at 2 s (as the panel would)")
+    p.add_argument("--pieces", action="store_true", help="no window: the frame loop's CPU pieces")
     a = p.parse_args()
     if not os.access(a.view, os.X_OK):
         print(f"viewer_frames: {a.view}: not an executable (build the gradel-view target)", file=sys.stderr)
         return 2
+    if a.pieces:
+        return pieces(a)
     cols = ["size", "rep", "surface", "vertices", "draw_triangles", "full_surface_triangles", "coarse_step", "dt_s",
             "real_time_factor_last_s", "steps_per_second_last_s", "frame_ms_median", "frame_ms_max",
             "frame_work_ms_median", "world_held_ms_median", "frames_per_second", "step_cpu_ns_per_vertex_step",
@@ -65,6 +72,26 @@ def main():
                     v = j[c]
                     row[c] = f"{v:.4g}" if isinstance(v, float) else v
             print(",".join(str(row[c]) for c in cols), flush=True)
+    return 0
+
+
+def pieces(a):
+    cols = ["body_size", "rep", "vertices", "dt", "step_cpu_ms_1_thread", "step_cpu_ns_per_vertex_step",
+            "real_time_factor_one_free_core", "draw_triangles", "full_surface_triangles", "coarse_step",
+            "draw_list_cpu_ms", "draw_list_full_cpu_ms", "stress_pass_cpu_ms", "bounds_cpu_ms", "build_cpu_s",
+            "body_view_cpu_s", "load_1min_before", "load_1min_after"]
+    print(",".join(cols))
+    for size in (int(s) for s in a.sizes.split(",")):
+        for rep in range(a.reps):
+            before = load()
+            out = subprocess.run([a.view, "--frame-pieces", "--body-size", str(size)], capture_output=True, text=True)
+            after = load()
+            if out.returncode != 0:
+                print(f"viewer_frames: size {size}: exit {out.returncode}: {out.stderr.strip()}", file=sys.stderr)
+                return 1
+            j = json.loads(out.stdout)
+            j.update(rep=rep, load_1min_before=before, load_1min_after=after)
+            print(",".join(f"{j[c]:.4g}" if isinstance(j[c], float) else str(j[c]) for c in cols), flush=True)
     return 0
 
 
