@@ -19,8 +19,8 @@
 //   Poisson's ratio nu (`poisson_ratio`, default 0): the shape-matching energy above is linear
 //   isotropic elasticity with mu = E/2, lambda = 0 at small strain (k_e/2 tr(eps S eps^T) =
 //   E/2 |eps|^2 V_e for a complete element). For nu > 0 k_e is divided by (1 + nu), so that
-//   mu = E / (2 (1 + nu)), and each element gets a volumetric energy kappa_e/2 (J - 1)^2 on
-//   J = det F, F = A S_e^-1 (element.h elementVolumeForces) with kappa_e = lambda V_e,
+//   mu = E / (2 (1 + nu)), and each element gets a corotated volumetric energy kappa_e/2 e_v^2 on
+//   its volumetric strain e_v about its best-fit rotation (element.h elementVolumeForces), kappa_e = lambda V_e,
 //   lambda = E nu / ((1 + nu)(1 - 2 nu)): small-strain energy mu |eps|^2 + lambda/2 tr(eps)^2,
 //   Young's modulus E and Poisson's ratio nu. 2D bodies are in plane strain (as the stress
 //   output, element_strain.h): the same lambda, a lateral / axial strain nu / (1 - nu). `paper`
