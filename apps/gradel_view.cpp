@@ -33,6 +33,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "gradel/divergence.h"
 #include "gradel/render/body_table.h"
 #include "gradel/render/draw_list.h"
 #include "gradel/render/manipulator_drag.h"
@@ -231,7 +232,7 @@ class Viewer {
     World& w = *built_.world;
     if (!stepper_.joinable() && !paused_ && !rebuild_) {  // fixed 1/60 s of simulated time a frame
       const long n = std::max(1L, std::lround(kFrameSeconds * speed_ / w.dt()));
-      for (long k = 0; k < n && finite(w); ++k) w.step();
+      for (long k = 0; k < n && finiteState(w.state()); ++k) w.step();
       steps_ += n;
     }
     if (stepOnce_ && !rebuild_) {
@@ -419,12 +420,6 @@ class Viewer {
     return kAsLoaded;
   }
 
-  static bool finite(const World& w) {
-    for (const Vec3& p : w.state().positions)
-      if (!p.allFinite()) return false;
-    return true;
-  }
-
   // ---- stepping (its own thread) ----
   // Each batch: what to do, from the state (brief); the steps, holding only the world; the
   // result, into the state (brief). Never both locks at once.
@@ -468,7 +463,7 @@ class Viewer {
       const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
       const double cpu = threadCpuSeconds() - cpu0;
       const size_t vertices = w.model().numVertices();
-      const bool ok = finite(w);
+      const bool ok = finiteState(w.state());
       const double simTime = w.time();
       world.unlock();
       std::unique_lock<std::mutex> state = lockState();
