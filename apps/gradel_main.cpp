@@ -203,14 +203,6 @@ class Progress {
   bool drawn_ = false;
 };
 
-bool finiteState(const gradel::State& s) {
-  for (const gradel::Vec3& p : s.positions)
-    if (!p.allFinite()) return false;
-  for (const gradel::Vec3& v : s.velocities)
-    if (!v.allFinite()) return false;
-  return true;
-}
-
 std::string hex64(uint64_t h) {
   char buf[20];
   std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
@@ -372,7 +364,7 @@ int runScene(const RunOptions& o) {
   Progress progress;
   gradel::FrameLoopChecks checks;
   checks.afterChunk = [&] {
-    if (!finiteState(world.state())) {
+    if (!gradel::finiteState(world.state())) {
       char msg[160];
       std::snprintf(msg, sizeof msg, "simulation diverged at t=%.6g s (dt = %.3g s): non-finite numbers; ",
                     world.time(), dt);

@@ -35,6 +35,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "gradel/divergence.h"
 #include "gradel/render/body_table.h"
 #include "gradel/render/display_budget.h"
 #include "gradel/render/draw_list.h"
@@ -237,7 +238,7 @@ class Viewer {
     World& w = *built_.world;
     if (!stepper_.joinable() && !paused_ && !rebuild_) {  // fixed 1/60 s of simulated time a frame
       const long n = std::max(1L, std::lround(kFrameSeconds * speed_ / w.dt()));
-      for (long k = 0; k < n && finite(w); ++k) w.step();
+      for (long k = 0; k < n && finiteState(w.state()); ++k) w.step();
       steps_ += n;
     }
     if (stepOnce_ && !rebuild_) {
@@ -443,12 +444,6 @@ class Viewer {
     return sf;
   }
 
-  static bool finite(const World& w) {
-    for (const Vec3& p : w.state().positions)
-      if (!p.allFinite()) return false;
-    return true;
-  }
-
   // ---- stepping (its own thread) ----
   // Each batch: what to do, from the state (brief); the steps, holding only the world; the
   // result, into the state (brief). Never both locks at once.
@@ -492,7 +487,7 @@ class Viewer {
       const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
       const double cpu = threadCpuSeconds() - cpu0;
       const size_t vertices = w.model().numVertices();
-      const bool ok = finite(w);
+      const bool ok = finiteState(w.state());
       const double simTime = w.time();
       std::optional<StressFigures> stress;  // four times a second, here rather than in a frame
       if (const double at = wallNow(); ok && at - stressAt_.load() >= 0.25) stress = stressFigures(w, at);

@@ -17,6 +17,7 @@
 #include <optional>
 #include <sstream>
 
+#include "gradel/divergence.h"
 #include "gradel/io/volume_data_source.h"
 #include "gradel/io/volume_file.h"
 #include "gradel/isosurface.h"
@@ -283,12 +284,6 @@ void requireFiniteState(const World& w) {
       throw InputError("velocities: vertex " + std::to_string(i) +
                        " is not finite (NaN or inf written into velocities?)");
   }
-}
-
-bool finiteState(const World& w) {
-  for (size_t i = 0; i < w.state().positions.size(); ++i)
-    if (!w.state().positions[i].allFinite() || !w.state().velocities[i].allFinite()) return false;
-  return true;
 }
 
 std::string num(double x) {
@@ -901,13 +896,13 @@ PYBIND11_MODULE(gradel, m) {
       .def("metrics",
            [](Simulation& s) {
              WorldLock lock(s);
-             return metricsDict(s.world().metrics(), finiteState(s.world()));
+             return metricsDict(s.world().metrics(), finiteState(s.world().state()));
            })
       .def(
           "body_metrics",
           [](Simulation& s) {
             WorldLock lock(s);
-            const bool finite = finiteState(s.world());
+            const bool finite = finiteState(s.world().state());
             py::list out;
             for (const Metrics& x : s.world().bodyMetrics()) out.append(metricsDict(x, finite));
             return out;

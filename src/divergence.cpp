@@ -80,6 +80,14 @@ DivergenceFacts divergenceFacts(const World& world, double duration) {
   return f;
 }
 
+bool finiteState(const State& s) {
+  for (const Vec3& p : s.positions)
+    if (!p.allFinite()) return false;
+  for (const Vec3& v : s.velocities)
+    if (!v.allFinite()) return false;
+  return true;
+}
+
 std::string likelyCause(const DivergenceFacts& f, const Metrics& now) {
   char buf[512];
   if (f.forwardEuler)

@@ -70,6 +70,11 @@ struct DivergenceFacts {
 };
 DivergenceFacts divergenceFacts(const World& world, double duration);
 
+/// Whether every position and velocity of the state is finite: the check every front end (the
+/// CLI's `run` and `render`, the viewer, the web page, Python) makes between chunks of steps; a
+/// non-finite state is a divergence whatever the energy says.
+bool finiteState(const State& s);
+
 /// The likely cause and the setting that fixes it, from what was measured: dt against the
 /// stability limit, a manipulator's or a body's speed per step against the voxel size, the
 /// stiffness ratio of the materials, else the inverted elements of `now`.

@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "gradel/divergence.h"
 #include "gradel/output.h"
 #include "gradel/render/draw_list.h"
 #include "gradel/render/offscreen.h"
@@ -117,7 +118,7 @@ int runRenderCommand(const RenderCommandOptions& o) {
   const DisplaySurface& exportSurface = exportKind == SurfaceKind::Voxel ? body.voxel : body.smooth;
   const auto wallStart = std::chrono::steady_clock::now();
   double drawSeconds = 0;
-  const size_t frames = runFrames(world, schedule, [&](size_t f) {
+  const auto onFrame = [&](size_t f) {
     char name[48];
     if (!o.noPictures) {
       const auto t0 = std::chrono::steady_clock::now();
@@ -140,7 +141,21 @@ int runRenderCommand(const RenderCommandOptions& o) {
       else
         writePly(dir.file(name).string(), m);
     }
-  });
+  };
+  // A non-finite state stops the run with exit 3, as `gradel run` (gradel_main.cpp's exit codes).
+  struct NonFinite {};
+  FrameLoopChecks checks;
+  checks.afterChunk = [&] {
+    if (!finiteState(world.state())) throw NonFinite{};
+  };
+  size_t frames = 0;
+  try {
+    frames = runFrames(world, schedule, onFrame, checks);
+  } catch (const NonFinite&) {
+    std::cerr << "gradel render: simulation diverged at t=" << world.time() << " s (dt = " << world.dt()
+              << " s): non-finite numbers\n";
+    return 3;
+  }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
 
   bool video = false;

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "gradel/divergence.h"
 #include "gradel/render/camera.h"
 #include "gradel/render/draw_list.h"
 #include "gradel/render/manipulator_drag.h"
@@ -226,11 +227,7 @@ class Demo {
     const float f[3] = {float(c.x()), float(c.y()), float(c.z())};
     return floatArray(f, 3);
   }
-  bool finite() const {
-    for (const Vec3& p : built_.world->state().positions)
-      if (!p.allFinite()) return false;
-    return true;
-  }
+  bool finite() const { return finiteState(built_.world->state()); }
 
  private:
   enum class Mode { None, Orbit, Pan, Drag };
