@@ -740,8 +740,7 @@ void readBodies(Fields& top, Scene& scene) {
     if (auto m = f.optObject("material")) readMaterial(*m, b.material);
     f.finish();
   }
-  scene.body = std::move(bodies[0]);
-  scene.moreBodies.assign(std::make_move_iterator(bodies.begin() + 1), std::make_move_iterator(bodies.end()));
+  scene.bodies = std::move(bodies);
 }
 
 void readSimulation(Fields f, Scene& scene) {
@@ -836,7 +835,7 @@ PinSettings readPin(Fields& f, const Scene& scene) {
   const int dim = scene.dim;
   PinSettings p;
   p.body = uint32_t(f.optInteger("body", 0, int(scene.numBodies()) - 1).value_or(0));
-  const BodySettings& body = scene.bodyAt(p.body);
+  const BodySettings& body = scene.bodies[p.body];
   if (auto mf = f.optObject("mask")) {
     f.forbid("min", "a pin takes a box (\"min\", \"max\") or a \"mask\", not both");
     f.forbid("max", "a pin takes a box (\"min\", \"max\") or a \"mask\", not both");
@@ -944,9 +943,9 @@ Scene parseScene(const std::string& jsonText, const std::string& sourceName) {
     readBodies(top, scene);
   } else {
     Fields body = top.requireObject("body");
-    readBody(body, scene.dim, scene.body);
+    readBody(body, scene.dim, scene.bodies[0]);
     body.finish();
-    if (auto m = top.optObject("material")) readMaterial(*m, scene.body.material);
+    if (auto m = top.optObject("material")) readMaterial(*m, scene.bodies[0].material);
   }
   if (auto s = top.optObject("simulation")) readSimulation(*s, scene);
   if (auto d = top.optObject("domain")) readDomain(*d, scene);
@@ -957,8 +956,7 @@ Scene parseScene(const std::string& jsonText, const std::string& sourceName) {
   top.finish();
 
   // A union's labels need materials (a volume file's labels are checked when it is read).
-  for (size_t k = 0; k < scene.numBodies(); ++k) {
-    const BodySettings& body = k == 0 ? scene.body : scene.moreBodies[k - 1];
+  for (const BodySettings& body : scene.bodies) {
     if (body.source) continue;
     // The body's key path ("body" or "bodies[k]"), from the key that set its grid.
     const std::string key = body.sizeKey.substr(0, body.sizeKey.rfind('.'));

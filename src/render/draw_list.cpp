@@ -350,10 +350,10 @@ void appendBodyView(BodyView& all, BodyView part, const BodyRange& range) {
 BodyView makeBodyView(const BuiltScene& scene, const TriangleMesh* restMesh) {
   BodyView all;
   if (scene.numBodies() == 1) {
-    all = makeOneBodyView(scene, restMesh);
+    all = makeOneBodyView(scene.bodies[0], restMesh);
   } else {
     for (size_t i = 0; i < scene.numBodies(); ++i)
-      appendBodyView(all, makeOneBodyView(scene.body(i), i == 0 ? restMesh : nullptr), scene.range(i));
+      appendBodyView(all, makeOneBodyView(scene.bodies[i], i == 0 ? restMesh : nullptr), scene.range(i));
   }
   all.smoothIndices = indexList(all.smooth.triangles);
   if (all.embedded) all.embeddedIndices = indexList(all.embedded->triangles);
