@@ -7,6 +7,8 @@
 // batches, so drawing and the panel never wait for it; it says so on screen when it cannot keep
 // up. A rebuild (a new size, shape, material ...) runs on a background thread with its progress
 // shown; a size estimated below 0.1x real time is flagged before it is built (shared/realtime_size.h).
+// A body whose smooth surface is over the display budget (render/display_budget.h) is drawn with
+// a coarser embedded isosurface, so a frame's drawing stays bounded at any size.
 // Frames are capped at 60 per second; no multisampling on a software OpenGL (llvmpipe).
 #include <GLFW/glfw3.h>
 #include <backends/imgui_impl_glfw.h>
@@ -34,6 +36,7 @@
 #include <nlohmann/json.hpp>
 
 #include "gradel/render/body_table.h"
+#include "gradel/render/display_budget.h"
 #include "gradel/render/draw_list.h"
 #include "gradel/render/manipulator_drag.h"
 #include "gradel/render/render_command.h"
@@ -85,8 +88,8 @@ constexpr const char* kPlayScene = R"({
 })";
 
 constexpr double kFrameSeconds = 1.0 / 60;  // [s] the frame cap
-constexpr double kMaxFramePeriod = 0.1;      // [s] the longest wait the CPU budget makes a frame
-constexpr double kDrawCores = 1.0;           // cores the drawing may use on average (the stepping has the rest)
+constexpr double kMaxFramePeriod = 0.1;     // [s] the longest wait the CPU budget makes a frame
+constexpr double kDrawCores = 1.0;          // cores the drawing may use on average (the stepping has the rest)
 constexpr double kSlowFactor = 0.1;         // sizes estimated below this real-time factor are flagged
 constexpr int kMinBodySize = 4, kMaxBodySize = 256;
 constexpr float kPanelWidth = 330;  // [pixels] the settings panel at the left
@@ -106,12 +109,15 @@ struct Options {
   int bodySize = 0;              // the first body's size [voxels] as the panel sets it (0 = the scene's)
   int rebuildSize = 0;           // with --run-for: ask for this size as the panel would ...
   double rebuildAt = 1.0;        // ... at this wall time [s]
+  bool fullSurface = false;      // the panel's "full-resolution surface" on from the start
+  bool framePieces = false;      // no window: time the frame loop's CPU pieces and exit
 };
 
 // Frame times [s] of a timing run (--run-for): their median and maximum, and the longest frame
 // while a rebuild ran.
 struct FrameTimes {
-  std::vector<double> all, work, worldHeld;  // frame to frame; a frame's own work (events, panel, drawing), cap excluded
+  // frame to frame; a frame's own work (events, panel, drawing), cap excluded; the world held
+  std::vector<double> all, work, worldHeld;
   double longestDuringRebuild = 0;
   static double median(std::vector<double> v) {
     if (v.empty()) return 0;
@@ -142,10 +148,10 @@ struct Figures {
 // A world being built on a background thread, and what the panel asked for.
 struct Rebuild {
   Scene scene;
-  bool load = false;     // a new scene: camera, surface mode and body edits start afresh
-  bool reframe = false;  // frame the camera on it
-  std::string what;      // shown while it builds, e.g. "size 128"
-  double start = 0;      // [s] wall
+  bool load = false;          // a new scene: camera, surface mode and body edits start afresh
+  bool reframe = false;       // frame the camera on it
+  std::string what;           // shown while it builds, e.g. "size 128"
+  double start = 0;           // [s] wall
   std::atomic<int> phase{0};  // 0 volume + layout + model + world, 1 display surfaces, 2 done
   std::optional<BuiltScene> built;
   std::optional<BodyView> view;
@@ -161,12 +167,12 @@ class Viewer {
   Viewer(GLFWwindow* window, Scene scene, bool threaded, Clock::time_point start, int bodySize)
       : window_(window), start_(start) {
     BuiltScene built = buildScene(scene);
-    BodyView view = makeBodyView(built);
+    BodyView view = makeBodyView(built, nullptr, kDisplayTriangleBudget);
     install(std::move(scene), std::move(built), std::move(view), true, true);
     if (bodySize > 0) {
       resizeBody(0, bodySize);
       built = buildScene(scene_);
-      view = makeBodyView(built);
+      view = makeBodyView(built, nullptr, kDisplayTriangleBudget);
       install(scene_, std::move(built), std::move(view), false, true);
     }
     if (threaded) stepper_ = std::thread([this] { stepLoop(); });
@@ -250,20 +256,21 @@ class Viewer {
     figures_.dtRule = w.dtRule();
     figures_.elements = w.model().numElements(), figures_.vertices = w.model().numVertices();
     figures_.pairs = w.model().numPairs();
-    // The stress: per vertex for the colour (every frame it is shown), else its maximum and the
-    // body table's figures four times a second (each a pass over the elements, holding the world).
+    // The stress: per vertex for the colour (every frame it is shown). Its maximum and the body
+    // table's figures (each a pass over the elements: 6-7 ms of CPU at size 128) are taken four
+    // times a second by the stepping thread after a batch (stressFigures); here only when that
+    // thread has not for a second (paused, a new world, screenshots without it).
     std::vector<Real> vertexStress;
     if (view_.stress) {
       const std::vector<Real> es = w.elementStress();
       figures_.maxStress = es.empty() ? 0.0 : *std::max_element(es.begin(), es.end());
-      figures_.stressAt = now;
       vertexStress = w.vertexStress(es);
     }
-    if (now - figures_.stressAt >= 0.25 || now < figures_.stressAt) {
-      const std::vector<Real> es = w.elementStress();
-      figures_.maxStress = es.empty() ? 0.0 : *std::max_element(es.begin(), es.end());
-      figures_.stressAt = now;
-      figures_.bodies = built_.numBodies() > 1 ? bodyTable(built_) : std::vector<BodyRow>{};
+    const double due = stepper_.joinable() && !paused_ ? 1.0 : 0.25;
+    if (now - figures_.stressAt >= due || now < figures_.stressAt) {
+      StressFigures sf = stressFigures(w, now);
+      figures_.maxStress = sf.maxStress, figures_.stressAt = sf.at, figures_.bodies = std::move(sf.bodies);
+      stressAt_ = sf.at;
     }
     figures_.bounds.clear();
     for (size_t b = 0; b < built_.numBodies(); ++b) {
@@ -368,6 +375,7 @@ class Viewer {
   bool rebuilding() const { return rebuild_ != nullptr; }
   double lastRebuildSeconds() const { return lastRebuildSeconds_; }
   const ViewOptions& view() const { return view_; }
+  const BodyView& bodyView() const { return body_; }
   void setView(const ViewOptions& v) { view_ = v; }
   /// Body 0's size as the panel's slider sets it, rebuilt in the background.
   void setBodySize(int size) {
@@ -417,6 +425,22 @@ class Viewer {
           return i;
       }
     return kAsLoaded;
+  }
+
+  // The panel's max von Mises stress and body table (a pass over the elements), taken at wall
+  // time `at` (call with the world held).
+  struct StressFigures {
+    Real maxStress = 0;
+    std::vector<BodyRow> bodies;
+    double at = 0;
+  };
+  StressFigures stressFigures(const World& w, double at) const {
+    StressFigures sf;
+    const std::vector<Real> es = w.elementStress();
+    sf.maxStress = es.empty() ? 0.0 : *std::max_element(es.begin(), es.end());
+    sf.bodies = built_.numBodies() > 1 ? bodyTable(built_) : std::vector<BodyRow>{};
+    sf.at = at;
+    return sf;
   }
 
   static bool finite(const World& w) {
@@ -470,9 +494,16 @@ class Viewer {
       const size_t vertices = w.model().numVertices();
       const bool ok = finite(w);
       const double simTime = w.time();
+      std::optional<StressFigures> stress;  // four times a second, here rather than in a frame
+      if (const double at = wallNow(); ok && at - stressAt_.load() >= 0.25) stress = stressFigures(w, at);
       world.unlock();
       std::unique_lock<std::mutex> state = lockState();
       if (generation != generation_) continue;
+      if (stress) {
+        figures_.maxStress = stress->maxStress, figures_.stressAt = stress->at;
+        figures_.bodies = std::move(stress->bodies);
+        stressAt_ = stress->at;
+      }
       if (drag && drag_ && drag_->index == drag->index) drag_->from = drag->to;  // reached
       pacer_.stepped(n, seconds);
       steps_ += n;
@@ -513,7 +544,7 @@ class Viewer {
         }
         p->built = buildScene(p->scene);
         p->phase = 1;
-        p->view = makeBodyView(*p->built);
+        p->view = makeBodyView(*p->built, nullptr, kDisplayTriangleBudget);
       } catch (const InputError& e) {
         p->error = e.what();
       } catch (const std::exception& e) {
@@ -554,6 +585,7 @@ class Viewer {
     body_ = std::move(view);
     autoStressScale_ = autoStressScale(built_.world->model());
     figures_.stressAt = -1e9;  // the new world's figures at the next frame
+    stressAt_ = -1e9;
     drag_.reset();
     steps_ = 0;
     rates_.reset();
@@ -665,8 +697,8 @@ class Viewer {
     ImGui::Text("t = %.3f s  dt = %.3g s  %s", f.time, f.dt, f.integrator.c_str());
     if (ImGui::IsItemHovered()) ImGui::SetTooltip("dt: %s", f.dtRule.c_str());
     // The auto choice's reason: one line (the full text as a tooltip).
-    reservedLine(!f.choice.empty(), ImGui::GetStyleColorVec4(ImGuiCol_Text), "auto: " + f.choice.substr(0, 44) +
-                                                                           (f.choice.size() > 44 ? "..." : ""));
+    reservedLine(!f.choice.empty(), ImGui::GetStyleColorVec4(ImGuiCol_Text),
+                 "auto: " + f.choice.substr(0, 44) + (f.choice.size() > 44 ? "..." : ""));
     if (!f.choice.empty() && ImGui::IsItemHovered()) ImGui::SetTooltip("auto: %s", f.choice.c_str());
     ImGui::Text("%zu elements  %zu vertices  %zu pairs", f.elements, f.vertices, f.pairs);
     ImGui::Text("max von Mises stress %s", pascalText(f.maxStress).c_str());
@@ -738,6 +770,24 @@ class Viewer {
     ImGui::SameLine();
     ImGui::RadioButton("none", &surface, int(SurfaceMode::None));
     view_.surface = SurfaceMode(surface);
+    // A body over the display budget (render/display_budget.h) is drawn with a coarser mesh that
+    // follows the same elements; the full one on request (its frames then cost what they cost).
+    ImGui::BeginDisabled(!body_.coarse);  // always there: the widgets below do not move
+    ImGui::Checkbox("full-resolution surface", &view_.fullResolution);
+    ImGui::EndDisabled();
+    {
+      char text[160] = "";
+      if (body_.coarse && !view_.fullResolution)
+        std::snprintf(text, sizeof text, "coarse surface%s: %zu of %zu triangles",
+                      body_.coarseStep > 1 ? (" (every " + std::to_string(body_.coarseStep) + " voxels)").c_str() : "",
+                      body_.coarse->triangles.size(), body_.fullTriangles);
+      reservedLine(text[0] != 0, ImGui::GetStyleColorVec4(ImGuiCol_TextDisabled), text);
+      if (text[0] != 0 && ImGui::IsItemHovered())
+        ImGui::SetTooltip(
+            "The smooth surface has more triangles than a frame's budget (%zu): the isosurface sampled "
+            "every %d voxels is drawn, carried by the same elements. The physics is the full body's.",
+            kDisplayTriangleBudget, body_.coarseStep);
+    }
     ImGui::Checkbox("wireframe (levels)", &view_.wireframe);
     ImGui::SameLine();
     ImGui::Checkbox("vertices", &view_.vertices);
@@ -830,8 +880,7 @@ class Viewer {
       ImGui::TextWrapped("%zu materials (one per region label)%s", materials,
                          label1Listed ? "" : "; E and density above are label 1's");
       for (const RegionMaterial& r : body.material.regions)
-        ImGui::TextDisabled("  label %u: E %.3g Pa, density %.0f kg/m3", unsigned(r.label), r.youngsModulus,
-                            r.density);
+        ImGui::TextDisabled("  label %u: E %.3g Pa, density %.0f kg/m3", unsigned(r.label), r.youngsModulus, r.density);
     }
     float damping = float(scene_.simulation.damping);
     if (ImGui::SliderFloat("damping [1/s]", &damping, 0.f, 20.f, "%.2f")) scene_.simulation.damping = damping;
@@ -925,8 +974,8 @@ class Viewer {
   Figures figures_;
   Camera camera_;
   ViewOptions view_;
-  float stressFactor_ = 1;       // the stress colour's darkest, in units of autoStressScale_
-  double autoStressScale_ = 1;   // [Pa] draw_list.h autoStressScale of the running model
+  float stressFactor_ = 1;      // the stress colour's darkest, in units of autoStressScale_
+  double autoStressScale_ = 1;  // [Pa] draw_list.h autoStressScale of the running model
   std::optional<ManipulatorDrag> drag_;
   Mode mode_ = Mode::None;
   double lastX_ = 0, lastY_ = 0;
@@ -946,11 +995,13 @@ class Viewer {
   double stepCpuSeconds_ = 0, stepWallSeconds_ = 0, vertexSteps_ = 0;
   double simTime_ = 0;  ///< [s] the world's time after the last batch
   double worldHeldSeconds_ = 0;
+  /// [s] wall time of the last max-stress / body-table pass (set by either thread).
+  std::atomic<double> stressAt_{-1e9};
   /// The panel's shape settings of one body (the scene holds the rest).
   struct BodyEdit {
-    int shapeIndex = 0, sizeVoxels = 12;  ///< kShapes index (kAsLoaded: the loaded volume)
-    Real extent = 0.12;                   ///< [m] kept when the resolution changes.
-    ShapeSpec loadedShape;                ///< As loaded: scaled for other sizes.
+    int shapeIndex = 0, sizeVoxels = 12;               ///< kShapes index (kAsLoaded: the loaded volume)
+    Real extent = 0.12;                                ///< [m] kept when the resolution changes.
+    ShapeSpec loadedShape;                             ///< As loaded: scaled for other sizes.
     std::shared_ptr<const VolumeSource> loadedSource;  ///< As loaded from a file (null: a shape).
     std::string origin;                                ///< "from <file>", "a preset shape", ... and the grid.
   };
@@ -998,10 +1049,76 @@ GLFWwindow* openWindow(int width, int height, int samples) {
   return window;
 }
 
+// --frame-pieces: the frame loop's CPU pieces without a window (no display, no OpenGL), on the
+// calling thread's CPU clock so that a loaded machine stretches them less than wall time: the
+// build, one step on one thread (what the stepping thread pays; dt / that = the real-time factor
+// one free core would give), and what a frame does holding the world: the draw list as the
+// viewer builds it (the coarse mesh over the budget) and at full resolution, the stress pass (4 a
+// second, or every frame while the stress colour shows) and the bodies' bounds. JSON on stdout.
+int framePieces(const Options& o, Scene scene) {
+  auto cpuOf = [](auto&& f, int reps) {
+    const double t0 = threadCpuSeconds();
+    for (int r = 0; r < reps; ++r) f();
+    return (threadCpuSeconds() - t0) / reps;
+  };
+  if (o.bodySize > 0) {
+    BodySettings& b = scene.bodies[0];
+    const Real extent = b.shape.voxelSize * b.shape.dims[0];
+    b.shape = presetShape("sphere", o.bodySize, scene.dim, extent / o.bodySize);
+    b.source = nullptr;
+  }
+  int width = 0, height = 0;
+  parseSize(o.size, &width, &height);
+  double t0 = threadCpuSeconds();
+  BuiltScene built = buildScene(scene);
+  const double buildCpu = threadCpuSeconds() - t0;
+  t0 = threadCpuSeconds();
+  const BodyView view = makeBodyView(built, nullptr, kDisplayTriangleBudget);
+  const double viewCpu = threadCpuSeconds() - t0;
+  World& w = *built.world;
+  w.setThreads(1);
+  for (int k = 0; k < 5; ++k) w.step();  // warm
+  const int steps = std::max(5, int(2e6 / double(w.model().numVertices())));
+  const double step = cpuOf([&] { w.step(); }, steps);
+  ViewOptions v;
+  const double drawList = cpuOf([&] { (void)buildDrawList(view, w, v, width, height); }, 10);
+  v.fullResolution = true;
+  const double drawListFull = cpuOf([&] { (void)buildDrawList(view, w, v, width, height); }, 10);
+  const double stress = cpuOf([&] { (void)w.elementStress(); }, 5);
+  const double bounds = cpuOf(
+      [&] {
+        Vec3 lo = w.state().positions[0], hi = lo;
+        for (const Vec3& x : w.state().positions) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+        volatile double sink = lo.x() + hi.x();
+        (void)sink;
+      },
+      10);
+  nlohmann::json j;
+  j["body_size"] = o.bodySize > 0 ? o.bodySize : scene.bodies[0].shape.dims[0];
+  j["vertices"] = w.model().numVertices();
+  j["dt"] = w.dt();
+  j["build_cpu_s"] = buildCpu;
+  j["body_view_cpu_s"] = viewCpu;
+  j["step_cpu_ms_1_thread"] = 1e3 * step;
+  j["step_cpu_ns_per_vertex_step"] = 1e9 * step / double(w.model().numVertices());
+  j["real_time_factor_one_free_core"] = w.dt() / step;
+  j["draw_triangles"] = (view.coarse ? view.coarse->triangles.size() : view.smooth.triangles.size());
+  j["full_surface_triangles"] = view.fullTriangles;
+  j["coarse_step"] = view.coarseStep;
+  j["draw_list_cpu_ms"] = 1e3 * drawList;
+  j["draw_list_full_cpu_ms"] = 1e3 * drawListFull;
+  j["stress_pass_cpu_ms"] = 1e3 * stress;
+  j["bounds_cpu_ms"] = 1e3 * bounds;
+  j["load_average_1min"] = loadAverage();
+  std::cout << j.dump(2) << "\n";
+  return 0;
+}
+
 int run(const Options& o) {
   int width = 0, height = 0;
   parseSize(o.size, &width, &height);
   Scene scene = o.scene.empty() ? parseScene(kPlayScene, "play") : loadScene(o.scene);
+  if (o.framePieces) return framePieces(o, std::move(scene));
   if (!(o.runFor >= 0) || !std::isfinite(o.runFor)) throw InputError("--run-for: must be >= 0 seconds");
   if (o.bodySize != 0 && (o.bodySize < kMinBodySize || o.bodySize > kMaxBodySize))
     throw InputError("--body-size: must be " + std::to_string(kMinBodySize) + " ... " + std::to_string(kMaxBodySize));
@@ -1055,6 +1172,11 @@ int run(const Options& o) {
       v.stress = true;
       viewer.setView(v);
     }
+    if (o.fullSurface) {
+      ViewOptions v = viewer.view();
+      v.fullResolution = true;
+      viewer.setView(v);
+    }
 
     FrameTimes times;
     double last = viewer.wallNow(), runStart = last;
@@ -1085,9 +1207,9 @@ int run(const Options& o) {
         std::unique_lock<std::mutex> lock = viewer.lockState();
         if (viewer.figures().time >= o.screenshotTime) {
           writePng(o.screenshot, readPixels(fbw, fbh));
-          std::cout << nlohmann::json{{"screenshot", o.screenshot}, {"size", {fbw, fbh}}, {"t", viewer.figures().time}}
-                           .dump()
-                    << "\n";
+          std::cout
+              << nlohmann::json{{"screenshot", o.screenshot}, {"size", {fbw, fbh}}, {"t", viewer.figures().time}}.dump()
+              << "\n";
           break;
         }
       }
@@ -1120,7 +1242,8 @@ int run(const Options& o) {
         times.work.push_back(work);
         times.worldHeld.push_back(viewer.worldHeldSeconds());
         if (viewer.rebuilding()) times.longestDuringRebuild = std::max(times.longestDuringRebuild, now - last);
-        if (rebuildAsked && !viewer.rebuilding() && !rebuildSeen) rebuildSeen = true, rebuildSeconds = viewer.lastRebuildSeconds();
+        if (rebuildAsked && !viewer.rebuilding() && !rebuildSeen)
+          rebuildSeen = true, rebuildSeconds = viewer.lastRebuildSeconds();
         if (o.rebuildSize > 0 && !rebuildAsked && now - runStart >= o.rebuildAt) {
           viewer.setBodySize(o.rebuildSize);
           rebuildAsked = true;
@@ -1139,7 +1262,8 @@ int run(const Options& o) {
         const double vertexSteps = viewer.vertexSteps() - vertexStepsStart;
         j["step_cpu_ns_per_vertex_step"] = vertexSteps > 0 ? 1e9 * stepCpu / vertexSteps : 0.0;
         j["step_thread_core_share"] = stepCpu / wall;
-        j["draw_cpu_ms_per_frame"] = frames > 0 ? 1e3 * (processCpuSeconds() - cpuStart - stepCpu) / double(frames) : 0.0;
+        j["draw_cpu_ms_per_frame"] =
+            frames > 0 ? 1e3 * (processCpuSeconds() - cpuStart - stepCpu) / double(frames) : 0.0;
         j["load_average_1min"] = loadAverage();
         j["frame_ms_median"] = 1e3 * FrameTimes::median(times.all);
         j["frame_work_ms_median"] = 1e3 * FrameTimes::median(times.work);
@@ -1161,6 +1285,9 @@ int run(const Options& o) {
           j["frame_ms_max_during_rebuild"] = 1e3 * times.longestDuringRebuild;
         }
         j["draw_triangles"] = viewer.drawTriangles();
+        j["full_surface_triangles"] = viewer.bodyView().fullTriangles;
+        j["coarse_surface"] = viewer.bodyView().coarse.has_value() && !viewer.view().fullResolution;
+        j["coarse_step"] = viewer.bodyView().coarseStep;
         j["gl_renderer"] = Renderer::glRenderer();
         std::cout << j.dump(2) << "\n";
         break;
@@ -1192,6 +1319,11 @@ int main(int argc, char** argv) {
                  "With --run-for: ask for this body size (as the panel would) at --rebuild-at; the JSON gives "
                  "the rebuild's time and the longest frame during it");
   app.add_option("--rebuild-at", o.rebuildAt, "[s] wall time of --rebuild-size")->capture_default_str();
+  app.add_flag("--frame-pieces", o.framePieces,
+               "No window: time the frame loop's CPU pieces (step, draw list, stress pass) at --body-size, print "
+               "JSON and exit");
+  app.add_flag("--full-surface", o.fullSurface,
+               "Draw the full-resolution surface of a body over the display budget (the panel's checkbox)");
   try {
     app.parse(argc, argv);
     return run(o);

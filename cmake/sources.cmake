@@ -93,6 +93,7 @@ set(GRADEL_RENDER_SOURCES
   src/image.cpp
   src/render/body_table.cpp
   src/render/camera.cpp
+  src/render/display_budget.cpp
   src/render/draw_list.cpp
   src/render/layout_picture.cpp
   src/render/manipulator_drag.cpp

@@ -1,5 +1,7 @@
 #include "gradel/isosurface.h"
 
+#include <algorithm>
+#include <string>
 #include <unordered_map>
 
 #include "gradel/display_normals.h"
@@ -17,29 +19,55 @@ constexpr int kPad = 2;  // empty voxel layers around the grid: one for the blur
 
 }  // namespace
 
-TriangleMesh isosurface(const VoxelVolume& volume, const Vec3& origin) {
+TriangleMesh isosurface(const VoxelVolume& volume, const Vec3& origin, int step) {
   if (volume.dim() != 3) throw InputError("isosurface: needs a 3D volume");
   if (volume.countFilled() == 0) throw InputError("isosurface: empty volume");
-  const int nx = volume.nx() + 2 * kPad, ny = volume.ny() + 2 * kPad, nz = volume.nz() + 2 * kPad;
+  if (step < 1) throw InputError("isosurface: step " + std::to_string(step) + " (must be >= 1)");
+  const int s = step;
+  // Sample point (i, j, k) is the centre of coarse voxel (i - kPad, j - kPad, k - kPad), the
+  // block of s^3 fine voxels starting at s * (i - kPad, ...).
+  const int nx = (volume.nx() + s - 1) / s + 2 * kPad, ny = (volume.ny() + s - 1) / s + 2 * kPad,
+            nz = (volume.nz() + s - 1) / s + 2 * kPad;
   auto at = [&](int i, int j, int k) { return size_t(i) + size_t(nx) * (size_t(j) + size_t(ny) * size_t(k)); };
 
-  // Sample point (i, j, k) is the centre of voxel (i - kPad, j - kPad, k - kPad).
+  // Filled fine voxels in [0, i) x [0, j) x [0, k) (a summed-volume table; outside the volume is
+  // empty), so a box count costs eight look-ups at any step.
+  const int fx = volume.nx(), fy = volume.ny(), fz = volume.nz();
+  std::vector<int32_t> sum(size_t(fx + 1) * size_t(fy + 1) * size_t(fz + 1), 0);
+  auto sat = [&](int i, int j, int k) -> int32_t& {
+    return sum[size_t(i) + size_t(fx + 1) * (size_t(j) + size_t(fy + 1) * size_t(k))];
+  };
+  for (int k = 1; k <= fz; ++k)
+    for (int j = 1; j <= fy; ++j)
+      for (int i = 1; i <= fx; ++i)
+        sat(i, j, k) = int32_t(volume.at(i - 1, j - 1, k - 1)) + sat(i - 1, j, k) + sat(i, j - 1, k) +
+                       sat(i, j, k - 1) - sat(i - 1, j - 1, k) - sat(i - 1, j, k - 1) - sat(i, j - 1, k - 1) +
+                       sat(i - 1, j - 1, k - 1);
+  auto boxCount = [&](int x0, int y0, int z0, int x1, int y1, int z1) {  // filled in [x0, x1) x ... (clamped)
+    x0 = std::clamp(x0, 0, fx), x1 = std::clamp(x1, 0, fx), y0 = std::clamp(y0, 0, fy), y1 = std::clamp(y1, 0, fy);
+    z0 = std::clamp(z0, 0, fz), z1 = std::clamp(z1, 0, fz);
+    if (x0 >= x1 || y0 >= y1 || z0 >= z1) return 0;
+    return sat(x1, y1, z1) - sat(x0, y1, z1) - sat(x1, y0, z1) - sat(x1, y1, z0) + sat(x0, y0, z1) + sat(x0, y1, z0) +
+           sat(x1, y0, z0) - sat(x0, y0, z0);
+  };
+  // The field at a sample: the filled share of the 3x3x3 coarse voxels around it (3s fine voxels
+  // a side; at step 1 the 3x3x3 box average of the voxels).
+  // 27 s^3 voxels: count / 27 is never exactly the 0.5 level at odd s; at even s half a voxel
+  // is added so it is not either (a sample on the level would put crossings on sample points).
+  const float boxVolume = float(27 * s * s * s), offset = s % 2 == 0 ? 0.5f : 0.0f;
   std::vector<float> field(size_t(nx) * size_t(ny) * size_t(nz), 0.0f);
   for (int k = 0; k < nz; ++k)
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i) {
-        int filled = 0;
-        for (int dz = -1; dz <= 1; ++dz)
-          for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx) filled += volume.at(i - kPad + dx, j - kPad + dy, k - kPad + dz);
-        field[at(i, j, k)] = float(filled) / 27.0f;  // k/27 is never exactly the 0.5 level
+        const int x0 = s * (i - kPad - 1), y0 = s * (j - kPad - 1), z0 = s * (k - kPad - 1);
+        field[at(i, j, k)] = (float(boxCount(x0, y0, z0, x0 + 3 * s, y0 + 3 * s, z0 + 3 * s)) + offset) / boxVolume;
       }
 
   TriangleMesh mesh;
   std::unordered_map<uint64_t, uint32_t> edgeVertex;  // lattice edge (two sample ids) -> mesh vertex
   auto samplePos = [&](size_t id) {
     const int i = int(id % size_t(nx)), j = int(id / size_t(nx) % size_t(ny)), k = int(id / (size_t(nx) * size_t(ny)));
-    return Vec3(i - kPad + 0.5, j - kPad + 0.5, k - kPad + 0.5);
+    return Vec3(s * (i - kPad + 0.5), s * (j - kPad + 0.5), s * (k - kPad + 0.5));
   };
   auto crossing = [&](size_t a, size_t b) {
     if (a > b) std::swap(a, b);

@@ -172,6 +172,33 @@ TEST(Isosurface, ClosedOutwardAndCloseToTheVoxelVolume) {
   EXPECT_THROW(isosurface(rasterize(presetShape("box", 4, 2)), Vec3::Zero()), InputError);
 }
 
+// The viewer's coarse display mesh (render/display_budget.h): sampled every `step` voxels the
+// isosurface stays closed and outward, encloses about the same volume, and has about step^2
+// times fewer triangles; step 1 is the full surface, bit for bit.
+TEST(Isosurface, CoarserStepHasStepSquaredFewerTrianglesAroundTheSameVolume) {
+  const VoxelVolume volume = rasterize(presetShape("sphere", 32, 3));
+  const Vec3 origin(0.1, 0.2, 0.3);
+  const TriangleMesh full = isosurface(volume, origin);
+  const TriangleMesh one = isosurface(volume, origin, 1);
+  EXPECT_EQ(one.triangles, full.triangles);
+  EXPECT_EQ(one.vertices, full.vertices);
+  const Real voxels = Real(volume.countFilled()) * std::pow(volume.voxelSize(), 3);
+  for (int step : {2, 3, 4}) {
+    const TriangleMesh m = isosurface(volume, origin, step);
+    ASSERT_FALSE(m.triangles.empty()) << step;
+    DisplaySurface s;
+    s.triangles = m.triangles;
+    expectClosedAndOriented(s, "isosurface step " + std::to_string(step));
+    EXPECT_LT(double(m.triangles.size()), 1.2 * double(full.triangles.size()) / (step * step)) << step;
+    EXPECT_GT(double(m.triangles.size()), 0.6 * double(full.triangles.size()) / (step * step)) << step;
+    Real v6 = 0;
+    for (const auto& t : m.triangles) v6 += m.vertices[t[0]].dot(m.vertices[t[1]].cross(m.vertices[t[2]]));
+    EXPECT_GT(v6 / 6, 0.8 * voxels) << step;
+    EXPECT_LT(v6 / 6, 1.1 * voxels) << step;
+  }
+  EXPECT_THROW(isosurface(volume, origin, 0), InputError);
+}
+
 }  // namespace
 }  // namespace gradel
 

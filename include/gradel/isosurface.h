@@ -15,7 +15,11 @@ namespace gradel {
 
 /// The isosurface of a 3D volume in metres (lattice point (0,0,0) at `origin`), triangles
 /// counter-clockwise seen from outside, vertices shared (closed, consistently oriented), with
-/// normals from the occupancy smoothed by a Gaussian (display_normals.h; no terraces). Throws InputError for a 2D or empty volume.
-TriangleMesh isosurface(const VoxelVolume& volume, const Vec3& origin);
+/// normals from the occupancy smoothed by a Gaussian (display_normals.h; no terraces). Throws InputError for a 2D or
+/// empty volume. `step` > 1 samples every step-th voxel: the level set of the filled share of the 3 step voxels a side
+/// around each sample (blocks of step^3 voxels taken as one), about step^2 times fewer triangles with corners rounded
+/// by about `step` voxels (the viewer's display budget, render/display_budget.h); step 1 is the full-resolution surface
+/// above. InputError for step < 1.
+TriangleMesh isosurface(const VoxelVolume& volume, const Vec3& origin, int step = 1);
 
 }  // namespace gradel

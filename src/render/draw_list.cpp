@@ -2,6 +2,7 @@
 
 #include "gradel/element_strain.h"
 #include "gradel/isosurface.h"
+#include "gradel/render/display_budget.h"
 
 #include <algorithm>
 #include <cmath>
@@ -159,8 +160,8 @@ void addLegend(DrawList& list, Real scale, int width, int height) {
   // Labels right-aligned to the left of the bar, the title above it ending at the bar's right
   // edge; the backdrop as wide as they need (9.6 pixels a character at this font scale).
   const auto textWidth = [](const std::string& t) { return 9.6f * float(t.size()); };
-  const float left = std::min(x0 - 14 - std::max({textWidth(top), textWidth(mid), textWidth("0 Pa")}),
-                              x1 - textWidth(title) - 4);
+  const float left =
+      std::min(x0 - 14 - std::max({textWidth(top), textWidth(mid), textWidth("0 Pa")}), x1 - textWidth(title) - 4);
   addQuad2D(list, left, y0 - 28, float(width) - 4, y1 + 10, backdrop, backdrop);
   for (int i = 0; i < kSteps; ++i) {
     // Top of the bar = high stress (dark).
@@ -222,9 +223,12 @@ std::string pascalText(Real pa) {
   const Real a = std::abs(pa);
   const char* unit = "Pa";
   Real v = pa;
-  if (a >= 1e9) v = pa / 1e9, unit = "GPa";
-  else if (a >= 1e6) v = pa / 1e6, unit = "MPa";
-  else if (a >= 1e3) v = pa / 1e3, unit = "kPa";
+  if (a >= 1e9)
+    v = pa / 1e9, unit = "GPa";
+  else if (a >= 1e6)
+    v = pa / 1e6, unit = "MPa";
+  else if (a >= 1e3)
+    v = pa / 1e3, unit = "kPa";
   char buf[48];
   std::snprintf(buf, sizeof buf, "%.3g %s", v, unit);
   return buf;
@@ -251,18 +255,34 @@ std::array<float, 3> levelColor(int level) {
 namespace {
 
 // One body's view, in the vertex ids of its own model.
-BodyView makeOneBodyView(const BuiltBody& scene, const TriangleMesh* restMesh) {
+// `budget` > 0: also the coarse display mesh of at most that many triangles (display_budget.h);
+// `smooth`: the body's smooth surface, when the caller has built it already.
+BodyView makeOneBodyView(const BuiltBody& scene, const TriangleMesh* restMesh, size_t budget,
+                         std::optional<DisplaySurface> smooth = std::nullopt) {
   const Layout& layout = scene.layout;
   const RestModel& model = *scene.model;
   BodyView v;
+  v.smooth = smooth ? std::move(*smooth) : buildDisplaySurface(layout, scene.volume, SurfaceKind::Smooth);
+  v.fullTriangles = v.smooth.triangles.size();
   if (restMesh) {
     v.embedded = embedMesh(*restMesh, layout, model);
   } else if (scene.embedded) {
     v.embedded = scene.embedded;  // the body's own mesh file
-  } else if (layout.dim == 3) {
+  } else if (layout.dim == 3 && budget == 0) {
     v.embedded = embedMesh(isosurface(scene.volume, model.origin), layout, model);
   }
-  v.smooth = buildDisplaySurface(layout, scene.volume, SurfaceKind::Smooth);
+  if (budget > 0 && layout.dim == 3) {
+    if (v.embedded) {
+      v.coarse = v.embedded;  // a given mesh is drawn as it is
+    } else {
+      // Over the budget the full isosurface (3x the smooth surface's triangles: 462,456 at 128,
+      // seconds to build and embed) is not built: the embedded mode draws the coarse one too.
+      const CoarseSurface c =
+          coarseIsosurface(scene.volume, model.origin, budget, displayStepEstimate(v.fullTriangles, budget));
+      v.coarse = embedMesh(c.mesh, layout, model);
+      v.coarseStep = c.step;
+    }
+  }
   v.voxel = buildDisplaySurface(layout, scene.volume, SurfaceKind::Voxel);
   v.levels = layout.numLevels();
   const int dim = layout.dim, corners = dim == 3 ? 8 : 4;
@@ -297,6 +317,30 @@ BodyView makeOneBodyView(const BuiltBody& scene, const TriangleMesh* restMesh) {
   return v;
 }
 
+// Appends a body's embedded mesh (ids of its own model) to `all`'s, its ids moved by the body's range.
+void appendEmbedded(std::optional<EmbeddedMesh>& all, std::optional<EmbeddedMesh> part, const BodyRange& range) {
+  if (!part) return;
+  shiftVertexIds(*part, range.vertexBegin, range.elementBegin);
+  if (!all) {
+    all = std::move(part);
+    return;
+  }
+  EmbeddedMesh& to = *all;
+  const EmbeddedMesh& from = *part;
+  const uint32_t vertexBase = uint32_t(to.weightStart.size() - 1), weightBase = uint32_t(to.weight.size());
+  for (auto t : from.triangles) to.triangles.push_back({t[0] + vertexBase, t[1] + vertexBase, t[2] + vertexBase});
+  for (size_t v = 1; v < from.weightStart.size(); ++v) to.weightStart.push_back(weightBase + from.weightStart[v]);
+  to.weightVertex.insert(to.weightVertex.end(), from.weightVertex.begin(), from.weightVertex.end());
+  to.weight.insert(to.weight.end(), from.weight.begin(), from.weight.end());
+  to.element.insert(to.element.end(), from.element.begin(), from.element.end());
+  if (to.restFieldNormals.size() == vertexBase && !from.restFieldNormals.empty()) {
+    to.restMeshNormals.insert(to.restMeshNormals.end(), from.restMeshNormals.begin(), from.restMeshNormals.end());
+    to.restFieldNormals.insert(to.restFieldNormals.end(), from.restFieldNormals.begin(), from.restFieldNormals.end());
+  } else {
+    to.restMeshNormals.clear(), to.restFieldNormals.clear();
+  }
+}
+
 // Appends `part` (vertex ids of a body's own model) to `all`, its ids moved to the world's model
 // by the body's range there.
 void appendBodyView(BodyView& all, BodyView part, const BodyRange& range) {
@@ -321,42 +365,40 @@ void appendBodyView(BodyView& all, BodyView part, const BodyRange& range) {
   all.edgeLevel.insert(all.edgeLevel.end(), part.edgeLevel.begin(), part.edgeLevel.end());
   all.edgeInSection.insert(all.edgeInSection.end(), part.edgeInSection.begin(), part.edgeInSection.end());
   all.levels = std::max(all.levels, part.levels);
-  if (part.embedded) {
-    shiftVertexIds(*part.embedded, offset, range.elementBegin);
-    if (!all.embedded) {
-      all.embedded = std::move(part.embedded);
-    } else {
-      EmbeddedMesh& to = *all.embedded;
-      const EmbeddedMesh& from = *part.embedded;
-      const uint32_t vertexBase = uint32_t(to.weightStart.size() - 1), weightBase = uint32_t(to.weight.size());
-      for (auto t : from.triangles) to.triangles.push_back({t[0] + vertexBase, t[1] + vertexBase, t[2] + vertexBase});
-      for (size_t v = 1; v < from.weightStart.size(); ++v) to.weightStart.push_back(weightBase + from.weightStart[v]);
-      to.weightVertex.insert(to.weightVertex.end(), from.weightVertex.begin(), from.weightVertex.end());
-      to.weight.insert(to.weight.end(), from.weight.begin(), from.weight.end());
-      to.element.insert(to.element.end(), from.element.begin(), from.element.end());
-      if (to.restFieldNormals.size() == vertexBase && !from.restFieldNormals.empty()) {
-        to.restMeshNormals.insert(to.restMeshNormals.end(), from.restMeshNormals.begin(), from.restMeshNormals.end());
-        to.restFieldNormals.insert(to.restFieldNormals.end(), from.restFieldNormals.begin(),
-                                   from.restFieldNormals.end());
-      } else {
-        to.restMeshNormals.clear(), to.restFieldNormals.clear();
-      }
-    }
-  }
+  appendEmbedded(all.embedded, std::move(part.embedded), range);
+  appendEmbedded(all.coarse, std::move(part.coarse), range);
+  all.coarseStep = std::max(all.coarseStep, part.coarseStep);
+  all.fullTriangles += part.fullTriangles;
 }
 
 }  // namespace
 
-BodyView makeBodyView(const BuiltScene& scene, const TriangleMesh* restMesh) {
+BodyView makeBodyView(const BuiltScene& scene, const TriangleMesh* restMesh, size_t triangleBudget) {
+  // The smooth surfaces first: their triangle counts share the budget out.
+  std::vector<DisplaySurface> smooth;
+  size_t total = 0;
+  for (size_t i = 0; i < scene.numBodies(); ++i) {
+    const BuiltBody& b = scene.bodies[i];
+    smooth.push_back(buildDisplaySurface(b.layout, b.volume, SurfaceKind::Smooth));
+    total += smooth.back().triangles.size();
+  }
+  const bool coarse = triangleBudget > 0 && total > triangleBudget;
+  std::vector<size_t> share(smooth.size(), 0);
+  if (coarse)
+    for (size_t i = 0; i < smooth.size(); ++i)
+      share[i] =
+          std::max<size_t>(1, size_t(double(triangleBudget) * double(smooth[i].triangles.size()) / double(total)));
   BodyView all;
   if (scene.numBodies() == 1) {
-    all = makeOneBodyView(scene.bodies[0], restMesh);
+    all = makeOneBodyView(scene.bodies[0], restMesh, share[0], std::move(smooth[0]));
   } else {
     for (size_t i = 0; i < scene.numBodies(); ++i)
-      appendBodyView(all, makeOneBodyView(scene.bodies[i], i == 0 ? restMesh : nullptr), scene.range(i));
+      appendBodyView(all, makeOneBodyView(scene.bodies[i], i == 0 ? restMesh : nullptr, share[i], std::move(smooth[i])),
+                     scene.range(i));
   }
   all.smoothIndices = indexList(all.smooth.triangles);
   if (all.embedded) all.embeddedIndices = indexList(all.embedded->triangles);
+  if (all.coarse) all.coarseIndices = indexList(all.coarse->triangles);
   return all;
 }
 
@@ -401,9 +443,12 @@ DrawList buildDrawList(const BodyView& body, const World& world, const ViewOptio
   const Real stressScale = o.stressScale > 0 ? o.stressScale : (o.stress ? autoStressScale(world.model()) : 0);
 
   // ---- the body's surface ----
-  const bool embedded = o.surface == SurfaceMode::Embedded && body.embedded.has_value();
+  const bool coarse =
+      body.coarse && !o.fullResolution && (o.surface == SurfaceMode::Smooth || o.surface == SurfaceMode::Embedded);
+  const bool embedded = coarse || (o.surface == SurfaceMode::Embedded && body.embedded.has_value());
   if (embedded) {
-    const EmbeddedMesh& em = *body.embedded;
+    const EmbeddedMesh& em = coarse ? *body.coarse : *body.embedded;
+    const auto& indices = coarse ? body.coarseIndices : body.embeddedIndices;
     const TriangleMesh m = embeddedMesh(em, x);
     std::vector<Color> colors(m.vertices.size(), kBodyColor);
     if (o.stress)
@@ -413,7 +458,7 @@ DrawList buildDrawList(const BodyView& body, const World& world, const ViewOptio
           s += em.weight[k] * stress[em.weightVertex[k]];
         colors[v] = stressColor(std::max(s, 0.0), stressScale);
       }
-    addIndexedMesh(list, m, colors, body.embeddedIndices ? body.embeddedIndices : indexList(m.triangles));
+    addIndexedMesh(list, m, colors, indices ? indices : indexList(m.triangles));
   } else if (o.surface != SurfaceMode::None) {
     const DisplaySurface& s = o.surface == SurfaceMode::Voxel ? body.voxel : body.smooth;
     const TriangleMesh m = surfaceMesh(s, x);

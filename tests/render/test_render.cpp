@@ -11,6 +11,7 @@
 
 #include "gradel/image.h"
 #include "gradel/render/body_table.h"
+#include "gradel/render/display_budget.h"
 #include "gradel/render/draw_list.h"
 #include "gradel/render/layout_picture.h"
 #include "gradel/render/manipulator_drag.h"
@@ -198,6 +199,61 @@ TEST(RenderHeadless, EveryBodyIsInTheBodyViewAtItsWorldVertices) {
   EXPECT_LT(*std::min_element(all.embedded->weightVertex.begin(), all.embedded->weightVertex.end()), b1);
 }
 
+// The display budget's first step (render/display_budget.h): the smallest s with
+// triangles / s^2 within the budget, 1 when it fits or there is no budget.
+TEST(DisplayBudget, StepEstimateIsTheSmallestStepThatFitsTheBudget) {
+  EXPECT_EQ(displayStepEstimate(36336, kDisplayTriangleBudget), 1);  // the size-64 sphere: whole
+  EXPECT_EQ(displayStepEstimate(142704, 40000), 2);
+  EXPECT_EQ(displayStepEstimate(160000, 40000), 2);
+  EXPECT_EQ(displayStepEstimate(160001, 40000), 3);
+  EXPECT_EQ(displayStepEstimate(1000000, 0), 1);
+  for (size_t t = 1; t < 200000; t += 997) {
+    const size_t s = size_t(displayStepEstimate(t, 1000));
+    EXPECT_LE(t, 1000 * s * s) << t;
+    if (s > 1) EXPECT_GT(t, 1000 * (s - 1) * (s - 1)) << t;
+  }
+}
+
+// A body whose smooth surface is over the budget gets a coarse display mesh within it, drawn by
+// default instead of the smooth surface (and of the embedded one), the full surface on request;
+// the coarse mesh follows the body's vertices (a rigid shift moves it by that shift). Under the
+// budget, or without one, nothing changes.
+TEST(DisplayBudget, LargeBodyIsDrawnWithinTheBudgetAndFollowsTheBody) {
+  BuiltScene built = buildScene(parseScene(R"({"body": {"shape": "sphere", "size": 40},
+      "simulation": {"gravity": [0, 0, 0]}})",
+                                           "large"));
+  const size_t budget = 5000;
+  const BodyView view = makeBodyView(built, nullptr, budget);
+  ASSERT_TRUE(view.coarse);
+  EXPECT_EQ(view.fullTriangles, view.smooth.triangles.size());
+  EXPECT_GT(view.fullTriangles, budget);
+  EXPECT_LE(view.coarse->triangles.size(), budget);
+  EXPECT_GT(view.coarse->triangles.size(), budget / 4);  // no coarser than needed (steps go as 1/s^2)
+  EXPECT_GT(view.coarseStep, 1);
+  World& w = *built.world;
+  ViewOptions o;
+  for (SurfaceMode mode : {SurfaceMode::Smooth, SurfaceMode::Embedded}) {
+    o.surface = mode;
+    const DrawList coarse = buildDrawList(view, w, o, kW, kH);
+    EXPECT_EQ(coarse.meshIndices, view.coarseIndices);
+    EXPECT_LE(coarse.meshIndices->size() / 3, budget);
+  }
+  o.surface = SurfaceMode::Smooth;
+  o.fullResolution = true;
+  EXPECT_EQ(buildDrawList(view, w, o, kW, kH).meshIndices, view.smoothIndices);
+  o.fullResolution = false;
+  const DrawList before = buildDrawList(view, w, o, kW, kH);
+  const Vec3 shift(0.3, -0.2, 0.1);
+  for (Vec3& x : w.state().positions) x += shift;
+  const DrawList after = buildDrawList(view, w, o, kW, kH);
+  ASSERT_EQ(after.meshVertices.size(), before.meshVertices.size());
+  for (size_t v = 0; v < after.meshVertices.size(); ++v)
+    for (int k = 0; k < 3; ++k)
+      ASSERT_NEAR(after.meshVertices[v].position[k] - before.meshVertices[v].position[k], shift[k], 1e-5) << v;
+  EXPECT_FALSE(makeBodyView(built, nullptr, view.fullTriangles).coarse);  // within the budget
+  EXPECT_FALSE(makeBodyView(built).coarse);                               // no budget
+}
+
 // The viewer's panel with several bodies (render/body_table.h): a row per body, its own
 // vertices and figures; only the moving body has kinetic energy.
 TEST(ViewerLogic, BodyTableHasARowPerBodyWithItsOwnFigures) {
@@ -357,7 +413,8 @@ TEST(LayoutPicture, TwoLabelsShowOneColourPerElementAndTheirBorder) {
         }
     }
   }
-  if (const char* dir = std::getenv("GRADEL_DOC_IMAGES")) writePng((fs::path(dir) / "layout-regions.png").string(), img);
+  if (const char* dir = std::getenv("GRADEL_DOC_IMAGES"))
+    writePng((fs::path(dir) / "layout-regions.png").string(), img);
 }
 
 }  // namespace

@@ -43,7 +43,11 @@ struct ViewOptions {
   Real forceScale = 0;
   /// [Pa] von Mises stress drawn darkest (World::vertexStress); 0 = auto (autoStressScale).
   Real stressScale = 0;
-  std::string caption;      ///< Text drawn at the top left (empty = none).
+  std::string caption;  ///< Text drawn at the top left (empty = none).
+  /// With a coarse display mesh in the BodyView (a body over the viewer's triangle budget,
+  /// render/display_budget.h): false draws it for the smooth and embedded surfaces, true the
+  /// full-resolution ones.
+  bool fullResolution = false;
 };
 
 /// Everything about the bodies that drawing needs and that is built once per model (rest data).
@@ -57,14 +61,26 @@ struct BodyView {
   /// The smooth surface's and the embedded mesh's triangles as one index list each (rest data,
   /// shared with every draw list: the renderer uploads them once).
   std::shared_ptr<const std::vector<uint32_t>> smoothIndices, embeddedIndices;
+  /// Set when the bodies' smooth surfaces have more triangles than the budget makeBodyView was
+  /// given: the coarse display mesh drawn instead (each body's isosurface sampled every
+  /// coarseStep voxels, or its own mesh file's mesh, embedded), its index list, the largest step
+  /// taken and the smooth surfaces' triangle count it stands for.
+  std::optional<EmbeddedMesh> coarse;
+  std::shared_ptr<const std::vector<uint32_t>> coarseIndices;
+  int coarseStep = 1;
+  size_t fullTriangles = 0;
 };
 
 /// Builds the surfaces and element outlines of a built scene, of every body (their vertex ids
 /// those of the world's model: each body's moved by its RestModel::bodies[i].vertexBegin). The
 /// embedded mesh is `restMesh` (rest coordinates [m], body 0) when given, else the body's own (a
 /// body voxelised from a mesh file: BuiltBody::embedded), else (3D) the isosurface of its volume
-/// (isosurface.h).
-BodyView makeBodyView(const BuiltScene& scene, const TriangleMesh* restMesh = nullptr);
+/// (isosurface.h). `triangleBudget` > 0 (the viewer: display_budget.h): when the smooth
+/// surfaces of the 3D bodies together have more triangles than that, a coarse display mesh is
+/// built too, each body's share of the budget in proportion to its smooth surface; such a body
+/// without a mesh of its own then has no full-resolution isosurface (`embedded` unset: the
+/// embedded mode draws the coarse mesh, and with fullResolution the smooth surface).
+BodyView makeBodyView(const BuiltScene& scene, const TriangleMesh* restMesh = nullptr, size_t triangleBudget = 0);
 
 struct DrawVertex {
   float position[3];
