@@ -872,6 +872,10 @@ class Viewer {
     if (ImGui::IsItemDeactivatedAfterEdit()) changed = true;
     if (ImGui::SliderFloat("density", &rho, 100.f, 5000.f, "%.0f kg/m3")) body.material.density = rho;
     if (ImGui::IsItemDeactivatedAfterEdit()) changed = true;
+    // Poisson's ratio (material.h): [0, 0.5); 0.49 is rubber / tissue (dt = auto shrinks with it).
+    float nu = float(body.material.poissonRatio);
+    if (ImGui::SliderFloat("Poisson's ratio", &nu, 0.f, 0.49f, "%.2f")) body.material.poissonRatio = nu;
+    if (ImGui::IsItemDeactivatedAfterEdit()) changed = true;
     if (!body.material.regions.empty()) {
       // Label 1 without an entry of its own takes the fields above: one more material.
       bool label1Listed = false;

@@ -52,6 +52,7 @@ namespace {
 struct Row {
   std::string set, shape, layout, integrator;
   double youngs = 0;  // [Pa], 0 for the paper setting (k instead)
+  double poisson = 0;  // material.poisson_ratio
   int n = 0, threads = 0, load = 0;
   size_t elements = 0, vertices = 0, pairs = 0;
   double nsPerVertex = 0, nsPerPair = 0, stepsPerSecond = 0, dt = 0, rtf = 0, bytesPerVertex = 0, contactShare = 0;
@@ -157,6 +158,7 @@ Row measureScene(const Scene& scene, const std::string& set, int threads, int re
   r.integrator = integratorKindName(b.world->settings().integrator);
   r.n = sc.bodies[0].source ? 0 : sc.bodies[0].shape.dims[0];
   r.youngs = sc.bodies[0].material.scaling == Scaling::Consistent ? sc.bodies[0].material.youngsModulus : 0;
+  r.poisson = sc.bodies[0].material.poissonRatio;
   // 200 explicit steps, 20 frame-size steps (1/3 s): the hash's point.
   const IntegratorKind k = b.world->settings().integrator;
   const bool frameStep = k == IntegratorKind::LargeStep || k == IntegratorKind::Implicit;
@@ -206,14 +208,14 @@ void printHeader() {
   std::printf(
       "set,shape,n,layout,youngs_modulus_pa,threads,load,elements,unique_vertices,pairs,ns_per_vertex_step,"
       "ns_per_pair_step,steps_per_second,dt_s,real_time_factor,bytes_per_vertex,state_hash,integrator,"
-      "contact_stage_share\n");
+      "contact_stage_share,poisson_ratio\n");
 }
 
 void printRow(const Row& r) {
-  std::printf("%s,%s,%d,%s,%.3g,%d,%d,%zu,%zu,%zu,%.3f,%.3f,%.1f,%.6g,%.4g,%.1f,%016llx,%s,%.3f\n", r.set.c_str(),
+  std::printf("%s,%s,%d,%s,%.3g,%d,%d,%zu,%zu,%zu,%.3f,%.3f,%.1f,%.6g,%.4g,%.1f,%016llx,%s,%.3f,%.3g\n", r.set.c_str(),
               r.shape.c_str(), r.n, r.layout.c_str(), r.youngs, r.threads, r.load, r.elements, r.vertices, r.pairs,
               r.nsPerVertex, r.nsPerPair, r.stepsPerSecond, r.dt, r.rtf, r.bytesPerVertex,
-              static_cast<unsigned long long>(r.hash), r.integrator.c_str(), r.contactShare);
+              static_cast<unsigned long long>(r.hash), r.integrator.c_str(), r.contactShare, r.poisson);
   std::fflush(stdout);
 }
 
@@ -283,7 +285,7 @@ void findRealtimeReal(double E, const std::optional<IntegratorKind>& integrator,
 int main(int argc, char** argv) {
   CLI::App app{"gradel-bench: speed of real scenes and of the paper's Table 1 setting, CSV on stdout"};
   std::string sets = "real,paper", shapes = "sphere,box", sizes = "16,32,64,128,256", layouts = "gradational,uniform",
-              moduli = "1e4,1e5,1e6", threads = "1,2", sceneFile, integratorName;
+              moduli = "1e4,1e5,1e6", poissonRatios = "0", threads = "1,2", sceneFile, integratorName;
   int reps = 5, contactSteps = 40;
   std::string contactTrace;
   double minTime = 0.2, maxPairs = 4.0e7;
@@ -300,6 +302,8 @@ int main(int argc, char** argv) {
   app.add_option("--sizes", sizes, "Comma-separated grid sizes n (voxels)");
   app.add_option("--layouts", layouts, "Comma-separated: gradational, uniform, voxel");
   app.add_option("--moduli", moduli, "real set: comma-separated Young's moduli [Pa]");
+  app.add_option("--poisson-ratios", poissonRatios,
+                 "real set: comma-separated Poisson's ratios (material.poisson_ratio; dt = auto follows them)");
   app.add_option("--threads", threads, "Comma-separated thread counts");
   app.add_option("--scene", sceneFile,
                  "Also time this scene file (frames computed at its frame_interval, not written)");
@@ -320,6 +324,7 @@ int main(int argc, char** argv) {
     const auto sizeList = splitList<int>(sizes, [](const std::string& s) { return std::stoi(s); });
     const auto layoutList = splitList<LayoutKind>(layouts, [](const std::string& s) { return parseLayoutKind(s); });
     const auto moduliList = splitList<double>(moduli, [](const std::string& s) { return std::stod(s); });
+    const auto poissonList = splitList<double>(poissonRatios, [](const std::string& s) { return std::stod(s); });
     const auto threadList = splitList<int>(threads, [](const std::string& s) { return std::stoi(s); });
     for (const std::string& set : setList)
       if (set != "real" && set != "paper" && set != "contact")
@@ -369,12 +374,14 @@ int main(int argc, char** argv) {
           if (set == "real") {
             if (tooBig("sphere", n, layout)) continue;
             for (double E : moduliList)
-              for (int t : threadList) {
-                std::fprintf(stderr, "real sphere %d %s E %.3g threads %d\n", n, layoutKindName(layout), E, t);
-                Scene sc = realBenchScene(n, E, layout);
-                if (integrator) sc.simulation.integrator = *integrator;
-                emit(measureScene(sc, "real", t, reps, minTime));
-              }
+              for (double nu : poissonList)
+                for (int t : threadList) {
+                  std::fprintf(stderr, "real sphere %d %s E %.3g nu %.3g threads %d\n", n, layoutKindName(layout), E, nu, t);
+                  Scene sc = realBenchScene(n, E, layout);
+                  sc.bodies[0].material.poissonRatio = nu;
+                  if (integrator) sc.simulation.integrator = *integrator;
+                  emit(measureScene(sc, "real", t, reps, minTime));
+                }
             continue;
           }
           for (const std::string& shape : shapeList) {

@@ -155,5 +155,6 @@ set(GRADEL_TEST_SOURCES
   tests/test_settings_check.cpp
   tests/test_shapes.cpp
   tests/test_stability.cpp
+  tests/test_poisson.cpp
   tests/test_step_pacer.cpp
   tests/test_surface.cpp)

@@ -450,7 +450,8 @@ PYBIND11_MODULE(gradel, m) {
                        Real density, Real k, const std::string& integrator, std::optional<Real> dt, Real dtFraction,
                        Real damping, std::vector<double> gravity, int threads, std::vector<double> position,
                        std::vector<double> velocity, std::optional<std::vector<double>> domainMin,
-                       std::optional<std::vector<double>> domainMax, Real restitution, Real friction) {
+                       std::optional<std::vector<double>> domainMax, Real restitution, Real friction,
+                       Real poissonRatio) {
              Scene s;
              s.name = "python";
              s.dim = body.volume->dim();
@@ -461,6 +462,7 @@ PYBIND11_MODULE(gradel, m) {
              s.bodies[0].material.youngsModulus = youngsModulus;
              s.bodies[0].material.density = density;
              s.bodies[0].material.paperK = k;
+             s.bodies[0].material.poissonRatio = poissonRatio;
              s.bodies[0].position = vec(position, "position", s.dim);
              s.bodies[0].velocity = vec(velocity, "velocity", s.dim);
              s.simulation.integrator = parseIntegratorKind(integrator);
@@ -493,6 +495,7 @@ PYBIND11_MODULE(gradel, m) {
            py::arg("position") = std::vector<double>{0, 0, 0}, py::arg("velocity") = std::vector<double>{0, 0, 0},
            py::arg("domain_min") = py::none(), py::arg("domain_max") = py::none(),
            py::arg("restitution") = DomainSettings{}.restitution, py::arg("friction") = DomainSettings{}.friction,
+           py::arg("poisson_ratio") = MaterialSettings{}.poissonRatio,
            "Builds layout, rest model and world. Units: SI (m, s, kg, Pa). Material, layout and integrator are fixed "
            "for the simulation's life (the rest model is immutable): make a new Simulation to change them.")
       .def_static(
@@ -506,7 +509,7 @@ PYBIND11_MODULE(gradel, m) {
           [](Simulation& s, const Body* volume, py::kwargs kw) {
             static const std::vector<std::string> kKeys = {
                 "shape", "size", "grid", "primitives", "source", "voxel_size", "layout", "position", "velocity",
-                "name", "material", "scaling", "youngs_modulus", "density", "k", "regions"};
+                "name", "material", "scaling", "youngs_modulus", "density", "k", "poisson_ratio", "regions"};
             py::dict entry, material;
             for (const auto& [key, value] : kw) {
               const std::string k = key.cast<std::string>();
@@ -515,7 +518,8 @@ PYBIND11_MODULE(gradel, m) {
               if (value.is_none()) continue;
               if (k == "material") {
                 for (const auto& [mk, mv] : value.cast<py::dict>()) material[mk] = mv;
-              } else if (k == "scaling" || k == "youngs_modulus" || k == "density" || k == "k" || k == "regions") {
+              } else if (k == "scaling" || k == "youngs_modulus" || k == "density" || k == "k" || k == "poisson_ratio" ||
+                         k == "regions") {
                 material[py::str(k)] = value;
               } else {
                 entry[py::str(k)] = value;

@@ -30,6 +30,7 @@ RestModel combineRestModels(const std::vector<std::shared_ptr<const RestModel>>&
   c.elemStart.push_back(0);
   c.smallestPeriod = std::numeric_limits<Real>::infinity();
   c.smallestVertexPeriod = std::numeric_limits<Real>::infinity();
+  const bool anyVolumeTerm = std::any_of(models.begin(), models.end(), [](const auto& m) { return m->hasVolumeTerm(); });
   const bool anyRegionDamping =
       std::any_of(models.begin(), models.end(), [](const auto& m) { return m->hasRegionDamping(); });
   for (const auto& mp : models) {
@@ -38,6 +39,13 @@ RestModel combineRestModels(const std::vector<std::shared_ptr<const RestModel>>&
     append(c.restPositions, m.restPositions), append(c.mass, m.mass), append(c.invMass, m.invMass);
     append(c.onSurface, m.onSurface);
     append(c.stiffness, m.stiffness), append(c.size, m.size), append(c.level, m.level);
+    // Volumetric terms (model.h): a model without one has kappa 0 on its elements.
+    if (anyVolumeTerm) {
+      if (m.hasVolumeTerm())
+        append(c.volumeStiffness, m.volumeStiffness);
+      else
+        c.volumeStiffness.resize(c.numElements(), 0);
+    }
     for (size_t e = 1; e < m.elemStart.size(); ++e) c.elemStart.push_back(p0 + m.elemStart[e]);
     for (uint32_t v : m.elemVerts) c.elemVerts.push_back(v0 + v);
     append(c.restOffsets, m.restOffsets);

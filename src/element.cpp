@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include <Eigen/Eigenvalues>
+
 #include "gradel/rotation_fit.h"
 
 namespace gradel {
@@ -75,6 +77,59 @@ ElementResult elementForces(int dim, const Vec3* x, const uint32_t* verts, const
   }
   res.energy = 0.5 * k * res.sumSqDisp;
   return res;
+}
+
+Mat3 restMomentInverse(int dim, const Mat3& S) {
+  Mat3 inv = Mat3::Zero();
+  if (dim == 2) {
+    const Real det = S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0);
+    if (std::abs(det) > 1e-30 * (S(0, 0) * S(1, 1) + 1e-300)) {
+      inv(0, 0) = S(1, 1) / det, inv(1, 1) = S(0, 0) / det;
+      inv(0, 1) = -S(0, 1) / det, inv(1, 0) = -S(1, 0) / det;
+      return inv;
+    }
+  } else if (std::abs(S.determinant()) > 1e-30 * std::pow(S.trace() / 3 + 1e-300, 3)) {
+    return S.inverse();
+  }
+  Eigen::SelfAdjointEigenSolver<Mat3> es(S);
+  const Real top = es.eigenvalues().cwiseAbs().maxCoeff();
+  for (int k = 0; k < 3; ++k) {
+    const Real l = es.eigenvalues()[k];
+    if (std::abs(l) > 1e-12 * top) inv += es.eigenvectors().col(k) * es.eigenvectors().col(k).transpose() / l;
+  }
+  return inv;
+}
+
+Mat3 elementDeformationGradient(int dim, const Mat3& A, const Mat3& Sinv) {
+  Mat3 F = A * Sinv;
+  if (dim == 2) F.row(2).setZero(), F.col(2).setZero(), F(2, 2) = 1;
+  return F;
+}
+
+Mat3 cofactor(const Mat3& F) {
+  Mat3 C;
+  C.row(0) = F.row(1).cross(F.row(2));
+  C.row(1) = F.row(2).cross(F.row(0));
+  C.row(2) = F.row(0).cross(F.row(1));
+  return C;
+}
+
+Real restMomentTrace(const Vec3* R0, int n) {
+  Real t = 0;
+  for (int i = 0; i < n; ++i) t += R0[i].squaredNorm();
+  return t;
+}
+
+Real elementVolumeForces(int dim, const Vec3* x, const uint32_t* verts, const Vec3* R0, int n, const Quat& q,
+                         Real kappa, Vec3* f) {
+  const Moments mo = moments(x, verts, R0, n);
+  const Mat3 M = q.toRotationMatrix();
+  const Real D = dim == 2 ? 2 : 3, g = D / restMomentTrace(R0, n);
+  const Real ev = g * (M.cwiseProduct(mo.A).sum() - 1 / g * D);  // D (tr(M^T A) - tr S) / tr S
+  const Mat3 H = -kappa * ev * g * M;
+  const Vec3 mean = mo.sumR0 / Real(n);  // rounding residue, removed so the forces sum to zero
+  for (int i = 0; i < n; ++i) f[i] += H * (R0[i] - mean);
+  return 0.5 * kappa * ev * ev;
 }
 
 Real elementDeterminant(int dim, const Vec3* x, const uint32_t* verts, const Vec3* R0, int n) {

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "gradel/element.h"
+#include "gradel/material.h"
 #include "gradel/rotation_fit.h"
 #include "simd.h"
 
@@ -87,6 +89,13 @@ ElementStageRest::ElementStageRest(const RestModel& m)
       k.sumLattice[a][l] = sum[a], k.restCentroid[a][l] = c[a], k.meanRestOffset[a][l] = residue[a];
     k.invCount[l] = 1.0 / Real(n);
     k.stiffness[l] = m.stiffness[e];
+    if (m.hasVolumeTerm()) {
+      if (volume.empty()) volume.assign(groups.size(), ElementVolumeGroup{});
+      ElementVolumeGroup& vg = volume[e / 4];
+      const Real g = Real(m.dim == 2 ? 2 : 3) / restMomentTrace(&m.restOffsets[b], int(n));
+      vg.strainScale[l] = g * h;
+      vg.stiffness[l] = m.volumeStiffness[e] * g;
+    }
   }
   // Transpose element -> vertex into vertex -> elements, ascending per vertex.
   vertexStart.assign(V + 1, 0);
@@ -110,11 +119,29 @@ ElementConstants ElementStageRest::constants(size_t e) const {
 }
 
 size_t ElementStageRest::memoryBytes() const {
-  return groups.capacity() * sizeof(ElementConstantGroup) + pairs.capacity() * sizeof(StagePair) +
+  return groups.capacity() * sizeof(ElementConstantGroup) + volume.capacity() * sizeof(ElementVolumeGroup) +
+         pairs.capacity() * sizeof(StagePair) +
          (vertexStart.capacity() + vertexFrames.capacity()) * sizeof(uint32_t);
 }
 
 namespace {
+
+// The volumetric term of four elements into their frames (element_stage.h):
+// e_v = (D h / tr S) tr(M^T A / h) - D, H = -(kappa D / tr S) e_v M; G += H, t -= H (C + mean R0).
+// K as in elementFrames; Fr[col][row] the frames before the transpose.
+inline void addVolumeTerm(const ElementVolumeGroup& vg, int dim, const RotationBatch& batch, const d4* M, const d4* K,
+                          d4 (*Fr)[4]) {
+  const d4 kappa = load4(vg.stiffness);
+  if (kappa[0] == 0 && kappa[1] == 0 && kappa[2] == 0 && kappa[3] == 0) return;
+  d4 tr = M[0] * load4(batch.A[0]);
+  for (int j = 1; j < 9; ++j) tr += M[j] * load4(batch.A[j]);
+  const d4 s = kappa * (splat(dim == 2 ? 2 : 3) - load4(vg.strainScale) * tr);  // -kappa D / tr S e_v
+  for (int r = 0; r < 3; ++r) {
+    const d4 h0 = s * M[3 * r], h1 = s * M[3 * r + 1], h2 = s * M[3 * r + 2];
+    Fr[0][r] += h0, Fr[1][r] += h1, Fr[2][r] += h2;
+    Fr[3][r] -= h0 * (K[4] + K[8]) + h1 * (K[5] + K[9]) + h2 * (K[6] + K[10]);
+  }
+}
 
 template <bool Prefetch>
 void elementFrames(const RestModel& m, const ElementStageRest& rest, size_t begin, size_t end, const Vec3* x,
@@ -182,6 +209,7 @@ void elementFrames(const RestModel& m, const ElementStageRest& rest, size_t begi
       F[3][r] = k * (c[r] - (M[3 * r] * K[8] + M[3 * r + 1] * K[9] + M[3 * r + 2] * K[10]) -
                      (M[3 * r] * K[4] + M[3 * r + 1] * K[5] + M[3 * r + 2] * K[6]));
     F[3][3] = k;
+    if (!rest.volume.empty()) addVolumeTerm(rest.volume[e0 / L], m.dim, batch, M, K, F);
     for (int col = 0; col < 4; ++col) transpose(F[col][0], F[col][1], F[col][2], F[col][3]);
     d4 q[4] = {load4(batch.q[1]), load4(batch.q[2]), load4(batch.q[3]), load4(batch.q[0])};
     transpose(q[0], q[1], q[2], q[3]);

@@ -24,6 +24,12 @@
 // bound by these indirect gathers. Every sum is formed in an order that does not depend on how ranges are
 // split, so the result is the same at any thread count; it equals element.h's reference kernel to
 // rounding (tested).
+// The volumetric term (Poisson's ratio > 0, element.h elementVolumeForces) is affine in the rest
+// position too: f_v = H_e (X_v - C_e - mean R0) with H_e = -kappa_e e_v (D / tr S_e) M, so pass 1
+// adds H_e to G and -H_e (C_e + mean R0) to t, and pass 2 is unchanged; e_v = (D h / tr S_e)
+// tr(M^T A / h) - D from the moments and rotation pass 1 has anyway, four elements at a time
+// (~40 flops per element). A model without a volumetric term (every poisson_ratio 0) has no
+// ElementVolumeGroup and does none of this work.
 #pragma once
 
 #include <cstdint>
@@ -58,6 +64,14 @@ struct alignas(32) ElementConstantGroup {
   Real meanRestOffset[3][4];
 };
 
+/// The volumetric term's constants of four consecutive elements, in lanes as ElementConstantGroup:
+/// D h / tr S_e [1/m] and kappa_e D / tr S_e [N/m]. A lane with kappa 0 contributes nothing; a
+/// group of four zeros is skipped.
+struct alignas(32) ElementVolumeGroup {
+  Real strainScale[4];
+  Real stiffness[4];
+};
+
 /// Per element-vertex pair, in the model's pair order: the vertex (as the byte offset of its
 /// position, vertex * sizeof(Vec3), so the gather needs no index arithmetic) and (P_i, 1), P_i its
 /// lattice offset [voxels] from the element's first vertex. 12 bytes.
@@ -84,6 +98,8 @@ constexpr size_t kPrefetchAboveBytes = size_t(2) << 20;
 /// Rest data of the two passes, derived once from the RestModel.
 struct ElementStageRest {
   std::vector<ElementConstantGroup> groups;  ///< Element e's constants: lane e % 4 of groups[e / 4].
+  /// As groups, for the volumetric term; empty when the model has none (RestModel::hasVolumeTerm).
+  std::vector<ElementVolumeGroup> volume;
   /// The model's pairs, then kPrefetchPairs padding pairs (vertex 0) for the prefetch to read.
   /// std::logic_error when a rest position is off the model's voxel lattice, or when the model
   /// is too large for 32-bit byte offsets (over ~178 M vertices or ~33 M elements).

@@ -112,6 +112,9 @@ Real LargeStepSolver::energy(const std::vector<Vec3>& x, const std::vector<Vec3>
     Quat r = q[el];
     e += elementForces(m.dim, x.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[el], r, f.data(), 8)
              .energy;
+    if (m.hasVolumeTerm() && m.volumeStiffness[el] > 0)
+      e += elementVolumeForces(m.dim, x.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), r, m.volumeStiffness[el],
+                               f.data());
   }
   for (size_t i = 0; i < x.size(); ++i) e += 0.5 * m.mass[i] * v[i].squaredNorm() - m.mass[i] * gravity.dot(x[i]);
   return e;
@@ -133,6 +136,9 @@ void LargeStepSolver::forces(const std::vector<Vec3>& x, std::vector<Quat>& q, s
           const uint32_t b = m.elemStart[el], n = m.elemStart[el + 1] - b;
           elementForces(m.dim, x.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[el], q[el], &pair[b],
                         iterations);
+          if (m.hasVolumeTerm() && m.volumeStiffness[el] > 0)  // Poisson's ratio (element.h)
+            elementVolumeForces(m.dim, x.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), q[el],
+                                m.volumeStiffness[el], &pair[b]);
         }
       },
       [&](size_t begin, size_t end) { gatherPairs(vertexPairStart_, vertexPairs_, pair, begin, end, f); });
@@ -163,6 +169,10 @@ int LargeStepSolver::minimise(const ProjectiveSolver& pre, Real h, const std::ve
   // each element's K_e p into its pair slots and per vertex their sum (as forces(): the same bits
   // at any thread count).
   std::vector<StiffnessFrame> frames(m.numElements());
+  // The volumetric term's Gauss-Newton Hessian kappa g g^T, g_i = (D / tr S) M R0_i = de_v/dx_i
+  // at the iterate (element.h; positive semi-definite, as element_stiffness.h clamps the rotation
+  // term's; the rotation's own change is left out): (D / tr S) M per element.
+  std::vector<Mat3> volumeFrames(m.hasVolumeTerm() ? m.numElements() : 0);
   auto fitFrames = [&] {
     elementsThenVertices(
         team_, m.numElements(), 0,
@@ -171,6 +181,10 @@ int LargeStepSolver::minimise(const ProjectiveSolver& pre, Real h, const std::ve
             const uint32_t b = m.elemStart[el], n = m.elemStart[el + 1] - b;
             const Mat3 A = elementCovariance(x.data(), &m.elemVerts[b], &m.restOffsets[b], int(n));
             frames[el] = elementStiffnessFrame(m.dim, A, q[el], &m.restOffsets[b], int(n));
+            if (!volumeFrames.empty() && m.volumeStiffness[el] > 0) {
+              volumeFrames[el] = Real(m.dim == 2 ? 2 : 3) / restMomentTrace(&m.restOffsets[b], int(n)) *
+                                 q[el].toRotationMatrix();
+            }
           }
         },
         [](size_t, size_t) {});
@@ -184,6 +198,13 @@ int LargeStepSolver::minimise(const ProjectiveSolver& pre, Real h, const std::ve
             const uint32_t b = m.elemStart[el], n = m.elemStart[el + 1] - b;
             elementStiffnessProduct(frames[el], d.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[el],
                                     &pair[b]);
+            if (!volumeFrames.empty() && m.volumeStiffness[el] > 0) {
+              const Mat3& D = volumeFrames[el];
+              Real s = 0;
+              for (uint32_t i = 0; i < n; ++i) s += (D * m.restOffsets[b + i]).dot(d[m.elemVerts[b + i]]);
+              s *= m.volumeStiffness[el];
+              for (uint32_t i = 0; i < n; ++i) pair[b + i] += s * (D * m.restOffsets[b + i]);
+            }
           }
         },
         [&](size_t begin, size_t end) { gatherPairs(vertexPairStart_, vertexPairs_, pair, begin, end, out); });

@@ -24,6 +24,7 @@ MaterialSettings regionMaterial(const MaterialSettings& m, uint16_t label) {
       out.youngsModulus = r.youngsModulus;
       out.density = r.density;
       out.paperK = r.paperK;
+      out.poissonRatio = r.poissonRatio;
       out.damping = r.damping;
       return out;
     }
@@ -54,20 +55,44 @@ Mat3 restSecondMoment(const Vec3* r, size_t n) {
   return S;
 }
 
-Real elementStiffness(const MaterialSettings& m, int dim, Real h, int64_t regionVoxels, Real elementSize,
-                      const Vec3* restOffsets, size_t n) {
+namespace {
+
+Real largestRestMoment(int dim, const Vec3* restOffsets, size_t n) {
+  const Mat3 S = restSecondMoment(restOffsets, n);
+  return dim == 3 ? Eigen::SelfAdjointEigenSolver<Mat3>(S, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff()
+                  : Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(S.topLeftCorner<2, 2>(), Eigen::EigenvaluesOnly)
+                        .eigenvalues()
+                        .maxCoeff();
+}
+
+// k_e at nu = 0 (material.h).
+Real shapeStiffness(const MaterialSettings& m, int dim, Real h, int64_t regionVoxels, Real elementSize,
+                    const Vec3* restOffsets, size_t n) {
   if (m.scaling == Scaling::Paper) return m.paperK / elementSize;  // displacement / element size (sec. 2.2)
   // No direction stiffer than the continuum (material.h): k_e = E V_e / lambda_max(S),
   // S = sum R0_i R0_i^T. A complete element's S is isotropic and this is D E V_e / tr S.
-  const Mat3 S = restSecondMoment(restOffsets, n);
-  const Real lambdaMax =
-      dim == 3 ? Eigen::SelfAdjointEigenSolver<Mat3>(S, Eigen::EigenvaluesOnly).eigenvalues().maxCoeff()
-               : Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(S.topLeftCorner<2, 2>(), Eigen::EigenvaluesOnly)
-                     .eigenvalues()
-                     .maxCoeff();
   const Real voxelVolume = h * h * h;
   const Real regionVolume = Real(regionVoxels) * voxelVolume;
-  return m.youngsModulus * regionVolume / lambdaMax;
+  return m.youngsModulus * regionVolume / largestRestMoment(dim, restOffsets, n);
+}
+
+}  // namespace
+
+Real elementStiffness(const MaterialSettings& m, int dim, Real h, int64_t regionVoxels, Real elementSize,
+                      const Vec3* restOffsets, size_t n) {
+  const Real k = shapeStiffness(m, dim, h, regionVoxels, elementSize, restOffsets, n);
+  // mu = E / (2 (1 + nu)); nu = 0 leaves k untouched (bit for bit).
+  return m.poissonRatio > 0 ? k / (1 + m.poissonRatio) : k;
+}
+
+Real elementVolumeStiffness(const MaterialSettings& m, int dim, Real h, int64_t regionVoxels, Real elementSize,
+                            const Vec3* restOffsets, size_t n) {
+  const Real nu = m.poissonRatio;
+  if (!(nu > 0)) return 0;
+  // E V_e = k_e(nu = 0) lambda_max(S) (also `paper`'s equivalent modulus times V_e); kappa = lambda V_e.
+  const Real EV = shapeStiffness(m, dim, h, regionVoxels, elementSize, restOffsets, n) *
+                  largestRestMoment(dim, restOffsets, n);
+  return EV * nu / ((1 + nu) * (1 - 2 * nu));
 }
 
 Real springPeriod(Real mass, Real stiffness) { return 2 * std::numbers::pi * std::sqrt(mass / stiffness); }

@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "gradel/element.h"
 #include "gradel/settings_check.h"
 
 namespace gradel {
@@ -164,8 +165,12 @@ void buildElements(const Layout& layout, RestModel& m) {
     m.size[e] = (layout.kind == LayoutKind::Voxel ? 1 : 2) * layout.cellSize[e] * layout.voxelSize;
     m.stiffness[e] = elementStiffness(m.materials[m.elementMaterial[e]], layout.dim, layout.voxelSize,
                                       layout.regionVoxels(e), m.size[e], &m.restOffsets[b], n);
+    const Real kappa = elementVolumeStiffness(m.materials[m.elementMaterial[e]], layout.dim, layout.voxelSize,
+                                              layout.regionVoxels(e), m.size[e], &m.restOffsets[b], n);
+    if (kappa > 0 && m.volumeStiffness.empty()) m.volumeStiffness.assign(E, 0);
+    if (kappa > 0) m.volumeStiffness[e] = kappa;
     // The lightest vertex bounds the element's period from below.
-    smallest = std::min(smallest, springPeriod(minMass, m.stiffness[e]));
+    smallest = std::min(smallest, springPeriod(minMass, m.elementStiffnessBound(e)));
   }
   m.smallestPeriod = smallest;
 }
@@ -174,7 +179,7 @@ void buildElements(const Layout& layout, RestModel& m) {
 void vertexPeriod(RestModel& m) {
   std::vector<Real> kSum(m.numVertices(), 0.0);
   for (size_t e = 0; e < m.numElements(); ++e)
-    for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) kSum[m.elemVerts[p]] += m.stiffness[e];
+    for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) kSum[m.elemVerts[p]] += m.elementStiffnessBound(e);
   Real tv = std::numeric_limits<Real>::infinity();
   for (size_t i = 0; i < m.numVertices(); ++i) tv = std::min(tv, springPeriod(m.mass[i], kSum[i]));
   m.smallestVertexPeriod = tv;
@@ -252,7 +257,14 @@ size_t RestModel::memoryBytes() const {
   return sizeof(*this) + bytes(restPositions) + bytes(mass) + bytes(invMass) + bytes(onSurface) + bytes(stiffness) +
          bytes(size) + bytes(level) + bytes(elementMaterial) + bytes(elemStart) + bytes(elemVerts) +
          bytes(restOffsets) + bytes(bodies) + bytes(materials) + bytes(materialLabel) + bytes(dampingOwn) +
-         bytes(dampingDefaultShare);
+         bytes(dampingDefaultShare) + bytes(volumeStiffness);
+}
+
+Real RestModel::elementStiffnessBound(size_t e) const {
+  if (volumeStiffness.empty() || volumeStiffness[e] == 0) return stiffness[e];
+  const uint32_t b = elemStart[e], n = elemStart[e + 1] - b;
+  const Real D = dim == 2 ? 2 : 3;
+  return stiffness[e] + volumeStiffness[e] * D * D / restMomentTrace(&restOffsets[b], int(n));
 }
 
 }  // namespace gradel

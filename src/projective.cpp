@@ -30,6 +30,41 @@ using FactorOrdering = Eigen::AMDOrdering<SpMat::StorageIndex>;
 #endif
 using Rhs = Eigen::Matrix<Real, Eigen::Dynamic, 3>;
 
+namespace {
+
+// The matrix of determinant 1 nearest F (Frobenius norm): F = U diag(s) V^T with the signs of
+// an inverted F folded into the smallest singular value, then s' = argmin |s' - s| with
+// prod s' = 1 by Newton steps on the linearised constraint (Bouaziz et al. 2014, sec. 5). 2D: the
+// x-y block (F_zz = 1 stays).
+Mat3 nearestUnitDeterminant(int dim, const Mat3& F) {
+  const int D = dim == 2 ? 2 : 3;
+  const Eigen::MatrixXd Fd = F.topLeftCorner(D, D);
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(Fd, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::MatrixXd U = svd.matrixU(), V = svd.matrixV();
+  Eigen::VectorXd s = svd.singularValues();
+  if (U.determinant() * V.determinant() < 0) s(D - 1) = -s(D - 1), U.col(D - 1) = -U.col(D - 1);
+  Eigen::VectorXd t = s;
+  for (int it = 0; it < 8; ++it) {
+    Eigen::VectorXd g(D);
+    Real c = 1;
+    for (int k = 0; k < D; ++k) c *= t(k);
+    for (int k = 0; k < D; ++k) {
+      g(k) = 1;
+      for (int l = 0; l < D; ++l)
+        if (l != k) g(k) *= t(l);
+    }
+    const Real gg = g.squaredNorm();
+    if (!(gg > 1e-300)) break;
+    // The point of the constraint's tangent plane at t nearest s.
+    t = s - g * ((c - 1) + g.dot(s - t)) / gg;
+  }
+  Mat3 T = Mat3::Identity();
+  T.topLeftCorner(D, D) = U * t.asDiagonal() * V.transpose();
+  return T;
+}
+
+}  // namespace
+
 struct ProjectiveSolver::Impl {
   const RestModel* model = nullptr;
   Real dt = 0;                        ///< [s]; 0 = static solver (no inertia term).
@@ -40,6 +75,10 @@ struct ProjectiveSolver::Impl {
   SplitFactor factor;                 ///< The reduced global matrix's LDL^T factor (factor_solve.h).
   ThreadTeam* team = nullptr;         ///< Its solves' threads (null: this thread).
   Rhs rhs, sol;                       ///< Scratch, numFree x 3.
+  /// Per element, the volume constraint's weight w_e (0: none) and S_e^-1 (projective.h); empty
+  /// without a volumetric term.
+  std::vector<Real> volumeWeight;
+  std::vector<Mat3> restInverse;
   mutable std::vector<Vec3> rows;     ///< Scratch of factorSolve, numFree.
 
   // z = A^-1 b through the factor A = P^T L D L^T P, the three coordinates at once: each
@@ -93,6 +132,28 @@ struct ProjectiveSolver::Impl {
         if (r < 0) continue;
         rhs.row(r) += (k * (p[i] - mean) + coupling).transpose();
       }
+      if (!volumeWeight.empty() && volumeWeight[e] > 0) addVolumeTerms(e, x, A);
+    }
+  }
+
+  // The volume constraint of element e (projective.h): T = the matrix of determinant 1 nearest
+  // F = A S^-1, and the right-hand side w T R0_i minus the pinned vertices' coupling
+  // w sum_{pinned k} (R0_i^T S^-1 R0_k) x_k.
+  void addVolumeTerms(size_t e, const std::vector<Vec3>& x, const Mat3& A) {
+    const RestModel& m = *model;
+    const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
+    const uint32_t* verts = &m.elemVerts[b];
+    const Vec3* R0 = &m.restOffsets[b];
+    const Mat3& Sinv = restInverse[e];
+    const Real w = volumeWeight[e];
+    const Mat3 T = nearestUnitDeterminant(m.dim, elementDeformationGradient(m.dim, A, Sinv));
+    for (uint32_t i = 0; i < n; ++i) {
+      const int32_t r = freeIndex[verts[i]];
+      if (r < 0) continue;
+      Vec3 t = w * (T * R0[i]);
+      for (uint32_t k = 0; k < n; ++k)
+        if (freeIndex[verts[k]] < 0) t -= w * R0[i].dot(Sinv * R0[k]) * x[verts[k]];
+      rhs.row(r) += t.transpose();
     }
   }
 
@@ -371,6 +432,27 @@ ProjectiveSolver::ProjectiveSolver(const RestModel& model, Real dt, const std::v
       for (uint32_t j = 0; j < n; ++j) {
         const int32_t rj = s.freeIndex[model.elemVerts[b + j]];
         if (rj >= 0) t.emplace_back(ri, rj, i == j ? k + off : off);
+      }
+    }
+  }
+  // The volume constraints (projective.h): w_e B_e, B_e(i, k) = R0_i^T S^-1 R0_k, per coordinate.
+  if (model.hasVolumeTerm()) {
+    s.volumeWeight.assign(model.numElements(), 0), s.restInverse.resize(model.numElements());
+    for (size_t e = 0; e < model.numElements(); ++e) {
+      if (!(model.volumeStiffness[e] > 0)) continue;
+      const uint32_t b = model.elemStart[e], n = model.elemStart[e + 1] - b;
+      const Mat3 S = restSecondMoment(&model.restOffsets[b], n);
+      const Mat3 Sinv = restMomentInverse(model.dim, S);
+      const int D = model.dim == 2 ? 2 : 3;
+      const Real w = Real(D * D) * model.volumeStiffness[e] / S.topLeftCorner(D, D).trace();
+      s.volumeWeight[e] = w, s.restInverse[e] = Sinv;
+      for (uint32_t i = 0; i < n; ++i) {
+        const int32_t ri = s.freeIndex[model.elemVerts[b + i]];
+        if (ri < 0) continue;
+        for (uint32_t j = 0; j < n; ++j) {
+          const int32_t rj = s.freeIndex[model.elemVerts[b + j]];
+          if (rj >= 0) t.emplace_back(ri, rj, w * model.restOffsets[b + i].dot(Sinv * model.restOffsets[b + j]));
+        }
       }
     }
   }

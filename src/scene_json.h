@@ -72,6 +72,7 @@ inline const Bound kVoxelSize{1e-9, 1e3, false, false};
 constexpr Real kMaxPositionVoxels = 1e9;
 inline const Bound kNonNegative{0, std::numeric_limits<Real>::infinity(), false, false};
 inline const Bound kUnit{0, 1, false, false};  // [0, 1]
+inline const Bound kPoissonRatio{0, 0.5, false, true};  // [0, 0.5) (material.h)
 
 // "a number in [lo, hi] [unit]".
 std::string expectNumber(const Bound& b, const char* unit);

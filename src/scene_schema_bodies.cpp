@@ -178,6 +178,7 @@ void readMaterial(Fields f, MaterialSettings& m) {
   m.youngsModulus = f.number("youngs_modulus", m.youngsModulus, kPositive, "Pa");
   m.density = f.number("density", m.density, kPositive, "kg/m^3");
   m.paperK = f.number("k", m.paperK, kPositive, "N");
+  m.poissonRatio = f.number("poisson_ratio", m.poissonRatio, kPoissonRatio, "");
   // Per-label materials; a field an entry leaves out is the body's (read above).
   std::vector<Fields> regions = f.objectArray("regions", false);
   for (size_t i = 0; i < regions.size(); ++i) {
@@ -191,6 +192,7 @@ void readMaterial(Fields f, MaterialSettings& m) {
     r.youngsModulus = rf.number("youngs_modulus", m.youngsModulus, kPositive, "Pa");
     r.density = rf.number("density", m.density, kPositive, "kg/m^3");
     r.paperK = rf.number("k", m.paperK, kPositive, "N");
+    r.poissonRatio = rf.number("poisson_ratio", m.poissonRatio, kPoissonRatio, "");
     r.damping = rf.optNumber("damping", kNonNegative, "1/s");
     rf.finish();
     m.regions.push_back(r);

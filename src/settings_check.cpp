@@ -23,6 +23,10 @@ void nonNegative(const char* field, Real x) {
 void positive(const char* field, Real x) {
   if (!(x > 0) || !std::isfinite(x)) fail(field, "must be a finite number > 0", x);
 }
+// Poisson's ratio (material.h): 0.5 is incompressible, which the volumetric term cannot represent.
+void poisson(const char* field, Real x) {
+  if (!(x >= 0 && x < 0.5)) fail(field, "must be in [0, 0.5) (0.5, incompressible, is refused)", x);
+}
 }  // namespace
 
 void validate(const SimulationSettings& s) {
@@ -74,6 +78,7 @@ void validate(const MaterialSettings& s) {
   positive("youngs_modulus", s.youngsModulus);
   positive("density", s.density);
   positive("k", s.paperK);
+  poisson("poisson_ratio", s.poissonRatio);
   for (size_t i = 0; i < s.regions.size(); ++i) {
     const RegionMaterial& r = s.regions[i];
     const std::string at = "regions[" + std::to_string(i) + "].";
@@ -84,6 +89,7 @@ void validate(const MaterialSettings& s) {
     positive((at + "youngs_modulus").c_str(), r.youngsModulus);
     positive((at + "density").c_str(), r.density);
     positive((at + "k").c_str(), r.paperK);
+    poisson((at + "poisson_ratio").c_str(), r.poissonRatio);
     if (r.damping) nonNegative((at + "damping").c_str(), *r.damping);
   }
   if (s.damping) nonNegative("damping", *s.damping);

@@ -7,15 +7,18 @@
 
 #include "gradel/element.h"
 #include "gradel/element_stiffness.h"
+#include "gradel/material.h"
 
 namespace gradel {
 
 namespace {
 
-// y = M^-1/2 K M^-1/2 x over every element (frames at rest, fixed), z zeroed in 2D.
+// y = M^-1/2 K M^-1/2 x over every element (frames at rest, fixed), z zeroed in 2D. K includes
+// the volumetric term's rest Hessian kappa_e g g^T, g_i = (D / tr S_e) R0_i (element.h, M = I).
 struct RestOperator {
   const RestModel& m;
   std::vector<StiffnessFrame> frames;
+  std::vector<Real> restScale;  ///< D / tr S_e per element (empty without a volumetric term).
   std::vector<Real> invSqrtMass;
   mutable std::vector<Vec3> scaled, elementOut;
 
@@ -28,6 +31,13 @@ struct RestOperator {
       const Mat3 A = elementCovariance(m.restPositions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n));
       frames[e] = elementStiffnessFrame(m.dim, A, Quat::Identity(), &m.restOffsets[b], int(n));
       largest = std::max<size_t>(largest, n);
+    }
+    if (m.hasVolumeTerm()) {
+      restScale.resize(E);
+      for (size_t e = 0; e < E; ++e) {
+        const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
+        restScale[e] = Real(m.dim == 2 ? 2 : 3) / restMomentTrace(&m.restOffsets[b], int(n));
+      }
     }
     invSqrtMass.resize(V);
     for (size_t i = 0; i < V; ++i) invSqrtMass[i] = 1 / std::sqrt(m.mass[i]);
@@ -43,6 +53,12 @@ struct RestOperator {
       elementStiffnessProduct(frames[e], scaled.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[e],
                               elementOut.data());
       for (uint32_t k = 0; k < n; ++k) y[m.elemVerts[b + k]] += elementOut[k];
+      if (!restScale.empty() && m.volumeStiffness[e] > 0) {
+        Real s = 0;
+        for (uint32_t k = 0; k < n; ++k) s += m.restOffsets[b + k].dot(scaled[m.elemVerts[b + k]]);
+        s *= m.volumeStiffness[e] * restScale[e] * restScale[e];
+        for (uint32_t k = 0; k < n; ++k) y[m.elemVerts[b + k]] += s * m.restOffsets[b + k];
+      }
     }
     for (size_t i = 0; i < V; ++i) {
       y[i] *= invSqrtMass[i];
@@ -64,10 +80,13 @@ FrequencyEstimate highestFrequency(const RestModel& m, int iterations) {
   const size_t V = m.numVertices();
   if (m.numElements() == 0 || V == 0) return est;
 
-  // The upper bound: every element's K_e <= k_e I, so K <= diag(sum of k_e at each vertex).
+  // The upper bound: every element's K_e <= k_e I (with a volumetric term, + kappa_e D^2 / tr S_e:
+  // RestModel::elementStiffnessBound), so K <= diag(sum of the bounds at each vertex).
   std::vector<Real> kSum(V, 0.0);
-  for (size_t e = 0; e < m.numElements(); ++e)
-    for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) kSum[m.elemVerts[p]] += m.stiffness[e];
+  for (size_t e = 0; e < m.numElements(); ++e) {
+    const Real k = m.elementStiffnessBound(e);
+    for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) kSum[m.elemVerts[p]] += k;
+  }
   double bound = 0;
   for (size_t i = 0; i < V; ++i) bound = std::max(bound, double(kSum[i] / m.mass[i]));
   est.gershgorin = std::sqrt(bound);

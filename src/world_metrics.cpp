@@ -10,8 +10,8 @@
 
 namespace gradel {
 
-std::vector<Real> World::elementStress(Real poissonRatio) const {
-  return elementVonMisesStress(*model_, state_.positions, state_.rotations, poissonRatio);
+std::vector<Real> World::elementStress() const {
+  return elementVonMisesStress(*model_, state_.positions, state_.rotations);
 }
 
 std::vector<Real> World::vertexStrain() const { return vertexStress(elementStrain()); }
@@ -92,12 +92,16 @@ Metrics World::metricsOf(const BodyRange& body, std::vector<Real>* elementStress
     Quat q = state_.rotations[e];
     const ElementResult er = elementForces(m.dim, state_.positions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n),
                                            m.stiffness[e], q, f.data(), 20);
+    if (m.hasVolumeTerm() && m.volumeStiffness[e] > 0) {  // Poisson's ratio > 0 (element.h)
+      r.elasticEnergy += elementVolumeForces(m.dim, state_.positions.data(), &m.elemVerts[b], &m.restOffsets[b],
+                                             int(n), q, m.volumeStiffness[e], f.data());
+    }
     for (uint32_t i = 0; i < n; ++i) forces[m.elemVerts[b + i] - v0] += f[i];
     r.elasticEnergy += er.energy;
     const Real strain = std::sqrt(er.sumSqDisp / n) / m.size[e];
     if (elementStrain) (*elementStrain)[e] = strain;
     r.maxStrain = std::max(r.maxStrain, strain);
-    const Real stress = elementVonMises(m, state_.positions.data(), e, q, 0);  // q: the fit just made
+    const Real stress = elementVonMises(m, state_.positions.data(), e, q);  // q: the fit just made
     if (elementStress) (*elementStress)[e] = stress;
     r.maxStress = std::max(r.maxStress, stress);
     r.minElementDet = std::min(r.minElementDet, elementDeterminant(m.dim, state_.positions.data(), &m.elemVerts[b],

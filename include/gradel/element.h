@@ -9,6 +9,24 @@
 //   E   = k_e / 2 sum_i |M R0_i - r_i|^2  (f_i = -dE/dx_i: the elastic energy)
 // This is the reference form (metrics, stress, tests); the explicit step runs the same element in
 // element_stage.h's data-parallel layout.
+//
+// The volumetric term (material.h, Poisson's ratio nu > 0): with M the element's best-fit
+// rotation above, S = sum_i R0_i R0_i^T and D the dimension (3, or 2 in 2D),
+//   e_v = D (tr(M^T A) - tr S) / tr S      (the volumetric strain in the element's rotated frame:
+//                                            tr(eps) for a small strain eps when S is isotropic)
+//   E_v = kappa_e / 2 e_v^2
+//   f_i = -dE_v/dx_i = -kappa_e e_v (D / tr S) M R0_i
+// M maximises tr(M^T A) over rotations, so d tr(M^T A) / dA = M (the envelope theorem: M's own
+// change does not count) and dA/dx_i [u] = u R0_i^T. The forces sum to zero (sum R0_i = 0; the
+// rounding residue's share removed as above) and have zero torque for the same reason as eq. 1
+// (sum r_i (M R0_i)^T = A M^T is symmetric for the polar rotation). This is the corotated linear
+// volumetric energy (the stress output's eps = sym(M^T F) - I, element_strain.h): its stiffness
+// along the forces' direction is kappa_e D^2 / tr S in every pose, like the rotation term's k_e
+// (so the rest estimate of the explicit step's limit holds when deformed), and it stays restoring
+// through inversion: an element turned inside out has tr(M^T A) < tr S, and the force pushes it
+// back out along M R0_i, the rotation term's own target. (J - 1)^2 on J = det F was tried first:
+// its stiffness grows with J^(4/3), and a mirrored 4-voxel box at nu = 0.3 overshot to J = 3 and
+// blew up the explicit step within 20 steps, where nu = 0 recovered.
 #pragma once
 
 #include "gradel/types.h"
@@ -28,6 +46,22 @@ ElementResult elementForces(int dim, const Vec3* x, const uint32_t* verts, const
 
 /// A = sum_i r_i R0_i^T about the current centroid (also returns the centroid).
 Mat3 elementCovariance(const Vec3* x, const uint32_t* verts, const Vec3* R0, int n, Vec3* centroid = nullptr);
+
+/// S^-1 for S = sum R0_i R0_i^T: the 2x2 block in 2D (z row and column zero), the 3x3 inverse in
+/// 3D; a pseudo-inverse for a degenerate rest shape (never for the layouts' elements).
+Mat3 restMomentInverse(int dim, const Mat3& S);
+
+/// The volumetric term above: adds its forces into f[0..n) and returns its energy [J]. `q` is the
+/// element's fitted rotation (elementForces' output), `kappa` [J] = lambda V_e (material.h
+/// elementVolumeStiffness).
+Real elementVolumeForces(int dim, const Vec3* x, const uint32_t* verts, const Vec3* R0, int n, const Quat& q,
+                         Real kappa, Vec3* f);
+/// tr S = sum_i |R0_i|^2 [m^2] (the term's normalisation).
+Real restMomentTrace(const Vec3* R0, int n);
+
+/// F = A S^-1 (F_zz = 1 in 2D) and its cofactor matrix cof(F) = dJ/dF.
+Mat3 elementDeformationGradient(int dim, const Mat3& A, const Mat3& Sinv);
+Mat3 cofactor(const Mat3& F);
 
 /// Deformation gradient determinant estimate det(A) / det(sum R0 R0^T); < 0 means inverted.
 Real elementDeterminant(int dim, const Vec3* x, const uint32_t* verts, const Vec3* R0, int n);

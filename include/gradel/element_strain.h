@@ -11,8 +11,8 @@
 // element is in plane strain (eps_zz = 0).
 // The stress is linear isotropic: sigma = lambda tr(eps) I + 2 mu eps with lambda =
 // E nu / ((1 + nu)(1 - 2 nu)), mu = E / (2 (1 + nu)); von Mises = sqrt(3/2 s:s), s = dev(sigma).
-// The engine's elements have no Poisson's ratio of their own (material.h: "Poisson ratio 0
-// model"), so the callers pass nu = 0; the functions take nu for when materials carry one.
+// E and nu are the element's region's (material.h youngs_modulus, poisson_ratio): the same
+// small-strain moduli as its elastic energy.
 #pragma once
 
 #include <vector>
@@ -33,12 +33,15 @@ Real vonMisesStress(const Mat3& strain, Real youngsModulus, Real poissonRatio);
 /// materials give a force k [N] instead, the modulus of a cube element as stiff as it: 2 k_e / s_e.
 Real elementYoungsModulus(const RestModel& model, size_t e);
 
-/// Von Mises stress [Pa] of element e at positions x; `q` as elementStrain.
-Real elementVonMises(const RestModel& model, const Vec3* x, size_t e, Quat& q, Real poissonRatio);
+/// Poisson's ratio of element e: its region's (material.h).
+Real elementPoissonRatio(const RestModel& model, size_t e);
+
+/// Von Mises stress [Pa] of element e at positions x in its region's material; `q` as elementStrain.
+Real elementVonMises(const RestModel& model, const Vec3* x, size_t e, Quat& q);
 
 /// Von Mises stress [Pa] of every element of the model at `positions`, warm-started from
 /// `rotations` (one per element; not changed).
 std::vector<Real> elementVonMisesStress(const RestModel& model, const std::vector<Vec3>& positions,
-                                        const std::vector<Quat>& rotations, Real poissonRatio);
+                                        const std::vector<Quat>& rotations);
 
 }  // namespace gradel

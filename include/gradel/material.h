@@ -16,6 +16,16 @@
 //   (exact on average over directions), made a gradational bar 1.20 E stiff along its axis at
 //   16 voxels across, because its incomplete elements all lie along the bar
 //   (docs/validation/README.md).
+//   Poisson's ratio nu (`poisson_ratio`, default 0): the shape-matching energy above is linear
+//   isotropic elasticity with mu = E/2, lambda = 0 at small strain (k_e/2 tr(eps S eps^T) =
+//   E/2 |eps|^2 V_e for a complete element). For nu > 0 k_e is divided by (1 + nu), so that
+//   mu = E / (2 (1 + nu)), and each element gets a corotated volumetric energy kappa_e/2 e_v^2 on
+//   its volumetric strain e_v about its best-fit rotation (element.h elementVolumeForces), kappa_e = lambda V_e,
+//   lambda = E nu / ((1 + nu)(1 - 2 nu)): small-strain energy mu |eps|^2 + lambda/2 tr(eps)^2,
+//   Young's modulus E and Poisson's ratio nu. 2D bodies are in plane strain (as the stress
+//   output, element_strain.h): the same lambda, a lateral / axial strain nu / (1 - nu). `paper`
+//   scaling uses the element's equivalent modulus k_e lambda_max(S_e) / V_e in place of E.
+//   nu = 0 is exactly the model above (no volumetric term, no work).
 // `paper`: every vertex has the mass of one voxel (rho h^3), and the displacement is divided by
 //   the element's size (its block edge s_e in metres), f_i = k (M R0_i - r_i) / s_e, i.e.
 //   k_e = k / s_e with k in newtons. Coarse elements are softer per metre; kept to reproduce
@@ -46,6 +56,7 @@ struct RegionMaterial {
   Real youngsModulus = 1.0e5;  ///< [Pa] as MaterialSettings::youngsModulus.
   Real density = 1000.0;       ///< [kg/m^3] as MaterialSettings::density.
   Real paperK = 10000.0;       ///< [N] as MaterialSettings::paperK.
+  Real poissonRatio = 0;       ///< as MaterialSettings::poissonRatio.
   /// [1/s] velocity damping rate of the region's vertices (v <- v / (1 + c dt), integrator.h);
   /// unset: the simulation's `damping`. A vertex on a border takes its regions' mass-weighted
   /// mean (model.h RestModel::vertexDamping).
@@ -57,6 +68,7 @@ struct MaterialSettings {
   Real youngsModulus = 1.0e5;             ///< [Pa] consistent scaling: Young's-modulus-like E (soft rubber / gel).
   Real density = 1000.0;                  ///< [kg/m^3] both scalings (paper: mass per voxel = density * h^3).
   Real paperK = 10000.0;                  ///< [N] paper scaling: force per unit strain (the paper's k).
+  Real poissonRatio = 0;                  ///< Poisson's ratio nu in [0, 0.5) (see above); 0: no volumetric term.
   std::optional<Real> damping;            ///< [1/s] set only by a region's entry (regionMaterial);
                                           ///< unset: the simulation's damping.
   std::vector<RegionMaterial> regions;    ///< Per-label materials, distinct labels; label 1 without
@@ -79,9 +91,13 @@ Real cellCornerMass(const MaterialSettings& m, Real voxelSize, int cellEdge, int
 Mat3 restSecondMoment(const Vec3* restOffsets, size_t n);
 /// An element's stiffness k_e [N/m]. `consistent`: E V_e / lambda_max(S) with S its rest offsets'
 /// second moment (the top-left 2x2 block in 2D) and V_e = regionVoxels * h^3; `paper`: k / s_e
-/// with s_e = elementSize [m].
+/// with s_e = elementSize [m]; either divided by (1 + nu) when m.poissonRatio nu > 0.
 Real elementStiffness(const MaterialSettings& m, int dim, Real voxelSize, int64_t regionVoxels, Real elementSize,
                       const Vec3* restOffsets, size_t n);
+/// The volumetric stiffness kappa_e = lambda V_e [J] of an element (see above; same arguments as
+/// elementStiffness): 0 when m.poissonRatio is 0.
+Real elementVolumeStiffness(const MaterialSettings& m, int dim, Real voxelSize, int64_t regionVoxels, Real elementSize,
+                            const Vec3* restOffsets, size_t n);
 /// The period [s] of a mass m [kg] on a spring k [N/m]: 2 pi sqrt(m / k). Every non-rigid mode of
 /// a shape-matching element with vertex masses >= m has omega^2 <= k_e / m (sec. 3.4).
 Real springPeriod(Real mass, Real stiffness);

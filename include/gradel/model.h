@@ -46,6 +46,9 @@ struct RestModel {
   std::vector<Real> size;                 ///< [m] block edge 2 * cellSize * h (voxel layout: h); normalises stress.
   std::vector<uint8_t> level;             ///< Layout level (0 = finest).
   std::vector<uint16_t> elementMaterial;  ///< Index into `materials` of the element's region.
+  /// kappa_e = lambda V_e [J], the volumetric term's stiffness (material.h, element.h
+  /// elementVolumeForces); empty when every material's poisson_ratio is 0 (no volumetric work).
+  std::vector<Real> volumeStiffness;
 
   // ---- materials per region (material.h regionMaterial): one per label of the layout ----
   std::vector<MaterialSettings> materials;  ///< Ascending label; the stiffness and masses above come from them.
@@ -77,6 +80,12 @@ struct RestModel {
   size_t memoryBytes() const;
   size_t numPairs() const { return elemVerts.size(); }
   size_t numBodies() const { return bodies.size(); }
+  /// True if some element has a volumetric term (volumeStiffness is filled).
+  bool hasVolumeTerm() const { return !volumeStiffness.empty(); }
+  /// Element e's stiffness bound [N/m]: its rest Hessian is <= this times the identity on its
+  /// vertices: k_e, plus kappa_e D^2 / tr S_e with a volumetric term (its Hessian along its force
+  /// is kappa_e g g^T, g_i = (D / tr S_e) M R0_i, |g|^2 = D^2 / tr S_e; element.h).
+  Real elementStiffnessBound(size_t e) const;
   /// True if some region sets its own damping rate (dampingOwn is filled).
   bool hasRegionDamping() const { return !dampingOwn.empty(); }
   /// Vertex v's velocity damping rate [1/s] given the simulation's rate (the regions' rates above;

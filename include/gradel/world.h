@@ -201,9 +201,9 @@ class World {
   const PinSet& pinned() const { return pinSet_; }
 
   /// Per-element von Mises stress [Pa] (element_strain.h): from the element's small strain about
-  /// its best-fit rotation and its region's Young's modulus. The engine's material has no Poisson's
-  /// ratio (material.h: a nu = 0 model), so the default is 0. Per-vertex: mean over its elements.
-  std::vector<Real> elementStress(Real poissonRatio = 0) const;
+  /// its best-fit rotation and its region's Young's modulus and Poisson's ratio (material.h).
+  /// Per-vertex: mean over its elements.
+  std::vector<Real> elementStress() const;
   std::vector<Real> vertexStress() const;
   /// Per-element strain measure (sec. 3, fig. 1) [-]: RMS over its vertices of |M R0_i - r_i|,
   /// divided by the element size. Per-vertex: mean over the vertex's elements.

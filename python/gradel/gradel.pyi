@@ -102,6 +102,7 @@ class Simulation:
         domain_max: Optional[Sequence[float]] = None,
         restitution: float = ...,
         friction: float = ...,
+        poisson_ratio: float = 0.0,
     ) -> None: ...
     @staticmethod
     def from_scene(scene: _Scene) -> Simulation:
@@ -111,7 +112,7 @@ class Simulation:
         """Adds a body before the first step; returns its index. A Body, or a scene's bodies[i]
         keys as keyword arguments: shape, size, grid, primitives, source, voxel_size, layout,
         position, velocity, name, material (dict) or scaling, youngs_modulus, density, k,
-        regions."""
+        poisson_ratio, regions."""
     def add_pin(
         self,
         min: Optional[Sequence[float]] = None,
