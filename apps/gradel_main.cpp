@@ -222,10 +222,10 @@ gradel::SizeLimits runSizeLimits(const gradel::Scene& scene, Real duration, std:
   probe.dim = scene.dim;
   probe.simulation = scene.simulation;
   probe.simulation.threads = 1;
-  probe.body.material = scene.body.material;
-  probe.body.layout = gradel::LayoutKind::Voxel;
-  probe.body.shape = gradel::presetShape("box", 4, scene.dim, scene.body.shape.voxelSize);
-  probe.body.material.regions.clear();
+  probe.bodies[0].material = scene.bodies[0].material;
+  probe.bodies[0].layout = gradel::LayoutKind::Voxel;
+  probe.bodies[0].shape = gradel::presetShape("box", 4, scene.dim, scene.bodies[0].shape.voxelSize);
+  probe.bodies[0].material.regions.clear();
   Real dt = 0;
   try {
     dt = gradel::buildScene(probe).world->dt();
@@ -292,7 +292,7 @@ int runScene(const RunOptions& o) {
   // capped speed by the world (overlaps.h).
   {
     std::vector<std::string> names;
-    for (size_t i = 0; i < built.numBodies(); ++i) names.push_back(built.body(i).name);
+    for (size_t i = 0; i < built.numBodies(); ++i) names.push_back(built.bodies[i].name);
     for (const gradel::StartOverlap& ov : world.startOverlaps())
       std::fprintf(stderr, "gradel: %s: %s\n", o.scene.c_str(), gradel::describeStartOverlap(ov, world, names).c_str());
   }
@@ -342,7 +342,7 @@ int runScene(const RunOptions& o) {
       throw Diverged(*diverged);
     if (!warning.empty()) std::fprintf(stderr, "gradel: %s: %s\n", o.scene.c_str(), warning.c_str());
     if (several) {
-      for (size_t i = 0; i < each.size(); ++i) csv.append(built.body(i).name, each[i], /*forces=*/false);
+      for (size_t i = 0; i < each.size(); ++i) csv.append(built.bodies[i].name, each[i], /*forces=*/false);
       csv.append("all", m);
     } else {
       csv.append(m);
@@ -353,10 +353,10 @@ int runScene(const RunOptions& o) {
     const std::vector<gradel::Real> vertexStress = world.vertexStress(elementStress);
     const std::vector<gradel::Real> vertexStrain = world.vertexStress(elementStrain);
     for (size_t i = 0; i < built.numBodies(); ++i) {
-      const std::string name = gradel::frameFileName(index, several ? built.body(i).name : "");
+      const std::string name = gradel::frameFileName(index, several ? built.bodies[i].name : "");
       gradel::writeVtu(dir.file(name), model, world.state(), built.range(i), vertexStress, elementStress,
                        gradel::VtkEncoding::Base64, vertexStrain, elementStrain);
-      pvd.push_back({world.time(), name, int(i), several ? built.body(i).name : ""});
+      pvd.push_back({world.time(), name, int(i), several ? built.bodies[i].name : ""});
     }
   };
 

@@ -151,21 +151,21 @@ struct FieldDiff {
 };
 std::vector<FieldDiff> strikeFieldDiff(const std::string& sceneFile, Scaling scaling, std::vector<Real> times) {
   Scene base = loadScene(sceneFile);
-  base.body.material.scaling = scaling;
+  base.bodies[0].material.scaling = scaling;
   Scene sg = base, su = base;
-  sg.body.layout = LayoutKind::Gradational;
-  su.body.layout = LayoutKind::Uniform;
+  sg.bodies[0].layout = LayoutKind::Gradational;
+  su.bodies[0].layout = LayoutKind::Uniform;
   BuiltScene bg = buildScene(sg), bu = buildScene(su);
   std::map<std::array<long long, 3>, uint32_t> uniformAt;
   auto key = [](const Vec3& x) {
     return std::array<long long, 3>{std::llround(x.x() * 1e6), std::llround(x.y() * 1e6), std::llround(x.z() * 1e6)};
   };
-  for (size_t i = 0; i < bu.model->numVertices(); ++i)
-    if (bu.model->onSurface[i]) uniformAt[key(bu.model->restPositions[i])] = uint32_t(i);
+  for (size_t i = 0; i < bu.bodies[0].model->numVertices(); ++i)
+    if (bu.bodies[0].model->onSurface[i]) uniformAt[key(bu.bodies[0].model->restPositions[i])] = uint32_t(i);
   std::vector<std::pair<uint32_t, uint32_t>> pairs;
-  for (size_t i = 0; i < bg.model->numVertices(); ++i)
-    if (bg.model->onSurface[i])
-      if (auto it = uniformAt.find(key(bg.model->restPositions[i])); it != uniformAt.end())
+  for (size_t i = 0; i < bg.bodies[0].model->numVertices(); ++i)
+    if (bg.bodies[0].model->onSurface[i])
+      if (auto it = uniformAt.find(key(bg.bodies[0].model->restPositions[i])); it != uniformAt.end())
         pairs.emplace_back(uint32_t(i), it->second);
   std::vector<FieldDiff> out;
   for (Real t : times) {
@@ -177,13 +177,13 @@ std::vector<FieldDiff> strikeFieldDiff(const std::string& sceneFile, Scaling sca
     Real sum = 0, sumDef = 0;
     Vec3 meanG = Vec3::Zero(), meanU = Vec3::Zero();
     for (auto [g, u] : pairs) {
-      meanG += bg.world->state().positions[g] - bg.model->restPositions[g];
-      meanU += bu.world->state().positions[u] - bu.model->restPositions[u];
+      meanG += bg.world->state().positions[g] - bg.bodies[0].model->restPositions[g];
+      meanU += bu.world->state().positions[u] - bu.bodies[0].model->restPositions[u];
     }
     meanG /= Real(std::max<size_t>(pairs.size(), 1)), meanU /= Real(std::max<size_t>(pairs.size(), 1));
     for (auto [g, u] : pairs) {
-      const Vec3 dg = bg.world->state().positions[g] - bg.model->restPositions[g];
-      const Vec3 du = bu.world->state().positions[u] - bu.model->restPositions[u];
+      const Vec3 dg = bg.world->state().positions[g] - bg.bodies[0].model->restPositions[g];
+      const Vec3 du = bu.world->state().positions[u] - bu.bodies[0].model->restPositions[u];
       const Real diff = (dg - du).norm();
       d.maxDiff = std::max(d.maxDiff, diff);
       d.maxDisp = std::max(d.maxDisp, du.norm());
@@ -268,7 +268,7 @@ struct Cost {
 };
 Cost measureCost(const std::string& sceneFile, IntegratorKind kind, Real eScale, Real duration) {
   Scene s = loadScene(sceneFile);
-  s.body.material.youngsModulus *= eScale;
+  s.bodies[0].material.youngsModulus *= eScale;
   s.simulation.integrator = kind;
   if (kind == IntegratorKind::Implicit) s.simulation.dt = 1.0 / 60.0;
   BuiltScene b = buildScene(s);
@@ -340,8 +340,8 @@ std::string largeStepSection(const fs::path& dir, const BarSpec& bar, Real fExpl
     sim.damping = 2;
     BuiltScene b = buildScene(barScene(bar, sim));
     b.world->advanceTo(3.0);
-    const auto tip = tipVertices(*b.model, bar.length());
-    for (uint32_t i : tip) sag += b.model->restPositions[i].y() - b.world->state().positions[i].y();
+    const auto tip = tipVertices(*b.bodies[0].model, bar.length());
+    for (uint32_t i : tip) sag += b.bodies[0].model->restPositions[i].y() - b.world->state().positions[i].y();
     sag /= Real(tip.size());
   }
   {
@@ -494,7 +494,7 @@ int main(int argc, char** argv) {
           // ("the material"), and the model's actual mass per length.
           SimulationSettings sim;
           BuiltScene b = buildScene(barScene(bar, sim));
-          row.massRatio = b.model->totalMass / (kRho * kWidth * kWidth * bar.length());
+          row.massRatio = b.bodies[0].model->totalMass / (kRho * kWidth * kWidth * bar.length());
           const Real Ecal = modulus[{int(s), int(LayoutKind::Uniform), n}];
           row.theoryCal = beamTipSag(bar.length(), kWidth, kRho * row.massRatio, Ecal);
           row.theoryNominal = beamTipSag(bar.length(), kWidth, kRho, kE);
@@ -530,7 +530,7 @@ int main(int argc, char** argv) {
           const BarSpec bar = makeBar(s, l, n);
           SimulationSettings sim;
           BuiltScene b = buildScene(barScene(bar, sim));
-          const Real massRatio = b.model->totalMass / (kRho * kWidth * kWidth * bar.length());
+          const Real massRatio = b.bodies[0].model->totalMass / (kRho * kWidth * kWidth * bar.length());
           const Real Ecal = modulus[{int(s), int(LayoutKind::Uniform), n}];
           const Real fCal = beamFrequency(bar.length(), kWidth, kRho * massRatio, Ecal);
           FreqRow row{s, l, n, vibrate(bar, IntegratorKind::SymplecticEuler, 0, periods / fCal, true), fCal};
@@ -563,8 +563,8 @@ int main(int argc, char** argv) {
   {
     BuiltScene b = buildScene(barScene(bar, simI));
     b.world->advanceTo(3.0);
-    const auto tip = tipVertices(*b.model, bar.length());
-    for (uint32_t i : tip) implicitSag += b.model->restPositions[i].y() - b.world->state().positions[i].y();
+    const auto tip = tipVertices(*b.bodies[0].model, bar.length());
+    for (uint32_t i : tip) implicitSag += b.bodies[0].model->restPositions[i].y() - b.world->state().positions[i].y();
     implicitSag /= Real(tip.size());
   }
   const SagResult staticSag = staticTipSag(bar);

@@ -399,7 +399,7 @@ class Viewer {
   }
 
   void applyShape(size_t b) {
-    BodySettings& body = scene_.bodyAt(b);
+    BodySettings& body = scene_.bodies[b];
     const BodyEdit& edit = edits_.at(b);
     if (edit.shapeIndex == kAsLoaded) {
       body.source = edit.loadedSource;
@@ -592,13 +592,13 @@ class Viewer {
       original_ = scene_;
       atEnd_ = int(scene_.name == "play" ? AtEnd::RunOn : AtEnd::Stop);
       // A body from a mesh file shows that mesh (embedded) first; other bodies the smooth surface.
-      view_.surface = built_.embedded ? SurfaceMode::Embedded : SurfaceMode::Smooth;
+      view_.surface = built_.bodies[0].embedded ? SurfaceMode::Embedded : SurfaceMode::Smooth;
       view_.forces = true;  // the contact force arrows on the tools
       // Each body keeps its physical size when its resolution changes.
       edits_.clear();
       for (size_t i = 0; i < built_.numBodies(); ++i) {
-        const VoxelVolume& v = built_.body(i).volume;
-        const BodySettings& settings = scene_.bodyAt(i);
+        const VoxelVolume& v = built_.bodies[i].volume;
+        const BodySettings& settings = scene_.bodies[i];
         BodyEdit e;
         e.extent = v.voxelSize() * std::max(v.nx(), v.ny());
         e.sizeVoxels = std::clamp(std::max({v.nx(), v.ny(), v.nz()}), kMinBodySize, kMaxBodySize);
@@ -663,7 +663,7 @@ class Viewer {
   std::optional<SizeEstimate> sizeEstimate(int size) const {
     const BodyEdit& edit = edits_.at(size_t(editBody_));
     if (pacer_.capacity() <= 0 || steps_ < 20) return std::nullopt;
-    const LayoutKind layout = scene_.bodyAt(size_t(editBody_)).layout;
+    const LayoutKind layout = scene_.bodies.at(size_t(editBody_)).layout;
     return estimateSize(edit.sizeVoxels, pacer_.capacity(), size, vertexExponent(layout), kMinBodySize, kMaxBodySize);
   }
 
@@ -804,12 +804,12 @@ class Viewer {
     static const char* layouts[] = {"gradational", "uniform", "voxel"};
     // With several bodies the settings below are those of the body picked here.
     editBody_ = std::min(editBody_, int(scene_.numBodies()) - 1);
-    if (scene_.numBodies() > 1 && ImGui::BeginCombo("edit body", scene_.bodyAt(size_t(editBody_)).name.c_str())) {
+    if (scene_.numBodies() > 1 && ImGui::BeginCombo("edit body", scene_.bodies.at(size_t(editBody_)).name.c_str())) {
       for (size_t i = 0; i < scene_.numBodies(); ++i)
-        if (ImGui::Selectable(scene_.bodyAt(i).name.c_str(), int(i) == editBody_)) editBody_ = int(i), syncEdits();
+        if (ImGui::Selectable(scene_.bodies[i].name.c_str(), int(i) == editBody_)) editBody_ = int(i), syncEdits();
       ImGui::EndCombo();
     }
-    BodySettings& body = scene_.bodyAt(size_t(editBody_));
+    BodySettings& body = scene_.bodies.at(size_t(editBody_));
     BodyEdit& edit = edits_.at(size_t(editBody_));
     // The presets, and the body as loaded (a file's volume, a scene's union of primitives).
     const char* shapeItems[] = {kShapes[0], kShapes[1], kShapes[2], kShapes[kAsLoaded]};
@@ -1061,7 +1061,7 @@ int framePieces(const Options& o, Scene scene) {
     return (threadCpuSeconds() - t0) / reps;
   };
   if (o.bodySize > 0) {
-    BodySettings& b = scene.bodyAt(0);
+    BodySettings& b = scene.bodies[0];
     const Real extent = b.shape.voxelSize * b.shape.dims[0];
     b.shape = presetShape("sphere", o.bodySize, scene.dim, extent / o.bodySize);
     b.source = nullptr;
@@ -1093,7 +1093,7 @@ int framePieces(const Options& o, Scene scene) {
       },
       10);
   nlohmann::json j;
-  j["body_size"] = o.bodySize > 0 ? o.bodySize : scene.bodyAt(0).shape.dims[0];
+  j["body_size"] = o.bodySize > 0 ? o.bodySize : scene.bodies[0].shape.dims[0];
   j["vertices"] = w.model().numVertices();
   j["dt"] = w.dt();
   j["build_cpu_s"] = buildCpu;

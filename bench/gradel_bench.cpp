@@ -138,8 +138,8 @@ void timeSteps(World& w, Row& r, int hashSteps, double frameInterval, int reps, 
 
 Row measure(const std::string& shape, int n, LayoutKind layout, int threads, int reps, double minTime) {
   BuiltScene b = buildScene(paperBenchScene(shape, n, layout, threads));
-  b.layout = Layout();  // build inputs are not part of the running simulation's memory
-  b.volume = VoxelVolume();
+  for (BuiltBody& body : b.bodies)  // build inputs are not part of the running simulation's memory
+    body.layout = Layout(), body.volume = VoxelVolume();
   preparePaperBench(*b.world);
   Row r;
   r.set = "paper", r.shape = shape, r.layout = layoutKindName(layout), r.n = n, r.threads = threads;
@@ -152,14 +152,13 @@ Row measureScene(const Scene& scene, const std::string& set, int threads, int re
   Scene sc = scene;
   sc.simulation.threads = threads;
   BuiltScene b = buildScene(sc);
-  b.layout = Layout();
-  b.volume = VoxelVolume();
+  for (BuiltBody& body : b.bodies) body.layout = Layout(), body.volume = VoxelVolume();
   Row r;
-  r.set = set, r.shape = sc.name, r.layout = layoutKindName(sc.body.layout), r.threads = threads;
+  r.set = set, r.shape = sc.name, r.layout = layoutKindName(sc.bodies[0].layout), r.threads = threads;
   r.integrator = integratorKindName(b.world->settings().integrator);
-  r.n = sc.body.source ? 0 : sc.body.shape.dims[0];
-  r.youngs = sc.body.material.scaling == Scaling::Consistent ? sc.body.material.youngsModulus : 0;
-  r.poisson = sc.body.material.poissonRatio;
+  r.n = sc.bodies[0].source ? 0 : sc.bodies[0].shape.dims[0];
+  r.youngs = sc.bodies[0].material.scaling == Scaling::Consistent ? sc.bodies[0].material.youngsModulus : 0;
+  r.poisson = sc.bodies[0].material.poissonRatio;
   // 200 explicit steps, 20 frame-size steps (1/3 s): the hash's point.
   const IntegratorKind k = b.world->settings().integrator;
   const bool frameStep = k == IntegratorKind::LargeStep || k == IntegratorKind::Implicit;
@@ -379,7 +378,7 @@ int main(int argc, char** argv) {
                 for (int t : threadList) {
                   std::fprintf(stderr, "real sphere %d %s E %.3g nu %.3g threads %d\n", n, layoutKindName(layout), E, nu, t);
                   Scene sc = realBenchScene(n, E, layout);
-                  sc.body.material.poissonRatio = nu;
+                  sc.bodies[0].material.poissonRatio = nu;
                   if (integrator) sc.simulation.integrator = *integrator;
                   emit(measureScene(sc, "real", t, reps, minTime));
                 }

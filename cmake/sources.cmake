@@ -60,7 +60,10 @@ set(GRADEL_CORE_SOURCES
   src/step_body_contacts.cpp     # stage: body contacts after the advance, the walls' re-pass
   # Scene files (JSON, nlohmann_json as a private build dependency) and the scene builder.
   src/scene_build.cpp
-  src/scene_io.cpp)
+  src/scene_io.cpp               # scene files: the top level (which section when), loadScene
+  src/scene_json.cpp             # the strict JSON reader: duplicate keys, Fields, one-line messages
+  src/scene_schema_bodies.cpp    # the schema: bodies, shapes, sources, materials
+  src/scene_schema_world.cpp)    # the schema: simulation, domain, body contact, pins, manipulators
 
 # gradel_shared: the layer between the engine and its tools, used by `gradel` (run, render),
 # gradel-view, gradel-validate, gradel-bench and the tests; not part of the installed package.

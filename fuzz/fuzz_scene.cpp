@@ -19,7 +19,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   try {
     Scene scene = parseScene(text, "fuzz.json");
-    if (scene.body.source) return 0;
+    if (scene.bodies[0].source) return 0;
     for (const PinSettings& p : scene.pins)
       if (p.mask && p.mask->source) return 0;
     scene.simulation.threads = 1;

@@ -241,7 +241,7 @@ Scene readScene(const py::object& scene) {
 py::list bodyStandIns(const Scene& scene) {
   py::list bodies;
   for (size_t i = 0; i < scene.numBodies(); ++i) {
-    const BodySettings& b = scene.bodyAt(i);
+    const BodySettings& b = scene.bodies[i];
     py::dict d;
     d["shape"] = "box";
     d["size"] = 1;
@@ -450,16 +450,16 @@ PYBIND11_MODULE(gradel, m) {
              Scene s;
              s.name = "python";
              s.dim = body.volume->dim();
-             s.body.source = std::make_shared<io::VolumeDataSource>(body.volume, body.name);
-             s.body.shape.voxelSize = body.volume->voxelSize();  // the body's lattice (pins)
-             s.body.layout = parseLayoutKind(layout);
-             s.body.material.scaling = parseScaling(scaling);
-             s.body.material.youngsModulus = youngsModulus;
-             s.body.material.density = density;
-             s.body.material.paperK = k;
-             s.body.material.poissonRatio = poissonRatio;
-             s.body.position = vec(position, "position", s.dim);
-             s.body.velocity = vec(velocity, "velocity", s.dim);
+             s.bodies[0].source = std::make_shared<io::VolumeDataSource>(body.volume, body.name);
+             s.bodies[0].shape.voxelSize = body.volume->voxelSize();  // the body's lattice (pins)
+             s.bodies[0].layout = parseLayoutKind(layout);
+             s.bodies[0].material.scaling = parseScaling(scaling);
+             s.bodies[0].material.youngsModulus = youngsModulus;
+             s.bodies[0].material.density = density;
+             s.bodies[0].material.paperK = k;
+             s.bodies[0].material.poissonRatio = poissonRatio;
+             s.bodies[0].position = vec(position, "position", s.dim);
+             s.bodies[0].velocity = vec(velocity, "velocity", s.dim);
              s.simulation.integrator = parseIntegratorKind(integrator);
              if (dt && !(*dt > 0)) throw InputError("dt: must be > 0 (or None for auto)");
              s.simulation.dt = dt.value_or(0);
@@ -467,7 +467,7 @@ PYBIND11_MODULE(gradel, m) {
              s.simulation.damping = damping;
              s.simulation.gravity = vec(gravity, "gravity", s.dim);
              s.simulation.threads = threads;
-             validate(s.body.material);
+             validate(s.bodies[0].material);
              validate(s.simulation);
              if (domainMin || domainMax) {
                if (!domainMin || !domainMax) throw InputError("domain: give both domain_min and domain_max");
@@ -536,7 +536,7 @@ PYBIND11_MODULE(gradel, m) {
             scene["dim"] = s.scene.dim;
             scene["bodies"] = py::make_tuple(entry);
             Scene parsed = parseFragment(toJson(scene, "add_body"), "add_body", "bodies[0].");
-            BodySettings b = std::move(parsed.body);
+            BodySettings b = std::move(parsed.bodies[0]);
             if (volume) {
               b.source = std::make_shared<io::VolumeDataSource>(volume->volume, volume->name);
               b.sizeKey = "add_body";
@@ -548,11 +548,11 @@ PYBIND11_MODULE(gradel, m) {
             const size_t index = s.scene.numBodies();
             if (!entry.contains("name")) b.name = "body" + std::to_string(index);
             for (size_t i = 0; i < index; ++i)
-              if (s.scene.bodyAt(i).name == b.name)
+              if (s.scene.bodies[i].name == b.name)
                 throw InputError("add_body: name: \"" + b.name + "\" is the name of body " + std::to_string(i) +
                                  " too (expected a name of its own)");
             Scene next = s.scene;
-            next.moreBodies.push_back(std::move(b));
+            next.bodies.push_back(std::move(b));
             rebuild(s, std::move(next));
             return index;
           },
@@ -892,7 +892,7 @@ PYBIND11_MODULE(gradel, m) {
                                return s.world().stateHash();
                              })
       .def_property_readonly(
-          "voxels", [](Simulation& s) { return volumeArray(std::make_shared<const VoxelVolume>(s.built.volume)); })
+          "voxels", [](Simulation& s) { return volumeArray(std::make_shared<const VoxelVolume>(s.built.bodies[0].volume)); })
       .def("metrics",
            [](Simulation& s) {
              WorldLock lock(s);
@@ -913,7 +913,7 @@ PYBIND11_MODULE(gradel, m) {
           "body_names",
           [](Simulation& s) {
             std::vector<std::string> names;
-            for (size_t i = 0; i < s.built.numBodies(); ++i) names.push_back(s.built.body(i).name);
+            for (size_t i = 0; i < s.built.numBodies(); ++i) names.push_back(s.built.bodies[i].name);
             return names;
           },
           "Each body's name (scene key bodies[i].name, default 'body<i>').")
@@ -954,7 +954,7 @@ PYBIND11_MODULE(gradel, m) {
           [](Simulation& s, const std::string& kind, size_t body) {
             WorldLock lock(s);
             const BodyRange& range = bodyRange(s, body);
-            const BuiltBody& b = s.built.body(body);
+            const BuiltBody& b = s.built.bodies[body];
             TriangleMesh mesh;
             if (kind == "embedded") {
               // The body's mesh file carried by the elements; for a volume, its isosurface. In

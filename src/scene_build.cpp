@@ -84,18 +84,19 @@ void buildBody(const BodySettings& settings, int dim, const SizeLimits& limits, 
 }  // namespace
 
 BuiltScene buildScene(const Scene& scene, const SizeLimits& limits) {
+  if (scene.bodies.empty()) throw InputError(scene.name + ": no body (expected \"body\" or \"bodies\")");
   BuiltScene b;
-  b.moreBodies.resize(scene.moreBodies.size());
+  b.bodies.resize(scene.bodies.size());
   // The memory limit holds all bodies: each body is checked against what the ones before leave.
   const uint64_t memory = limits.maxBytes ? limits.maxBytes : defaultMemoryLimit();
   uint64_t used = 0;
   std::vector<std::shared_ptr<const RestModel>> models;
-  for (size_t i = 0; i < scene.numBodies(); ++i) {
+  for (size_t i = 0; i < scene.bodies.size(); ++i) {
     SizeLimits left = limits;
     left.maxBytes = std::max<uint64_t>(1, memory > used ? memory - used : 0);
-    BuiltBody& body = i == 0 ? static_cast<BuiltBody&>(b) : b.moreBodies[i - 1];
+    BuiltBody& body = b.bodies[i];
     try {
-      buildBody(scene.bodyAt(i), scene.dim, left, body);
+      buildBody(scene.bodies[i], scene.dim, left, body);
     } catch (const InputError& e) {
       if (i == 0 || used == 0) throw;
       throw InputError(std::string(e.what()) + "; the bodies before it take about " + formatBytes(used) + " of " +
@@ -107,28 +108,22 @@ BuiltScene buildScene(const Scene& scene, const SizeLimits& limits) {
   }
   SlowStage stage("preparing the world: element stages, pins, contact surfaces and start overlaps");
   auto worldModel = models.size() == 1 ? models[0] : std::make_shared<const RestModel>(combineRestModels(models));
-  b.world = std::make_unique<World>(worldModel, scene.simulation, scene.domain, scene.manipulators);
-  if (!scene.pins.empty()) {
-    std::vector<PinSettings> pins = scene.pins;
-    loadPinMasks(pins);  // the mask files, read here once (World::setPins reads no file)
-    b.world->setPins(std::move(pins));
-  }
-  if (scene.dim == 3 && (scene.numBodies() > 1 || scene.bodyContact.selfContact)) {
+  WorldSettings settings;
+  settings.simulation = scene.simulation;
+  settings.domain = scene.domain;
+  settings.manipulators = scene.manipulators;
+  settings.pins = scene.pins;
+  loadPinMasks(settings.pins);  // the mask files, read here once (the World reads no file)
+  settings.bodyContact = scene.bodyContact;
+  for (const BodySettings& body : scene.bodies) settings.bodyVelocities.push_back(body.velocity);
+  std::vector<ContactBody> contactBodies;
+  if (scene.dim == 3 && (scene.bodies.size() > 1 || scene.bodyContact.selfContact)) {
     std::vector<const Layout*> layouts;
     std::vector<const VoxelVolume*> volumes;
-    for (size_t i = 0; i < scene.numBodies(); ++i) layouts.push_back(&b.body(i).layout), volumes.push_back(&b.body(i).volume);
-    b.world->setBodyContacts(buildContactBodies(b.world->model(), layouts, volumes), scene.bodyContact);
+    for (const BuiltBody& body : b.bodies) layouts.push_back(&body.layout), volumes.push_back(&body.volume);
+    contactBodies = buildContactBodies(*worldModel, layouts, volumes);
   }
-  // Bodies placed overlapping each other, a manipulator or a wall: separated at 1 m/s (overlaps.h).
-  b.world->releaseStartOverlaps();
-
-  for (size_t i = 0; i < scene.numBodies(); ++i) {
-    Vec3 v0 = scene.bodyAt(i).velocity;
-    if (scene.dim == 2) v0.z() = 0;
-    const BodyRange& r = b.range(i);
-    std::fill(b.world->state().velocities.begin() + r.vertexBegin, b.world->state().velocities.begin() + r.vertexEnd,
-              v0);
-  }
+  b.world = std::make_unique<World>(std::move(worldModel), std::move(settings), std::move(contactBodies));
   return b;
 }
 

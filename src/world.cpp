@@ -109,6 +109,25 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   for (ManipulatorSettings& s : manipulators) addManipulator(std::move(s));
 }
 
+World::World(std::shared_ptr<const RestModel> model, WorldSettings settings, std::vector<ContactBody> contactBodies)
+    : World(std::move(model), settings.simulation, settings.domain, std::move(settings.manipulators)) {
+  const std::vector<Vec3>& v0 = settings.bodyVelocities;
+  if (!v0.empty() && v0.size() != model_->bodies.size())
+    throw std::invalid_argument("World: " + std::to_string(v0.size()) + " body velocities for " +
+                                std::to_string(model_->bodies.size()) + " bodies");
+  for (size_t i = 0; i < v0.size(); ++i)
+    if (!v0[i].allFinite()) throw InputError("bodies[" + std::to_string(i) + "].velocity: not a finite vector");
+  if (!settings.pins.empty()) setPins(std::move(settings.pins));
+  if (!contactBodies.empty()) setBodyContacts(std::move(contactBodies), settings.bodyContact);
+  if (settings.releaseStartOverlaps) releaseStartOverlaps();
+  for (size_t i = 0; i < v0.size(); ++i) {
+    Vec3 v = v0[i];
+    if (model_->dim == 2) v.z() = 0;  // a 2D body moves in its plane
+    const BodyRange& r = model_->bodies[i];
+    std::fill(state_.velocities.begin() + r.vertexBegin, state_.velocities.begin() + r.vertexEnd, v);
+  }
+}
+
 World::~World() = default;
 World::World(World&&) noexcept = default;
 World& World::operator=(World&&) noexcept = default;

@@ -137,6 +137,50 @@ TEST(MultiBody, SeparatedBodiesEvolveBitIdenticallyToEachAlone) {
   }
 }
 
+// World(model, WorldSettings, contact surfaces) is the whole creation: pins, body contacts, the
+// start overlaps' release and each body's velocity, in that order. Two balls placed half a voxel
+// inside each other, one pinned at its far side, the other thrown at it: the same state, bit for
+// bit, as a bare world set up call by call, and each setting took effect.
+TEST(MultiBody, WorldSettingsCreateTheWholeWorldInOneCall) {
+  const Body a = makeBody("sphere", 8, 3, LayoutKind::Gradational, {}, 0.01);
+  const Body b = makeBody("sphere", 8, 3, LayoutKind::Voxel, {}, 0.01, Vec3(0.075, 0, 0));
+  auto combined = std::make_shared<RestModel>(combineRestModels({a.model, b.model}));
+  const std::vector<ContactBody> surfaces = buildContactBodies(*combined, {&a.layout, &b.layout}, {&a.volume, &b.volume});
+  WorldSettings settings;
+  settings.simulation = isolated();
+  PinSettings pin;
+  pin.min = Vec3(0.145, -1, -1), pin.max = Vec3(1, 1, 1), pin.body = 1;
+  settings.pins = {pin};
+  settings.bodyContact.friction = 0.3;
+  settings.bodyVelocities = {Vec3(0.5, 0, 0), Vec3(0, 0, 0)};
+  World one(combined, settings, surfaces);
+
+  World byHand(combined, settings.simulation, settings.domain, settings.manipulators);
+  byHand.setPins(settings.pins);
+  byHand.setBodyContacts(surfaces, settings.bodyContact);
+  byHand.releaseStartOverlaps();
+  for (uint32_t u = combined->bodies[0].vertexBegin; u < combined->bodies[0].vertexEnd; ++u)
+    byHand.state().velocities[u] = settings.bodyVelocities[0];
+
+  ASSERT_NE(one.bodyContacts(), nullptr);
+  EXPECT_FALSE(one.pinned().vertices.empty());
+  EXPECT_FALSE(one.startOverlaps().empty());  // the balls start inside each other
+  EXPECT_TRUE(one.separatingStartOverlaps());
+  EXPECT_EQ(one.state().velocities[combined->bodies[0].vertexBegin], Vec3(0.5, 0, 0));
+  EXPECT_EQ(one.state().velocities[combined->bodies[1].vertexBegin], Vec3(0, 0, 0));
+  EXPECT_EQ(one.stateHash(), byHand.stateHash());
+  for (int s = 0; s < 40; ++s) one.step(), byHand.step();
+  EXPECT_EQ(one.stateHash(), byHand.stateHash());
+  EXPECT_GT(one.metrics().kineticEnergy, 0);
+
+  // Without the release, the overlap is left to the contacts' instant push, as a bare world's.
+  settings.releaseStartOverlaps = false;
+  EXPECT_FALSE(World(combined, settings, surfaces).separatingStartOverlaps());
+  // One velocity per body, or none.
+  settings.bodyVelocities.pop_back();
+  EXPECT_THROW(World(combined, settings, surfaces), std::invalid_argument);
+}
+
 TEST(MultiBody, PinsSelectOnlyTheirBodysVertices) {
   const Body a = makeBody("box", 4, 3, LayoutKind::Voxel, {}, 0.01);
   const Body b = makeBody("box", 4, 3, LayoutKind::Voxel, {}, 0.01);  // the same place: boxes overlap
@@ -183,20 +227,20 @@ const char* kTwoBalls = R"({
 TEST(MultiBodyScene, BodiesKeyGivesEachBodyItsOwnSettings) {
   const Scene s = parseScene(kTwoBalls, kFile);
   ASSERT_EQ(s.numBodies(), 2u);
-  EXPECT_EQ(s.body.name, "left");
-  EXPECT_EQ(s.bodyAt(1).name, "body1");
-  EXPECT_EQ(s.body.material.youngsModulus, 2e5);
-  EXPECT_EQ(s.bodyAt(1).material.youngsModulus, MaterialSettings{}.youngsModulus);
-  EXPECT_EQ(s.bodyAt(1).shape.voxelSize, 0.015);
-  EXPECT_EQ(s.bodyAt(1).layout, LayoutKind::Voxel);
-  EXPECT_EQ(s.bodyAt(1).sizeKey, "bodies[1].size");
+  EXPECT_EQ(s.bodies[0].name, "left");
+  EXPECT_EQ(s.bodies[1].name, "body1");
+  EXPECT_EQ(s.bodies[0].material.youngsModulus, 2e5);
+  EXPECT_EQ(s.bodies[1].material.youngsModulus, MaterialSettings{}.youngsModulus);
+  EXPECT_EQ(s.bodies[1].shape.voxelSize, 0.015);
+  EXPECT_EQ(s.bodies[1].layout, LayoutKind::Voxel);
+  EXPECT_EQ(s.bodies[1].sizeKey, "bodies[1].size");
   ASSERT_EQ(s.pins.size(), 1u);
   EXPECT_EQ(s.pins[0].body, 1u);
 
   const BuiltScene b = buildScene(s);
   ASSERT_EQ(b.numBodies(), 2u);
   const RestModel& m = b.world->model();
-  EXPECT_EQ(m.numVertices(), b.model->numVertices() + b.body(1).model->numVertices());
+  EXPECT_EQ(m.numVertices(), b.bodies[0].model->numVertices() + b.bodies[1].model->numVertices());
   EXPECT_EQ(b.range(1).voxelSize, 0.015);
   EXPECT_EQ(b.range(1).material.density, MaterialSettings{}.density);
   EXPECT_EQ(b.range(0).material.density, 800);
@@ -238,7 +282,7 @@ TEST(MultiBodyScene, SizeLimitsCountEveryBody) {
   const std::string text = R"({"bodies": [{"shape": "box", "size": 24}, {"shape": "box", "size": 24}]})";
   const Scene s = parseScene(text, kFile);
   Scene single = s;
-  single.moreBodies.clear();
+  single.bodies.resize(1);
   // The bytes one body takes, measured through the limit's own estimate: a limit just above it.
   const uint64_t bytes =
       estimateModelBytes(countLayout(rasterize(presetShape("box", 24, 3, 0.01)), LayoutKind::Gradational), 3);

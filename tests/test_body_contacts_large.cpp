@@ -110,8 +110,8 @@ void stackSettles(IntegratorKind integrator) {
 // number, on one build and none on another (rounding).
 void twoBallsCollide(IntegratorKind integrator, Real speed, size_t insideStepsAllowed = 0) {
   Scene s = FrameRun::configure("two-balls.json", integrator, 1.0 / 60, 1);
-  if (speed > 0) s.bodyAt(0).velocity = Vec3(speed, 0, 0), s.bodyAt(1).velocity = Vec3(-speed, 0, 0);
-  const Real closing = s.bodyAt(0).velocity.x() - s.bodyAt(1).velocity.x();
+  if (speed > 0) s.bodies[0].velocity = Vec3(speed, 0, 0), s.bodies[1].velocity = Vec3(-speed, 0, 0);
+  const Real closing = s.bodies[0].velocity.x() - s.bodies[1].velocity.x();
   FrameRun r(s);
   const Vec3 p0 = r.momentum();
   const Real scale = r.momentumScale();
@@ -173,8 +173,8 @@ TEST(BodyContactsLarge, SameStateAtOneAndTwoThreads) {
       Scene s = FrameRun::configure(file, IntegratorKind::LargeStep, 1.0 / 60, threads);
       if (std::string(file) == "two-balls.json")
         for (size_t i = 0; i < 2; ++i) {
-          s.bodyAt(i).shape = presetShape("sphere", 14, 3);
-          s.bodyAt(i).position = Vec3(i == 0 ? -0.1405 : 0.0005, -0.07, -0.07);
+          s.bodies[i].shape = presetShape("sphere", 14, 3);
+          s.bodies[i].position = Vec3(i == 0 ? -0.1405 : 0.0005, -0.07, -0.07);
         }
       BuiltScene b = buildScene(s);
       if (std::string(file) == "two-balls.json") {

@@ -33,10 +33,10 @@ TEST(SourceMesh, TorusObjSceneEmbedsTheFileMeshWhereItWasVoxelised) {
   const Scene scene = loadScene(source("scenes/torus-obj.json"));
   const BuiltScene b = buildScene(scene);
   const TriangleMesh file = readSampleObj();
-  ASSERT_TRUE(b.sourceMesh && b.embedded);
-  ASSERT_EQ(b.sourceMesh->vertices.size(), file.vertices.size());
-  EXPECT_EQ(b.embedded->weightStart.size(), file.vertices.size() + 1);
-  EXPECT_EQ(b.embedded->triangles, file.triangles);
+  ASSERT_TRUE(b.bodies[0].sourceMesh && b.bodies[0].embedded);
+  ASSERT_EQ(b.bodies[0].sourceMesh->vertices.size(), file.vertices.size());
+  EXPECT_EQ(b.bodies[0].embedded->weightStart.size(), file.vertices.size() + 1);
+  EXPECT_EQ(b.bodies[0].embedded->triangles, file.triangles);
 
   // A similarity of the file mesh: scaled so its longest edge spans `resolution` voxels.
   Vec3 lo = file.vertices[0], hi = lo;
@@ -44,42 +44,42 @@ TEST(SourceMesh, TorusObjSceneEmbedsTheFileMeshWhereItWasVoxelised) {
   const Real scale = 24 * 0.01 / (hi - lo).maxCoeff();  // torus-obj.json: resolution 24, voxel_size 0.01
   for (size_t v = 0; v < file.vertices.size(); ++v) {
     const Vec3 expected = scale * (file.vertices[v] - file.vertices[0]);
-    EXPECT_LT((b.sourceMesh->vertices[v] - b.sourceMesh->vertices[0] - expected).norm(), 1e-12) << v;
+    EXPECT_LT((b.bodies[0].sourceMesh->vertices[v] - b.bodies[0].sourceMesh->vertices[0] - expected).norm(), 1e-12) << v;
   }
   // ... lying on the body: its bounding box matches the model's within a voxel.
-  Vec3 mlo = b.model->restPositions[0], mhi = mlo, slo = b.sourceMesh->vertices[0], shi = slo;
-  for (const Vec3& p : b.model->restPositions) mlo = mlo.cwiseMin(p), mhi = mhi.cwiseMax(p);
-  for (const Vec3& p : b.sourceMesh->vertices) slo = slo.cwiseMin(p), shi = shi.cwiseMax(p);
+  Vec3 mlo = b.bodies[0].model->restPositions[0], mhi = mlo, slo = b.bodies[0].sourceMesh->vertices[0], shi = slo;
+  for (const Vec3& p : b.bodies[0].model->restPositions) mlo = mlo.cwiseMin(p), mhi = mhi.cwiseMax(p);
+  for (const Vec3& p : b.bodies[0].sourceMesh->vertices) slo = slo.cwiseMin(p), shi = shi.cwiseMax(p);
   EXPECT_LT((slo - mlo).cwiseAbs().maxCoeff(), 0.01);
   EXPECT_LT((shi - mhi).cwiseAbs().maxCoeff(), 0.01);
 
   // At t = 0 the embedded mesh is the rest mesh.
-  const TriangleMesh atStart = embeddedMesh(*b.embedded, b.world->state().positions);
+  const TriangleMesh atStart = embeddedMesh(*b.bodies[0].embedded, b.world->state().positions);
   ASSERT_EQ(atStart.vertices.size(), file.vertices.size());
   for (size_t v = 0; v < atStart.vertices.size(); ++v)
-    EXPECT_LT((atStart.vertices[v] - b.sourceMesh->vertices[v]).norm(), 1e-12) << v;
+    EXPECT_LT((atStart.vertices[v] - b.bodies[0].sourceMesh->vertices[v]).norm(), 1e-12) << v;
 
   // A rigid motion of the model moves the mesh by the same motion, exactly.
   const Mat3 R = Eigen::AngleAxisd(1.1, Vec3(0.3, -1, 0.5).normalized()).toRotationMatrix();
   const Vec3 t(0.2, 0.05, -0.4);
   std::vector<Vec3> x = b.world->state().positions;
   for (Vec3& p : x) p = R * p + t;
-  const TriangleMesh moved = embeddedMesh(*b.embedded, x);
+  const TriangleMesh moved = embeddedMesh(*b.bodies[0].embedded, x);
   for (size_t v = 0; v < moved.vertices.size(); ++v)
-    EXPECT_LT((moved.vertices[v] - (R * b.sourceMesh->vertices[v] + t)).norm(), 1e-10) << v;
+    EXPECT_LT((moved.vertices[v] - (R * b.bodies[0].sourceMesh->vertices[v] + t)).norm(), 1e-10) << v;
 }
 
 TEST(SourceMesh, OnlyMeshSourcesHaveOne) {
   for (const char* name : {"scenes/torus-binvox.json", "scenes/ct-nrrd.json", "scenes/drop.json"}) {
     const BuiltScene b = buildScene(loadScene(source(name)));
-    EXPECT_FALSE(b.sourceMesh) << name;
-    EXPECT_FALSE(b.embedded) << name;
+    EXPECT_FALSE(b.bodies[0].sourceMesh) << name;
+    EXPECT_FALSE(b.bodies[0].embedded) << name;
   }
   for (const char* name : {"scenes/torus-stl.json", "scenes/pawn-ply.json"}) {
     const BuiltScene b = buildScene(loadScene(source(name)));
-    ASSERT_TRUE(b.embedded) << name;
-    const TriangleMesh m = embeddedMesh(*b.embedded, b.world->state().positions);
-    for (size_t v = 0; v < m.vertices.size(); ++v) ASSERT_LT((m.vertices[v] - b.sourceMesh->vertices[v]).norm(), 1e-12);
+    ASSERT_TRUE(b.bodies[0].embedded) << name;
+    const TriangleMesh m = embeddedMesh(*b.bodies[0].embedded, b.world->state().positions);
+    for (size_t v = 0; v < m.vertices.size(); ++v) ASSERT_LT((m.vertices[v] - b.bodies[0].sourceMesh->vertices[v]).norm(), 1e-12);
   }
 }
 

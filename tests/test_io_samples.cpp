@@ -100,10 +100,10 @@ Scene parseIn(const std::string& body, int dim = 3) {
 
 TEST(SceneSource, ParseSceneFileSourceBuildsTheBody) {
   const Scene s = parseIn(R"({"source": {"file": "../samples/ct.nrrd", "threshold": 300}, "voxel_size": 0.005})");
-  ASSERT_TRUE(s.body.source);
-  EXPECT_NE(s.body.source->describe().find("samples/ct.nrrd"), std::string::npos);
+  ASSERT_TRUE(s.bodies[0].source);
+  EXPECT_NE(s.bodies[0].source->describe().find("samples/ct.nrrd"), std::string::npos);
   const BuiltScene b = buildScene(s);
-  EXPECT_EQ(b.volume.voxelSize(), 0.005);
+  EXPECT_EQ(b.bodies[0].volume.voxelSize(), 0.005);
   EXPECT_GT(b.world->state().positions.size(), 100u);
 }
 
@@ -116,8 +116,8 @@ TEST(SceneSource, ParseScene2dSceneTakesAOneSliceVolume) {
   const Scene s =
       parseScene(R"({"dim": 2, "body": {"source": {"file": "img.nrrd", "range": [1, 1]}}})", (dir / "s.json").string());
   const BuiltScene b = buildScene(s);
-  EXPECT_EQ(b.volume.dim(), 2);
-  EXPECT_EQ(b.volume.countFilled(), 26u);
+  EXPECT_EQ(b.bodies[0].volume.dim(), 2);
+  EXPECT_EQ(b.bodies[0].volume.countFilled(), 26u);
   fs::remove_all(dir);
 }
 

@@ -20,12 +20,12 @@ TEST(Model, ConsistentIncompleteElementsExactAlongTheirLongAxisNeverStifferAcros
   bar.layout = LayoutKind::Gradational;
   bar.material.youngsModulus = 1e7;
   BuiltScene b = buildScene(barScene(bar, SimulationSettings{}, false));
-  const RestModel& m = *b.model;
+  const RestModel& m = *b.bodies[0].model;
   const Real h = bar.voxelSize(), eps = 1e-4;
   int incomplete = 0;
   for (size_t e = 0; e < m.numElements(); ++e) {
     const uint32_t s = m.elemStart[e], n = m.elemStart[e + 1] - s;
-    const Real continuum = 0.5 * 1e7 * eps * eps * Real(b.layout.regionVoxels(e)) * h * h * h;
+    const Real continuum = 0.5 * 1e7 * eps * eps * Real(b.bodies[0].layout.regionVoxels(e)) * h * h * h;
     Real energy[3];
     for (int a = 0; a < 3; ++a) {
       std::vector<Vec3> x = m.restPositions;
@@ -37,11 +37,11 @@ TEST(Model, ConsistentIncompleteElementsExactAlongTheirLongAxisNeverStifferAcros
               .energy;
       EXPECT_LE(energy[a], continuum * (1 + 1e-6)) << "element " << e << " axis " << a;
     }
-    const int cells = __builtin_popcount(b.layout.cellMask[e]);
-    if (b.layout.isFull(e) || cells == 1) {  // a cube: exact for every strain
+    const int cells = __builtin_popcount(b.bodies[0].layout.cellMask[e]);
+    if (b.bodies[0].layout.isFull(e) || cells == 1) {  // a cube: exact for every strain
       for (int a = 0; a < 3; ++a) EXPECT_NEAR(energy[a] / continuum, 1.0, 1e-6);
     } else {
-      const int mask = b.layout.cellMask[e];
+      const int mask = b.bodies[0].layout.cellMask[e];
       ASSERT_TRUE(mask == 3 || mask == 12 || mask == 48 || mask == 192)
           << "expected two cells along x, got mask " << mask;
       ++incomplete;

@@ -404,25 +404,25 @@ TEST(Regions, SceneWithALabelVolumeBuildsOneMaterialPerLabel) {
   LabelScene s;
   const Scene sc =
       parseScene(s.scene(R"([{"label": 2, "youngs_modulus": 1e6}, {"label": 3, "density": 1500}])"), s.file());
-  ASSERT_EQ(sc.body.material.regions.size(), 2u);
-  EXPECT_DOUBLE_EQ(sc.body.material.regions[0].density, 1000);  // left out: the body's
-  EXPECT_DOUBLE_EQ(sc.body.material.regions[1].youngsModulus, 1e5);
+  ASSERT_EQ(sc.bodies[0].material.regions.size(), 2u);
+  EXPECT_DOUBLE_EQ(sc.bodies[0].material.regions[0].density, 1000);  // left out: the body's
+  EXPECT_DOUBLE_EQ(sc.bodies[0].material.regions[1].youngsModulus, 1e5);
   const BuiltScene b = buildScene(sc);
-  EXPECT_EQ(b.model->materialLabel, (std::vector<uint16_t>{1, 2, 3}));
-  EXPECT_EQ(checkRegions(b.volume, b.layout), "");
+  EXPECT_EQ(b.bodies[0].model->materialLabel, (std::vector<uint16_t>{1, 2, 3}));
+  EXPECT_EQ(checkRegions(b.bodies[0].volume, b.bodies[0].layout), "");
   const Real h3 = 1e-6;
-  EXPECT_NEAR(b.model->totalMass, (256 * 1000 + 128 * 1000 + 128 * 1500) * h3, 1e-9);
+  EXPECT_NEAR(b.bodies[0].model->totalMass, (256 * 1000 + 128 * 1000 + 128 * 1500) * h3, 1e-9);
   // The frames carry each element's region label for ParaView.
-  writeVtu(s.dir / "frame.vtu", *b.model, b.world->state(), {}, {}, VtkEncoding::Ascii);
+  writeVtu(s.dir / "frame.vtu", *b.bodies[0].model, b.world->state(), {}, {}, VtkEncoding::Ascii);
   std::ifstream in(s.dir / "frame.vtu");
   const std::string xml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const size_t at = xml.find("Name=\"region\" format=\"ascii\">\n");
   ASSERT_NE(at, std::string::npos);
   std::istringstream values(xml.substr(xml.find('\n', at) + 1));
-  for (size_t e = 0; e < b.layout.numElements(); ++e) {
+  for (size_t e = 0; e < b.bodies[0].layout.numElements(); ++e) {
     int label = 0;
     values >> label;
-    EXPECT_EQ(label, b.layout.label[e]) << e;
+    EXPECT_EQ(label, b.bodies[0].layout.label[e]) << e;
   }
   // A label of the file without an entry: the volume file and the key.
   try {
@@ -533,15 +533,15 @@ TEST(Regions, PhantomWithAStiffInclusionIsHarderToIndentThanSoftTissueAlone) {
   // less elastic energy at the same indentation (the tool is kinematic: the energy is the work it
   // did), and the body pushes the tool back with less force while it holds (docs/scenes.md).
   const Scene phantom = loadScene(std::string(GRADEL_SOURCE_DIR) + "/scenes/phantom.json");
-  ASSERT_EQ(phantom.body.material.regions.size(), 1u);
+  ASSERT_EQ(phantom.bodies[0].material.regions.size(), 1u);
   Scene soft = phantom;
-  soft.body.material.regions[0].youngsModulus = phantom.body.material.youngsModulus;
+  soft.bodies[0].material.regions[0].youngsModulus = phantom.bodies[0].material.youngsModulus;
   struct Pressed {
     Real energy, force;
   };
   auto press = [](const Scene& s) {
     BuiltScene b = buildScene(s);
-    EXPECT_EQ(b.model->materialLabel, (std::vector<uint16_t>{1, 2}));
+    EXPECT_EQ(b.bodies[0].model->materialLabel, (std::vector<uint16_t>{1, 2}));
     b.world->advanceTo(0.35);
     const Metrics m = b.world->metrics();
     EXPECT_EQ(m.maxPenetration, 0.0);

@@ -60,18 +60,18 @@ TEST(SceneIo, ParseSceneFullFileGivesExpectedSettings) {
                              kFile);
   EXPECT_EQ(s.name, "demo");
   EXPECT_EQ(s.dim, 3);
-  EXPECT_EQ(s.body.shape.dim, 3);
-  EXPECT_EQ(s.body.shape.dims, (std::array<int, 3>{10, 10, 10}));
-  ASSERT_EQ(s.body.shape.primitives.size(), 1u);
-  EXPECT_EQ(s.body.shape.primitives[0].kind, PrimitiveKind::Cylinder);
-  EXPECT_DOUBLE_EQ(s.body.shape.voxelSize, 0.005);
-  EXPECT_EQ(s.body.layout, LayoutKind::Uniform);
-  EXPECT_EQ(s.body.position, Vec3(0.1, 0.2, 0.3));
-  EXPECT_EQ(s.body.velocity, Vec3(1, 0, -1));
-  EXPECT_EQ(s.body.material.scaling, Scaling::Paper);
-  EXPECT_DOUBLE_EQ(s.body.material.youngsModulus, 2e5);
-  EXPECT_DOUBLE_EQ(s.body.material.density, 500);
-  EXPECT_DOUBLE_EQ(s.body.material.paperK, 1234);
+  EXPECT_EQ(s.bodies[0].shape.dim, 3);
+  EXPECT_EQ(s.bodies[0].shape.dims, (std::array<int, 3>{10, 10, 10}));
+  ASSERT_EQ(s.bodies[0].shape.primitives.size(), 1u);
+  EXPECT_EQ(s.bodies[0].shape.primitives[0].kind, PrimitiveKind::Cylinder);
+  EXPECT_DOUBLE_EQ(s.bodies[0].shape.voxelSize, 0.005);
+  EXPECT_EQ(s.bodies[0].layout, LayoutKind::Uniform);
+  EXPECT_EQ(s.bodies[0].position, Vec3(0.1, 0.2, 0.3));
+  EXPECT_EQ(s.bodies[0].velocity, Vec3(1, 0, -1));
+  EXPECT_EQ(s.bodies[0].material.scaling, Scaling::Paper);
+  EXPECT_DOUBLE_EQ(s.bodies[0].material.youngsModulus, 2e5);
+  EXPECT_DOUBLE_EQ(s.bodies[0].material.density, 500);
+  EXPECT_DOUBLE_EQ(s.bodies[0].material.paperK, 1234);
   EXPECT_EQ(s.simulation.integrator, IntegratorKind::ForwardEuler);
   EXPECT_DOUBLE_EQ(s.simulation.dt, 1e-4);
   EXPECT_DOUBLE_EQ(s.simulation.dtFraction, 0.05);
@@ -122,10 +122,10 @@ TEST(SceneIo, ParseSceneMinimalFileUsesStructDefaults) {
   const SimulationSettings sim;
   EXPECT_EQ(s.name, "my-scene");  // the file stem
   EXPECT_EQ(s.dim, 3);
-  EXPECT_EQ(s.body.layout, LayoutKind::Gradational);
-  EXPECT_DOUBLE_EQ(s.body.shape.voxelSize, ShapeSpec{}.voxelSize);
-  EXPECT_EQ(s.body.material.scaling, Scaling::Consistent);
-  EXPECT_DOUBLE_EQ(s.body.material.youngsModulus, MaterialSettings{}.youngsModulus);
+  EXPECT_EQ(s.bodies[0].layout, LayoutKind::Gradational);
+  EXPECT_DOUBLE_EQ(s.bodies[0].shape.voxelSize, ShapeSpec{}.voxelSize);
+  EXPECT_EQ(s.bodies[0].material.scaling, Scaling::Consistent);
+  EXPECT_DOUBLE_EQ(s.bodies[0].material.youngsModulus, MaterialSettings{}.youngsModulus);
   EXPECT_EQ(s.simulation.dt, 0);  // auto
   EXPECT_EQ(s.simulation.gravity, sim.gravity);
   EXPECT_EQ(s.simulation.threads, hardwareThreads());  // one per core
@@ -140,7 +140,7 @@ TEST(SceneIo, ParseScene2dVectorsHaveTwoNumbersAndZeroZ) {
       "manipulators": [{"type": "circle", "path": [{"t": 0, "position": [0.5, 0.25]}]}])"),
                              kFile);
   EXPECT_EQ(s.dim, 2);
-  EXPECT_EQ(s.body.shape.dims, (std::array<int, 3>{8, 8, 1}));
+  EXPECT_EQ(s.bodies[0].shape.dims, (std::array<int, 3>{8, 8, 1}));
   EXPECT_EQ(s.simulation.gravity, Vec3(0, -1, 0));
   EXPECT_EQ(s.domain.max.head<2>(), Eigen::Vector2d(1, 2));
   EXPECT_EQ(s.manipulators[0].path.keys[0].position, Vec3(0.5, 0.25, 0));
@@ -152,13 +152,13 @@ TEST(SceneIo, ParseSceneUnionReadsGridAndPrimitives) {
       {"type": "sphere", "center": [15, 5, 3], "radius": 3},
       {"type": "cylinder", "center": [5, 5, 3], "radius": 2, "half_length": 8, "axis": "x"}])"),
                              kFile);
-  EXPECT_EQ(s.body.shape.dims, (std::array<int, 3>{20, 10, 6}));
-  ASSERT_EQ(s.body.shape.primitives.size(), 3u);
-  EXPECT_EQ(s.body.shape.primitives[0].kind, PrimitiveKind::Box);
-  EXPECT_EQ(s.body.shape.primitives[0].max, Vec3(10, 10, 6));
-  EXPECT_EQ(s.body.shape.primitives[1].center, Vec3(15, 5, 3));
-  EXPECT_EQ(s.body.shape.primitives[2].axis, 0);
-  EXPECT_GT(rasterize(s.body.shape).countFilled(), 0u);
+  EXPECT_EQ(s.bodies[0].shape.dims, (std::array<int, 3>{20, 10, 6}));
+  ASSERT_EQ(s.bodies[0].shape.primitives.size(), 3u);
+  EXPECT_EQ(s.bodies[0].shape.primitives[0].kind, PrimitiveKind::Box);
+  EXPECT_EQ(s.bodies[0].shape.primitives[0].max, Vec3(10, 10, 6));
+  EXPECT_EQ(s.bodies[0].shape.primitives[1].center, Vec3(15, 5, 3));
+  EXPECT_EQ(s.bodies[0].shape.primitives[2].axis, 0);
+  EXPECT_GT(rasterize(s.bodies[0].shape).countFilled(), 0u);
 }
 
 TEST(SceneIo, ParseSceneDtAutoIsZero) {
@@ -479,11 +479,11 @@ TEST(SceneIo, SizeLimitsModelEstimateBoundsTheWorld) {
                            R"("shape": "sphere", "size": 32, "layout": "uniform")", R"("shape": "box", "size": 48)"}) {
     SCOPED_TRACE(body);
     const BuiltScene b = buildScene(parseScene(scene3(body), kFile));
-    const Layout& L = b.layout;
+    const Layout& L = b.bodies[0].layout;
     const double layoutBytes = double(L.vertices.capacity() * sizeof(Int3) + L.elemVerts.capacity() * 5 +
                                       L.numElements() * (1 + 4 + sizeof(Int3) + 1 + 4));
     const double actual = double(b.world->memoryBytes()) + layoutBytes;
-    const double estimate = double(estimateModelBytes(countLayout(b.volume, L.kind), 3));
+    const double estimate = double(estimateModelBytes(countLayout(b.bodies[0].volume, L.kind), 3));
     EXPECT_GE(estimate, actual);
     EXPECT_LE(estimate, 4 * actual);
   }

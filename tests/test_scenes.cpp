@@ -37,8 +37,8 @@ TEST(Scenes, EveryShippedSceneRunsCleanly) {
     // A body finer than 32 voxels across (box-realtime.json, 64) runs here on a quarter of its grid
     // at the same physical size, with the integrator `auto` picks at full size (large_step): the
     // full size is the benchmark's (gradel-bench --scene, docs/speed.md).
-    ShapeSpec& shape = scene.body.shape;
-    if (!scene.body.source && shape.dims[0] > 32) {
+    ShapeSpec& shape = scene.bodies[0].shape;
+    if (!scene.bodies[0].source && shape.dims[0] > 32) {
       for (int& d : shape.dims) d = std::max(1, d / 4);
       shape.voxelSize *= 4;
       for (Primitive& p : shape.primitives) p.min /= 4, p.max /= 4, p.center /= 4, p.radius /= 4, p.halfLength /= 4;
@@ -52,7 +52,7 @@ TEST(Scenes, EveryShippedSceneRunsCleanly) {
     // 10 J per kg of body (a mean speed of 4.5 m/s; the 0.9 kg balls' bound was 10 J, the 125 kg
     // box of box-realtime.json falls with ~0.7 J/kg), far below a numerical explosion.
     const Real bound =
-        scene.body.material.scaling == Scaling::Paper ? 1e6 : 10.0 * std::max(Real(1), b.model->totalMass);
+        scene.bodies[0].material.scaling == Scaling::Paper ? 1e6 : 10.0 * std::max(Real(1), b.bodies[0].model->totalMass);
     EXPECT_LT(maxKinetic, bound);
     ++count;
   }

@@ -191,7 +191,7 @@ inline Vec3 centroid(const World& w) {
 inline std::unique_ptr<BuiltScene> runStiffScene(const std::string& file, Real duration, IntegratorKind kind,
                                                  Real eScale, Real dt) {
   Scene scene = loadScene(std::string(GRADEL_SOURCE_DIR) + "/scenes/" + file);
-  scene.body.material.youngsModulus *= eScale;
+  scene.bodies[0].material.youngsModulus *= eScale;
   scene.simulation.integrator = kind;
   scene.simulation.dt = dt;
   auto b = std::make_unique<BuiltScene>(buildScene(scene));

@@ -10,10 +10,10 @@ int main() {
   Scene scene;
   scene.name = "consumer-drop";
   scene.dim = 3;
-  scene.body.shape = presetShape("sphere", 8, 3, 0.01);  // [m] voxel size
-  scene.body.position = Vec3(-0.04, 0.30, -0.04);        // lattice origin: the sphere's centre at y = 0.34 m
-  scene.body.material.youngsModulus = 1e5;               // [Pa]
-  scene.body.material.density = 1000;                    // [kg/m^3]
+  scene.bodies[0].shape = presetShape("sphere", 8, 3, 0.01);  // [m] voxel size
+  scene.bodies[0].position = Vec3(-0.04, 0.30, -0.04);        // lattice origin: the sphere's centre at y = 0.34 m
+  scene.bodies[0].material.youngsModulus = 1e5;               // [Pa]
+  scene.bodies[0].material.density = 1000;                    // [kg/m^3]
   scene.simulation.damping = 4.0;                        // [1/s], as scenes/drop.json
   scene.domain.enabled = true;
   scene.domain.min = Vec3(-0.3, 0.0, -0.3);

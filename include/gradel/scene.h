@@ -40,8 +40,9 @@ struct OutputSettings {
 struct Scene {
   std::string name;  ///< From the file name or "name".
   int dim = 3;
-  BodySettings body;                     ///< Body 0: the scene's `body`, or `bodies[0]`.
-  std::vector<BodySettings> moreBodies;  ///< Bodies 1, 2, ... of `bodies` (empty: one body).
+  /// The bodies, at least one, in the world's body order (RestModel::bodies): the file's `body`
+  /// (one body, its material at the top level) or `bodies`. A default scene holds one default body.
+  std::vector<BodySettings> bodies = std::vector<BodySettings>(1);
   SimulationSettings simulation;
   DomainSettings domain;
   std::vector<ManipulatorSettings> manipulators;
@@ -51,9 +52,7 @@ struct Scene {
   /// On in 3D when there are several bodies or self_contact is set.
   BodyContactSettings bodyContact;
 
-  size_t numBodies() const { return 1 + moreBodies.size(); }
-  const BodySettings& bodyAt(size_t i) const { return i == 0 ? body : moreBodies.at(i - 1); }
-  BodySettings& bodyAt(size_t i) { return i == 0 ? body : moreBodies.at(i - 1); }
+  size_t numBodies() const { return bodies.size(); }
 };
 
 /// Reads and validates a scene file (strict: unknown keys, wrong types, NaN, out-of-range values
@@ -77,23 +76,23 @@ struct BuiltBody {
   std::optional<EmbeddedMesh> embedded;
 };
 
-/// The built scene: body 0 (the members inherited from BuiltBody, what one-body code uses), the
-/// other bodies, and the world that steps them all. With one body the world's model is
-/// `model`; with several it is their combination (combineRestModels).
-struct BuiltScene : BuiltBody {
-  std::vector<BuiltBody> moreBodies;  ///< Bodies 1, 2, ...
+/// The built scene: each body's volume, layout and rest model, and the world that steps them all
+/// (with one body the world's model is the body's; with several, their combination,
+/// combineRestModels).
+struct BuiltScene {
+  std::vector<BuiltBody> bodies;  ///< In the scene's order.
   std::unique_ptr<World> world;
 
-  size_t numBodies() const { return 1 + moreBodies.size(); }
-  const BuiltBody& body(size_t i) const { return i == 0 ? *this : moreBodies.at(i - 1); }
+  size_t numBodies() const { return bodies.size(); }
   /// Where body i's vertices and elements are in the world's model.
   const BodyRange& range(size_t i) const { return world->model().bodies.at(i); }
 };
 
 /// Per body: rasterises the shape (or reads its source), builds the layout and rest model, and
-/// embeds a source mesh; then the world of all bodies (each with its velocity; pins on their
-/// bodies). Before each volume and each layout, the sizes are checked against `limits`
-/// (size_limits.h), the memory limit counting the bodies before. Throws InputError.
+/// embeds a source mesh; then the world of all bodies in one call (World(model, WorldSettings,
+/// contact surfaces): each body with its velocity, pins on their bodies, start overlaps released).
+/// Before each volume and each layout, the sizes are checked against `limits` (size_limits.h),
+/// the memory limit counting the bodies before. Throws InputError.
 BuiltScene buildScene(const Scene& scene, const SizeLimits& limits = {});
 
 }  // namespace gradel

@@ -24,6 +24,7 @@
 #include "gradel/pins.h"
 #include "gradel/projective.h"
 #include "gradel/stability.h"
+#include "gradel/world_settings.h"
 
 namespace gradel {
 
@@ -89,6 +90,15 @@ Metrics combineMetrics(const std::vector<Metrics>& bodies);
 
 class World {
  public:
+  /// The complete world in one call (world_settings.h): dt and its rule, the manipulators, the
+  /// pins (their vertices moved to their targets), contact between the bodies over
+  /// `contactBodies` (buildContactBodies; empty: none), the start overlaps' release and the
+  /// bodies' initial velocities, in that order. InputError for settings out of range, a pin that
+  /// holds no vertex or body contact in 2D; std::invalid_argument for a bodyVelocities entry
+  /// count other than the model's bodies.
+  World(std::shared_ptr<const RestModel> model, WorldSettings settings, std::vector<ContactBody> contactBodies = {});
+  /// A bare world (tests, tools): no pins, no body contacts, at rest, start overlaps pushed out
+  /// by the contacts at once unless its owner calls releaseStartOverlaps().
   World(std::shared_ptr<const RestModel> model, const SimulationSettings& sim, const DomainSettings& domain,
         std::vector<ManipulatorSettings> manipulators);
   ~World();
@@ -99,9 +109,9 @@ class World {
   void step();
   /// Finds the overlaps of the bodies with each other, the manipulators and the walls now
   /// (overlaps.h) and separates them at kStartSeparationSpeed from the next step on, instead of
-  /// the contacts' instant push. buildScene calls it for every scene (at t = 0, after the pins
-  /// and the contacts between bodies are set); a world made by hand keeps the instant push
-  /// unless its owner calls it.
+  /// the contacts' instant push. World(model, WorldSettings) calls it (at t = 0, after the pins
+  /// and the contacts between bodies are set, WorldSettings::releaseStartOverlaps); a bare world
+  /// keeps the instant push unless its owner calls it.
   void releaseStartOverlaps();
   /// What the last releaseStartOverlaps() found (the warnings of `gradel run`).
   const std::vector<StartOverlap>& startOverlaps() const { return startOverlaps_; }
@@ -157,8 +167,9 @@ class World {
   void restartForceAverage();
 
   /// Soft-soft contact between the bodies and, if set, of a body with itself (body_contacts.h):
-  /// their contact surfaces (buildContactBodies), made once; replaces any before. It runs after
-  /// each step, serially. InputError for a 2D model.
+  /// their contact surfaces (buildContactBodies), made once; replaces any before (the World's
+  /// creation sets them from its contact surfaces). It runs after each step, serially.
+  /// InputError for a 2D model.
   void setBodyContacts(std::vector<ContactBody> bodies, const BodyContactSettings& settings);
   /// The stage (nullptr without body contacts) and what it found in the last step.
   const BodyContacts* bodyContacts() const { return bodyContacts_.get(); }
@@ -182,8 +193,9 @@ class World {
 
   void setThreads(int n) { sim_.threads = n < 1 ? 1 : n; }
 
-  /// Boundary conditions (pins.h): replaces the pins and moves the pinned vertices to their
-  /// prescribed positions now. Throws InputError when a pin holds no vertex.
+  /// Boundary conditions (pins.h): replaces the pins (WorldSettings::pins at creation) and moves
+  /// the pinned vertices to their prescribed positions now (a pin added while running: Python's
+  /// add_pin). Throws InputError when a pin holds no vertex.
   void setPins(std::vector<PinSettings> pins);
   const std::vector<PinSettings>& pins() const { return pins_; }
   const PinSet& pinned() const { return pinSet_; }

@@ -10,7 +10,7 @@ std::vector<BodyRow> bodyTable(const BuiltScene& scene) {
   for (size_t i = 0; i < scene.numBodies() && i < metrics.size(); ++i) {
     const BodyRange& b = scene.range(i);
     BodyRow r;
-    r.name = scene.body(i).name;
+    r.name = scene.bodies[i].name;
     r.vertices = b.numVertices(), r.elements = b.numElements();
     Vec3 moment = Vec3::Zero();
     for (uint32_t v = b.vertexBegin; v < b.vertexEnd; ++v)

@@ -378,7 +378,7 @@ BodyView makeBodyView(const BuiltScene& scene, const TriangleMesh* restMesh, siz
   std::vector<DisplaySurface> smooth;
   size_t total = 0;
   for (size_t i = 0; i < scene.numBodies(); ++i) {
-    const BuiltBody& b = scene.body(i);
+    const BuiltBody& b = scene.bodies[i];
     smooth.push_back(buildDisplaySurface(b.layout, b.volume, SurfaceKind::Smooth));
     total += smooth.back().triangles.size();
   }
@@ -390,10 +390,10 @@ BodyView makeBodyView(const BuiltScene& scene, const TriangleMesh* restMesh, siz
           std::max<size_t>(1, size_t(double(triangleBudget) * double(smooth[i].triangles.size()) / double(total)));
   BodyView all;
   if (scene.numBodies() == 1) {
-    all = makeOneBodyView(scene, restMesh, share[0], std::move(smooth[0]));
+    all = makeOneBodyView(scene.bodies[0], restMesh, share[0], std::move(smooth[0]));
   } else {
     for (size_t i = 0; i < scene.numBodies(); ++i)
-      appendBodyView(all, makeOneBodyView(scene.body(i), i == 0 ? restMesh : nullptr, share[i], std::move(smooth[i])),
+      appendBodyView(all, makeOneBodyView(scene.bodies[i], i == 0 ? restMesh : nullptr, share[i], std::move(smooth[i])),
                      scene.range(i));
   }
   all.smoothIndices = indexList(all.smooth.triangles);

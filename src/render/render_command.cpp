@@ -88,7 +88,7 @@ int runRenderCommand(const RenderCommandOptions& o) {
   const Real interval = schedule.interval;
   // auto: none under a section (the section is what is looked at), else the body's own mesh or smooth.
   if (o.surface == "auto")
-    view.surface = o.section ? SurfaceMode::None : built.embedded ? SurfaceMode::Embedded : SurfaceMode::Smooth;
+    view.surface = o.section ? SurfaceMode::None : built.bodies[0].embedded ? SurfaceMode::Embedded : SurfaceMode::Smooth;
   const BodyView body = makeBodyView(built);
   Vec3 lo, hi;
   sceneBounds(world, &lo, &hi);

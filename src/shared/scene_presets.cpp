@@ -8,11 +8,11 @@ Scene paperBenchScene(const std::string& shape, int size, LayoutKind layout, int
   Scene s;
   s.name = "paper-" + shape + std::to_string(size) + "-" + layoutKindName(layout);
   s.dim = 3;
-  s.body.shape = presetShape(shape, size, 3, 1.0);
-  s.body.layout = layout;
-  s.body.material.scaling = Scaling::Paper;
-  s.body.material.paperK = 10000;
-  s.body.material.density = 1.0;
+  s.bodies[0].shape = presetShape(shape, size, 3, 1.0);
+  s.bodies[0].layout = layout;
+  s.bodies[0].material.scaling = Scaling::Paper;
+  s.bodies[0].material.paperK = 10000;
+  s.bodies[0].material.density = 1.0;
   s.simulation.dt = 0;
   s.simulation.dtFraction = 0.1;
   s.simulation.dtPeriod = PeriodRule::Element;
@@ -39,12 +39,12 @@ Scene realBenchScene(int size, Real youngsModulus, LayoutKind layout, int thread
   s.name = "real-sphere" + std::to_string(size) + "-E" + std::to_string(int(std::lround(std::log10(youngsModulus)))) +
            "-" + layoutKindName(layout);
   s.dim = 3;
-  s.body.shape = presetShape("sphere", size, 3, h);
-  s.body.layout = layout;
-  s.body.material.scaling = Scaling::Consistent;
-  s.body.material.youngsModulus = youngsModulus;
-  s.body.material.density = 1000;
-  s.body.position = Vec3(-0.5 * kDiameter, 1e-4, -0.5 * kDiameter);  // just above the floor
+  s.bodies[0].shape = presetShape("sphere", size, 3, h);
+  s.bodies[0].layout = layout;
+  s.bodies[0].material.scaling = Scaling::Consistent;
+  s.bodies[0].material.youngsModulus = youngsModulus;
+  s.bodies[0].material.density = 1000;
+  s.bodies[0].position = Vec3(-0.5 * kDiameter, 1e-4, -0.5 * kDiameter);  // just above the floor
   s.simulation.damping = 1.0;
   s.simulation.gravity = Vec3(0, -9.81, 0);
   s.simulation.threads = threads;
@@ -70,9 +70,9 @@ Scene contactBenchScene(int size, int threads) {
   Scene s;
   s.name = "two-spheres" + std::to_string(size);
   s.dim = 3;
-  s.moreBodies.resize(1);
+  s.bodies.resize(2);
   for (size_t i = 0; i < 2; ++i) {
-    BodySettings& b = s.bodyAt(i);
+    BodySettings& b = s.bodies[i];
     b.name = i == 0 ? "left" : "right";
     b.shape = presetShape("sphere", size, 3, 0.01);
     b.position = Vec3(i == 0 ? -size * 0.01 - 0.0005 : 0.0005, 0, 0);  // 1 mm apart

@@ -20,7 +20,7 @@ Scene barScene(const BarSpec& bar, const SimulationSettings& sim, bool clamped) 
   Scene s;
   s.name = "bar";
   s.dim = 3;
-  ShapeSpec& shape = s.body.shape;
+  ShapeSpec& shape = s.bodies[0].shape;
   shape.dim = 3;
   shape.dims = {bar.along, bar.across, bar.across};
   shape.voxelSize = bar.voxelSize();
@@ -38,8 +38,8 @@ Scene barScene(const BarSpec& bar, const SimulationSettings& sim, bool clamped) 
     second.label = 2;
     shape.primitives.push_back(second);
   }
-  s.body.layout = bar.layout;
-  s.body.material = bar.material;
+  s.bodies[0].layout = bar.layout;
+  s.bodies[0].material = bar.material;
   s.simulation = sim;
   if (clamped) s.pins = {barFacePin(bar, 0)};
   return s;

@@ -163,7 +163,7 @@ TEST(RenderHeadless, WireframeShowsMoreLevelsForALargerSphere) {
     sceneBounds(*built.world, &lo, &hi);
     const Image img = draw(built, v, frameBox(lo, hi, false));
     writePng("render_wire_" + std::to_string(size) + ".png", img);
-    return std::pair{levelsSeen(img, built.layout.numLevels(), 30), built.layout.numLevels()};
+    return std::pair{levelsSeen(img, built.bodies[0].layout.numLevels(), 30), built.bodies[0].layout.numLevels()};
   };
   const auto [small, smallLevels] = wire(8);
   const auto [large, largeLevels] = wire(32);

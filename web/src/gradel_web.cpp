@@ -47,7 +47,7 @@ class Demo {
       scene_ = s;
       original_ = std::move(s);
       install(std::move(b));
-      const VoxelVolume& v = built_.volume;
+      const VoxelVolume& v = built_.bodies[0].volume;
       bodyExtent_ = v.voxelSize() * std::max(v.nx(), v.ny());
       return "";
     } catch (const std::exception& e) {
@@ -60,9 +60,9 @@ class Demo {
   std::string setBody(const std::string& shape, int size, const std::string& layout) {
     try {
       Scene s = scene_;
-      s.body.shape = presetShape(shape, size, s.dim, bodyExtent_ / size);
-      s.body.source = nullptr;
-      s.body.layout = parseLayoutKind(layout);
+      s.bodies[0].shape = presetShape(shape, size, s.dim, bodyExtent_ / size);
+      s.bodies[0].source = nullptr;
+      s.bodies[0].layout = parseLayoutKind(layout);
       keepManipulatorPoses(*built_.world, s);
       install(buildScene(s));
       scene_ = std::move(s);
