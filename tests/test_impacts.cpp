@@ -102,8 +102,8 @@ ImpactResult runImpact(const Impact& c, int trace = 0) {
     r.peak = std::max(r.peak, e / r.e0);
     r.momentum = std::max(r.momentum, (w.momentum() - p0).norm() / scale);
     if (trace && r.steps % trace == 0)
-      std::printf("  t %.5f E/E0 %.5f contacts %zu depth %.2e takeBacks %d minDet %.3f\n", world.time(), e / r.e0,
-                  st.contacts, st.maxDepth, st.takeBacks, m.minElementDet);
+      std::printf("  t %.5f E/E0 %.5f contacts %zu depth %.2e takeBacks %d to %.4f minDet %.3f\n", world.time(),
+                  e / r.e0, st.contacts, st.maxDepth, st.takeBacks, st.takenBackTo, m.minElementDet);
     if (st.contacts > 0) r.touched = true, apartSteps = 0;
     else if (r.touched) ++apartSteps;
     if (c.duration > 0 ? world.time() >= c.duration
