@@ -6,7 +6,17 @@
 # readers below); no windowing, no OpenGL, no command-line parser.
 set(GRADEL_CORE_SOURCES
   src/bodies.cpp
-  src/body_contacts.cpp
+  src/body_contacts.cpp             # body contacts: the stage, resolve()'s loop of rounds over the phases below
+  src/body_contact_bounds.cpp       # broad phase per step and round: motion bounds, which candidates to look up
+  src/body_contact_tracks.cpp       # broad phase kept across steps: per pair of bodies, candidates and faces
+  src/body_contact_grid.cpp         # the faces' grid the phases query (body_contact_grid.h)
+  src/body_contact_narrow_phase.cpp # nearest triangle, pseudo-normal sign test (pseudo_normal.h), self-contact
+  src/body_contact_response.cpp     # projections, friction, restitution: impulses that add no energy
+  src/body_contact_warm_start.cpp   # the last stage's contacts as round 0's
+  src/body_contact_takeback.cpp     # last resort: unreachable findings dropped, bodies taken back
+  src/body_contact_proximity.cpp    # the frame-size integrators' broad phase and proximity list
+  src/contact_surface.cpp           # a body's closed contact surface (contact_surface.h)
+  src/triangle_queries.cpp          # closest point on a triangle, winding number
   src/contacts.cpp
   src/contact_work.cpp
   src/divergence.cpp
