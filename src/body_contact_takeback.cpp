@@ -55,15 +55,29 @@ void BodyContacts::takeBack(const BodyContactState& s, BodyContactStats& stats) 
   const Real* im = s.invMass;
   const size_t B = bodies_.size();
   // Deeper than the tolerance, for the contacts of round_ now.
-  auto deep = [&] {
-    for (const Contact& c : round_)
-      if (c.depth > kTakeBackDepth * bodies_[bodyOf_[c.face[0]]].thickness) return true;
+  // Deeper than the tolerance, for the contacts of round_ now; beyond: deeper than the tolerance
+  // beyond where the vertex lay behind the same point of the face (along the same normal) at the
+  // step's start.
+  auto deep = [&](bool beyond) {
+    for (const Contact& c : round_) {
+      const Real atStart = beyond ? std::max(Real(0), -c.n.dot(relative(c, x0))) : Real(0);
+      if (c.depth > kTakeBackDepth * bodies_[bodyOf_[c.face[0]]].thickness + atStart) return true;
+    }
     return false;
   };
   std::vector<uint8_t> back(B, 0);
   std::vector<std::vector<Vec3>> end(B), endV(B);  // a body's positions and velocities when it joined
   Real f = 1;
-  while (deep()) {
+  while (deep(false)) {
+    // At the least fraction, deep only where the vertices were already about as deep at the
+    // step's start: taking the step back cannot undo that (where elements inverted, the sign test
+    // read a vertex outside at the start and 0.44 voxel inside after 1/16 of the step: it had moved
+    // 0.014 voxel, and the winding number said inside at both). Taken back to that start in every
+    // step, the pair never moved again (two 16^3 balls at 10 m/s, generic build: 2,234 of 2,424
+    // steps taken back): the bodies keep this fraction of the step instead. Explicit steps only
+    // (s.leapfrog: a step moves a surface a fraction of a voxel): after a frame-size step, 1/16 of
+    // it let two balls at 10 m/s pass through each other (the large step, dt = 1/60 s).
+    if (s.leapfrog && f == kTakeBackLeast && !deep(true)) break;
     bool grew = false;
     for (const Contact& c : round_)
       for (const size_t b : {size_t(bodyOf_[c.vertex]), size_t(bodyOf_[c.face[0]])})  // (both on a surface)

@@ -102,8 +102,8 @@ ImpactResult runImpact(const Impact& c, int trace = 0) {
     r.peak = std::max(r.peak, e / r.e0);
     r.momentum = std::max(r.momentum, (w.momentum() - p0).norm() / scale);
     if (trace && r.steps % trace == 0)
-      std::printf("  t %.5f E/E0 %.5f contacts %zu depth %.2e takeBacks %d minDet %.3f\n", world.time(), e / r.e0,
-                  st.contacts, st.maxDepth, st.takeBacks, m.minElementDet);
+      std::printf("  t %.5f E/E0 %.5f contacts %zu depth %.2e takeBacks %d to %.4f minDet %.3f\n", world.time(),
+                  e / r.e0, st.contacts, st.maxDepth, st.takeBacks, st.takenBackTo, m.minElementDet);
     if (st.contacts > 0) r.touched = true, apartSteps = 0;
     else if (r.touched) ++apartSteps;
     if (c.duration > 0 ? world.time() >= c.duration
@@ -158,25 +158,32 @@ TEST_P(HeadOn, NeverInventsEnergy) {
 }
 INSTANTIATE_TEST_SUITE_P(Impacts, HeadOn, ::testing::Combine(::testing::Values(4.0), ::testing::Values(0.1, 0.25)));
 
-// Not met yet (issue 26; disabled): 10 m/s holds in the x86-64-v3 build (above), but the generic
-// build (no FMA: the sanitizer pass) differs in the last bits and there the last resort froze the
-// pair at dt_fraction 0.1: 2,234 of 2,424 steps taken back, never parted (peak 1.0000x, end
-// 0.908x, min det 0.567), the same freeze as at 20 m/s below. At 20 m/s (dt_fraction 0.1) the energy holds (0.91x at
-// 40 ms) but elements invert within 1.5 ms of the touch (min det -0.65, before any take-back), and
-// from 6 ms on the last resort takes the balls back to the step's start in every step: the
-// inverted elements drive the same vertices 2 voxels into the other ball from the same start, the
-// winding number confirms it, and the state no longer moves (stuck; impulses on the tried
-// contacts at the start's positions did not free it). The stiff box into the soft ball and the
-// glancing hit were not measured to the end; the property below runs them all.
+// 10 m/s, both steps, both flavours (measured 2026-11-27, generic build: peak 1.0000x and 0.9951x,
+// momentum 2e-14, min det 0.62 / 0.73 once parted, 23 and 125 steps taken back). Before the last
+// resort stopped at its least fraction where every deep vertex was already about as deep at the
+// step's start, the generic build (no FMA: the sanitizer pass) froze the pair at dt_fraction 0.1:
+// 2,234 of 2,424 steps taken back to the same start, never parted.
 class HeadOnFast : public ::testing::TestWithParam<std::tuple<Real, Real>> {};
-TEST_P(HeadOnFast, DISABLED_NeverInventsEnergy) {
+TEST_P(HeadOnFast, NeverInventsEnergy) {
   Impact c;
   c.closing = std::get<0>(GetParam());
   c.dtFraction = std::get<1>(GetParam());
   expectSafe(c, 0.02, "head on");
 }
-INSTANTIATE_TEST_SUITE_P(Impacts, HeadOnFast,
-                         ::testing::Combine(::testing::Values(10.0, 20.0), ::testing::Values(0.1, 0.25)));
+INSTANTIATE_TEST_SUITE_P(Impacts, HeadOnFast, ::testing::Combine(::testing::Values(10.0), ::testing::Values(0.1, 0.25)));
+
+// Not met yet (issue 26; disabled): at 20 m/s (dt_fraction 0.1) the energy holds (0.91x at 40 ms)
+// but elements invert within 1.5 ms of the touch (min det -0.65, before any take-back); the pair
+// did not part within a minute of run time (generic build, 2026-11-27). The stiff box into the
+// soft ball did not end within 2.5 minutes either; the property below runs them all.
+class HeadOnFaster : public ::testing::TestWithParam<std::tuple<Real, Real>> {};
+TEST_P(HeadOnFaster, DISABLED_NeverInventsEnergy) {
+  Impact c;
+  c.closing = std::get<0>(GetParam());
+  c.dtFraction = std::get<1>(GetParam());
+  expectSafe(c, 0.02, "head on");
+}
+INSTANTIATE_TEST_SUITE_P(Impacts, HeadOnFaster, ::testing::Combine(::testing::Values(20.0), ::testing::Values(0.1, 0.25)));
 
 // A stiff box (E = 1e7) thrown at a soft ball at rest (E = 1e4), and a glancing hit of two balls
 // (offset half the sum of the radii, with friction).
