@@ -246,7 +246,7 @@ std::string materialsSection(const fs::path& dir, const std::vector<int>& resolu
         if (added) it->second = stretchModulus(makeBar(Scaling::Consistent, l, n)) / E1;
         const Real one = it->second;
         SimulationSettings sim;
-        const size_t elements = buildScene(barScene(bar, sim)).model->numElements();
+        const size_t elements = buildScene(barScene(bar, sim)).bodies[0].model->numElements();
         met = met && std::abs(E / rule - 1) <= 0.05;
         csv << name << ',' << layoutKindName(l) << ',' << n << ',' << elements << ',' << E << ',' << rule << ','
             << E / rule << ',' << one << ',' << E / (rule * one) << '\n';
