@@ -1,8 +1,11 @@
 #include "gradel/contact_surface.h"
 
 #include <algorithm>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
+#include <vector>
 
 #include "gradel/triangle_queries.h"
 
