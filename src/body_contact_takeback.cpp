@@ -54,7 +54,6 @@ void BodyContacts::takeBack(const BodyContactState& s, BodyContactStats& stats) 
   const Vec3* v0 = s.previousVelocities;
   const Real* im = s.invMass;
   const size_t B = bodies_.size();
-  // Deeper than the tolerance, for the contacts of round_ now.
   // Deeper than the tolerance, for the contacts of round_ now; beyond: deeper than the tolerance
   // beyond where the vertex lay behind the same point of the face (along the same normal) at the
   // step's start.
