@@ -2,7 +2,7 @@
 // include/gradel/shared/validation.h for both scalings and the three layouts and writes
 // OUT/report.md, OUT/*.csv, OUT/plots.py and (with matplotlib) OUT/*.png.
 //
-//   gradel-validate [--out docs/validation] [--quick] [--materials-only | --large-step-only]
+//   gradel-validate [--out docs/validation] [--quick] [--materials-only | --large-step-only | --poisson-only]
 //
 // Bars: square section a = 2 cm, length L = 8 a, density 1000 kg/m^3, E = 1e7 Pa (consistent
 // scaling); paper scaling with k = 2 E h^2, which gives the finest (2-voxel) elements the
@@ -11,13 +11,16 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
 #include <sstream>
+#include <tuple>
 
+#include "gradel/shapes.h"
 #include "gradel/shared/validation.h"
 
 using namespace gradel;
@@ -260,6 +263,225 @@ std::string materialsSection(const fs::path& dir, const std::vector<int>& resolu
   return md.str();
 }
 
+// ---- 7. Poisson's ratio (issue 29) ----
+// The uniaxial experiments and the squeezed ball of include/gradel/shared/validation.h at nu = 0,
+// 0.3, 0.45 and 0.49 (E = 1e5 Pa, 1000 kg/m^3), the cantilever of sections 2 and 3 at the same
+// ratios, and the explicit step's dt. Writes poisson_*.csv and returns the report's section.
+const std::vector<Real> kRatios = {0, 0.3, 0.45, 0.49};
+
+MaterialSettings softMaterial(Real nu) {
+  MaterialSettings m;
+  m.youngsModulus = 1e5;
+  m.density = kRho;
+  m.poissonRatio = nu;
+  return m;
+}
+
+const char* metMark(bool met) { return met ? "yes" : "**no**"; }
+
+// Compression between frictionless walls and stretch between frictionless grips.
+std::string poissonUniaxial(const fs::path& dir, bool quick) {
+  std::ofstream csv(dir / "poisson_uniaxial.csv");
+  csv << "experiment,integrator,layout,nu,strain,axial,lateral,ratio,volume,modulus_over_E,vertices\n";
+  std::ostringstream md;
+  md << "**Compression**: a box of 8^3 voxels (1 cm) pressed 2 % between two frictionless walls, free in y and z, "
+        "settled with damping (the state is homogeneous: strains from the extents). **Stretch**: a bar of "
+     << (quick ? 4 : 8) << " voxels across and 4x as long (section 2 cm) held by frictionless grips (the end faces' "
+     << "x prescribed, y and z free) and stretched 0.1 % and 10 %; lateral strain from the mid-length section, "
+        "modulus 2 U / (V eps^2) from the elastic energy U. Volume: enclosed by the deformed voxel surface over "
+        "the rest one. Targets (issue 29): lateral / axial = nu within 10 %; stretch modulus within 5 % of E; "
+        "volume change at 10 % stretch and nu = 0.49 within 3 %.\n\n"
+     << "| experiment | integrator | layout | nu | lateral / axial | volume kept | E_eff / E | met |\n"
+     << "| --- | --- | --- | ---: | ---: | ---: | ---: | --- |\n";
+  auto row = [&](const char* what, IntegratorKind k, LayoutKind l, Real nu, Real strain, const UniaxialResult& r) {
+    const Real ratio = r.axial != 0 ? -r.lateral / r.axial : 0;
+    const bool stretch = r.modulus > 0;
+    bool met = nu == 0 ? std::abs(ratio) < 0.02 : std::abs(ratio / nu - 1) <= 0.10;
+    if (stretch && strain < 0.01) met = met && std::abs(r.modulus / 1e5 - 1) <= 0.05;
+    if (stretch && strain >= 0.1 && nu >= 0.49) met = met && std::abs(r.volume - 1) <= 0.03;
+    csv << what << ',' << integratorKindName(k) << ',' << layoutKindName(l) << ',' << nu << ',' << strain << ','
+        << r.axial << ',' << r.lateral << ',' << ratio << ',' << r.volume << ',' << r.modulus / 1e5 << ','
+        << r.vertices << '\n';
+    md << "| " << what << " | " << integratorKindName(k) << " | " << layoutKindName(l) << " | " << nu << " | "
+       << fmt(ratio, 4) << " | " << fmt(r.volume, 4) << " | " << (stretch ? fmt(r.modulus / 1e5, 4) : "") << " | "
+       << metMark(met) << " |\n";
+    std::cerr << "  " << what << ' ' << integratorKindName(k) << ' ' << layoutKindName(l) << " nu " << nu
+              << ": ratio " << ratio << ", volume " << r.volume << "\n";
+  };
+  for (LayoutKind l : {LayoutKind::Uniform, LayoutKind::Gradational})
+    for (Real nu : kRatios)
+      row("compression 2 %", IntegratorKind::SymplecticEuler, l, nu, -0.02,
+          compressBetweenWalls(softMaterial(nu), l, 8, 0.02));
+  for (IntegratorKind k : {IntegratorKind::Implicit, IntegratorKind::LargeStep})
+    for (Real nu : kRatios)
+      row("compression 2 %", k, LayoutKind::Uniform, nu, -0.02,
+          compressBetweenWalls(softMaterial(nu), LayoutKind::Uniform, 8, 0.02, k, 120));
+  const int across = quick ? 4 : 8;
+  for (Real strain : {0.001, 0.1})
+    for (LayoutKind l : {LayoutKind::Uniform, LayoutKind::Gradational})
+      for (Real nu : kRatios)
+        row(strain < 0.01 ? "stretch 0.1 %" : "stretch 10 %", IntegratorKind::SymplecticEuler, l, nu, strain,
+            stretchBetweenGrips(softMaterial(nu), l, across, strain));
+  return md.str();
+}
+
+// The cantilever of sections 2 and 3 (consistent scaling, gradational, their finest n) at each ratio.
+std::string poissonCantilever(const fs::path& dir, int n) {
+  const Real sagEB = beamTipSag(kAspect * kWidth, kWidth, kRho, kE), fEB = beamFrequency(kAspect * kWidth, kWidth, kRho, kE);
+  std::ofstream csv(dir / "poisson_cantilever.csv");
+  csv << "nu,across,sag,sag_over_EB,frequency,frequency_over_EB,dt\n";
+  std::ostringstream md;
+  md << "\n**Cantilever** (sections 2 and 3: consistent scaling, gradational, n = " << n << " across, E = " << fmt(kE)
+     << " Pa) at each ratio, against Euler-Bernoulli (" << fmt(sagEB * 1000) << " mm, " << fmt(fEB)
+     << " Hz; beam theory has no Poisson effect in bending). Target: within 10 %.\n\n"
+     << "| nu | tip sag [mm] | vs EB | first frequency [Hz] | vs EB | explicit dt [s] | met |\n"
+     << "| ---: | ---: | ---: | ---: | ---: | ---: | --- |\n";
+  for (Real nu : kRatios) {
+    BarSpec bar = makeBar(Scaling::Consistent, LayoutKind::Gradational, n);
+    bar.material.poissonRatio = nu;
+    const SagResult sag = staticTipSag(bar);
+    const Vibration v = vibrate(bar, IntegratorKind::SymplecticEuler, 0, 6 / fEB, false);
+    const bool met = std::abs(sag.sag / sagEB - 1) <= 0.1 && std::abs(v.frequency / fEB - 1) <= 0.1;
+    csv << nu << ',' << n << ',' << sag.sag << ',' << sag.sag / sagEB << ',' << v.frequency << ',' << v.frequency / fEB
+        << ',' << v.dt << '\n';
+    md << "| " << nu << " | " << fmt(sag.sag * 1000) << " | " << pct(sag.sag / sagEB) << " | " << fmt(v.frequency)
+       << " | " << pct(v.frequency / fEB) << " | " << fmt(v.dt, 3) << " | " << metMark(met) << " |\n";
+    std::cerr << "  cantilever nu " << nu << ": sag " << sag.sag / sagEB << " of EB, f " << v.frequency / fEB << "\n";
+  }
+  return md.str();
+}
+
+// A ball squeezed between two manipulators by 10 % and 20 % of its radius on each side; the mid-plane
+// sections of the 20 % squeeze go to poisson_ball_sections.csv.
+std::string poissonBall(const fs::path& dir, int size) {
+  std::ofstream csv(dir / "poisson_ball.csv"), sections(dir / "poisson_ball_sections.csv");
+  csv << "nu,size,squeeze,volume,width_y\n";
+  sections << "nu,state,x0,y0,x1,y1,tool_x,tool_radius\n";
+  std::ostringstream md;
+  md << "\n**A ball squeezed** (a gradational sphere of " << size << " voxels of 5 mm, E = 1e5 Pa) between two "
+     << "frictionless sphere manipulators of twice its radius, each pressing 10 % or 20 % of the radius in over "
+        "0.15 s and held; no gravity, damping 30/s, 0.5 s. Target: volume kept within 3 % at nu = 0.49. The "
+        "volumetric strain e_v is tr(eps) in the element's rotated frame, exact to first order: where the "
+        "contact strains an element by 20 % the volume it keeps is J = 0.8 x 1.1^2 = 0.968, which is what the "
+        "20 % squeeze's row shows.\n\n"
+     << "| nu | volume kept, 10 % | volume kept, 20 % | width across / at rest, 20 % | met |\n"
+     << "| ---: | ---: | ---: | ---: | --- |\n";
+  for (Real nu : kRatios) {
+    md << "| " << nu << " |";
+    std::string met;
+    Real width = 0;
+    for (Real squeeze : {0.1, 0.2}) {
+      const BallSqueeze b = squeezeBall(softMaterial(nu), size, squeeze);
+      csv << nu << ',' << size << ',' << squeeze << ',' << b.volume << ',' << b.widthY << '\n';
+      if (squeeze == 0.2)
+        for (const auto& [state, segs] : {std::pair{"rest", &b.restSection}, std::pair{"end", &b.endSection}})
+          for (const auto& q : *segs)
+            sections << nu << ',' << state << ',' << q[0] << ',' << q[1] << ',' << q[2] << ',' << q[3] << ','
+                     << b.toolX << ',' << b.toolRadius << '\n';
+      md << ' ' << fmt(b.volume, 4) << " |";
+      met += std::string(met.empty() ? "" : "; ") + (squeeze == 0.1 ? "10 %: " : "20 %: ") +
+             metMark(std::abs(b.volume - 1) <= 0.03);
+      width = b.widthY;
+      std::cerr << "  ball nu " << nu << ", squeeze " << squeeze << ": volume " << b.volume << ", width " << b.widthY
+                << "\n";
+    }
+    md << ' ' << fmt(width, 4) << " | " << (nu >= 0.49 ? met : "") << " |\n";
+  }
+  return md.str();
+}
+
+// The explicit step's dt = auto (the operator rule, stability.h) at each ratio against nu = 0.
+std::string poissonTimeStep(const fs::path& dir) {
+  std::ofstream csv(dir / "poisson_dt.csv");
+  csv << "body,nu,dt,dt_over_nu0\n";
+  std::ostringstream md;
+  md << "\n**Time step**: dt = auto of the explicit step (the operator rule, stability.h, with the volumetric "
+        "stiffness) against nu = 0, E = 1e5 Pa, 1 cm voxels. The explicit step pays for the compression wave as "
+        "continuum theory says: sqrt((lambda + 2 mu) / E) = 1.16 / 1.95 / 4.14 at nu = 0.3 / 0.45 / 0.49.\n\n"
+     << "| nu | sphere 16, gradational | box 12, uniform |\n| ---: | ---: | ---: |\n";
+  std::map<std::pair<int, Real>, Real> dt;
+  for (Real nu : kRatios) {
+    md << "| " << nu << " |";
+    for (const auto& [shape, size, layout] :
+         {std::tuple{"sphere", 16, LayoutKind::Gradational}, std::tuple{"box", 12, LayoutKind::Uniform}}) {
+      Scene sc;
+      sc.bodies[0].shape = presetShape(shape, size, 3, 0.01);
+      sc.bodies[0].layout = layout;
+      sc.bodies[0].material = softMaterial(nu);
+      const Real d = buildScene(sc).world->dt();
+      dt[{size, nu}] = d;
+      const Real ratio = d / dt.at({size, 0.0});  // kRatios starts at 0
+      csv << shape << size << ',' << nu << ',' << d << ',' << ratio << '\n';
+      md << ' ' << fmt(ratio, 3) << " (" << fmt(d, 3) << " s) |";
+    }
+    md << "\n";
+  }
+  return md.str();
+}
+
+std::string poissonSection(const fs::path& dir, bool quick) {
+  std::ostringstream md;
+  md << "## 7. Poisson's ratio (issue 29)\n\n"
+     << "`material.poisson_ratio` nu (material.h): k_e / (1 + nu) (shear modulus E / (2 (1 + nu))) plus a "
+        "corotated volumetric energy kappa_e/2 e_v^2 per element, e_v = D (tr(M^T A) - tr S) / tr S (element.h), "
+        "kappa_e = lambda V_e, lambda = E nu / ((1 + nu)(1 - 2 nu)): small-strain energy mu |eps|^2 + lambda/2 "
+        "tr(eps)^2. Explicit rows use the symplectic step at dt = auto (the operator rule, which includes the "
+        "volumetric stiffness); the implicit step holds the volume by a projective det = 1 constraint of the same "
+        "small-strain stiffness.\n\n";
+  std::cerr << "Poisson's ratio: uniaxial...\n";
+  md << poissonUniaxial(dir, quick);
+  std::cerr << "Poisson's ratio: squeezed ball...\n";
+  md << poissonBall(dir, quick ? 12 : 16);
+  std::cerr << "Poisson's ratio: cantilever...\n";
+  md << poissonCantilever(dir, quick ? 8 : 16);  // sections 2 and 3's finest resolution
+  md << poissonTimeStep(dir);
+  {
+    std::ofstream py(dir / "poisson_plot.py");
+    py << R"PY(# The Poisson section's pictures from the CSV files next to it (gradel-validate writes and runs it).
+import csv, os, sys
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+from matplotlib.patches import Circle
+here = os.path.dirname(os.path.abspath(__file__))
+rows = list(csv.DictReader(open(os.path.join(here, "poisson_ball_sections.csv"))))
+ratios = sorted({r["nu"] for r in rows}, key=float)
+shown = [ratios[0], ratios[-1]]
+fig, axes = plt.subplots(1, 2, figsize=(10, 5), sharey=True)
+for ax, nu in zip(axes, shown):
+    for state, style in (("rest", "k:"), ("end", "b-")):
+        for r in rows:
+            if r["nu"] == nu and r["state"] == state:
+                ax.plot([1000 * float(r["x0"]), 1000 * float(r["x1"])], [1000 * float(r["y0"]), 1000 * float(r["y1"])], style, lw=1)
+    r0 = next(r for r in rows if r["nu"] == nu)
+    for side in (-1, 1):
+        ax.add_patch(Circle((side * 1000 * float(r0["tool_x"]), 0), 1000 * float(r0["tool_radius"]), color="0.8", zorder=0))
+    ax.set_aspect("equal"); ax.set_xlim(-70, 70); ax.set_ylim(-60, 60)
+    ax.set_title("nu = %s" % nu); ax.set_xlabel("x [mm]")
+axes[0].set_ylabel("y [mm]")
+fig.suptitle("ball squeezed between two spheres: mid-plane section at rest (dotted) and squeezed (blue)")
+fig.tight_layout(); fig.savefig(os.path.join(here, "poisson_ball.png"), dpi=110)
+uni = list(csv.DictReader(open(os.path.join(here, "poisson_uniaxial.csv"))))
+fig, ax = plt.subplots(figsize=(6, 5))
+ax.plot([0, 0.5], [0, 0.5], "k:", lw=1, label="lateral / axial = nu")
+for (exp, integ, layout), m in (
+        (("compression 2 %", "symplectic", "uniform"), "o"), (("compression 2 %", "symplectic", "gradational"), "s"),
+        (("compression 2 %", "implicit", "uniform"), "^"), (("stretch 0.1 %", "symplectic", "gradational"), "x"),
+        (("stretch 10 %", "symplectic", "gradational"), "+")):
+    r = [x for x in uni if (x["experiment"], x["integrator"], x["layout"]) == (exp, integ, layout)]
+    ax.plot([float(x["nu"]) for x in r], [float(x["ratio"]) for x in r], m, ms=8, mfc="none", label="%s, %s, %s" % (exp, integ, layout))
+ax.set_xlabel("material.poisson_ratio"); ax.set_ylabel("measured lateral / axial strain"); ax.legend(fontsize=8)
+fig.tight_layout(); fig.savefig(os.path.join(here, "poisson_ratio.png"), dpi=110)
+)PY";
+  }
+  const std::string cmd = "/usr/bin/python3 '" + (dir / "poisson_plot.py").string() + "'";
+  if (std::system(cmd.c_str()) == 0)
+    md << "\n![squeezed ball](poisson_ball.png) ![measured ratio](poisson_ratio.png)\n";
+  else
+    std::cerr << "poisson plots: /usr/bin/python3 with matplotlib not available, section written without pictures\n";
+  return md.str();
+}
+
 struct Cost {
   std::string scene, integrator;
   Real eScale = 1, dt = 0, nsPerStep = 0, rtf = 0, maxEnergy = 0;
@@ -421,6 +643,9 @@ int main(int argc, char** argv) {
   app.add_flag("--large-step-only", largeStepOnly,
                "Only the large-step section on the finest bar: writes large_step.md, large_step.csv and its plot, "
                "not report.md");
+  bool poissonOnly = false;
+  app.add_flag("--poisson-only", poissonOnly,
+               "Only the Poisson's-ratio section: writes poisson.md, poisson_*.csv and its plots, not report.md");
   CLI11_PARSE(app, argc, argv);
   fs::create_directories(out);
   const fs::path dir(out);
@@ -437,6 +662,16 @@ int main(int argc, char** argv) {
                                          << " s)\n\n"
                                          << section.substr(section.find("\n\n") + 2);
     std::cerr << "wrote " << (dir / "large_step.md").string() << "\n";
+    return 0;
+  }
+  if (poissonOnly) {
+    const auto t0 = Clock::now();
+    const std::string section = poissonSection(dir, quick);
+    std::ofstream(dir / "poisson.md") << "# Poisson's ratio (`gradel-validate" << (quick ? " --quick" : "")
+                                      << " --poisson-only`, "
+                                      << fmt(std::chrono::duration<double>(Clock::now() - t0).count(), 3) << " s)\n\n"
+                                      << section.substr(section.find("\n\n") + 2);
+    std::cerr << "wrote " << (dir / "poisson.md").string() << "\n";
     return 0;
   }
   if (materialsOnly) {
@@ -821,6 +1056,7 @@ fig.tight_layout(); fig.savefig(os.path.join(d, "tip_explicit_implicit.png"), dp
 
   std::cerr << "two materials...\n";
   md << "\n" << materialsSection(dir, resolutions);
+  md << "\n" << poissonSection(dir, quick);
 
   std::ofstream(dir / "report.md") << md.str();
   std::cerr << "wrote " << (dir / "report.md").string() << "\n";

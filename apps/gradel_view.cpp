@@ -869,8 +869,12 @@ class Viewer {
     if (ImGui::IsItemDeactivatedAfterEdit()) changed = true;
     // Poisson's ratio (material.h): [0, 0.5); 0.49 is rubber / tissue (dt = auto shrinks with it).
     float nu = float(body.material.poissonRatio);
-    if (ImGui::SliderFloat("Poisson's ratio", &nu, 0.f, 0.49f, "%.2f")) body.material.poissonRatio = nu;
+    if (ImGui::SliderFloat("Poisson's ratio", &nu, 0.f, 0.49f, "%.2f (-)")) body.material.poissonRatio = nu;
     if (ImGui::IsItemDeactivatedAfterEdit()) changed = true;
+    if (ImGui::IsItemHovered())
+      ImGui::SetTooltip("nu, dimensionless, 0 ... 0.49 (0.5 is refused)\n0: the paper's element, no bulge\n"
+                        "0.45 ... 0.49: tissue, rubber (volume kept)\ndt = auto shrinks: about 0.6x at 0.45, 0.3x "
+                        "at 0.49");
     if (!body.material.regions.empty()) {
       // Label 1 without an entry of its own takes the fields above: one more material.
       bool label1Listed = false;

@@ -862,7 +862,7 @@ PYBIND11_MODULE(gradel, m) {
             WorldLock lock(s);
             return realArray(s.world().vertexStress());
           },
-          "Per-vertex von Mises stress [Pa] (mean of its elements'; Poisson's ratio 0, the engine's material).")
+          "Per-vertex von Mises stress [Pa] (mean of its elements').")
       .def_property_readonly(
           "element_stress",
           [](Simulation& s) {
@@ -870,7 +870,7 @@ PYBIND11_MODULE(gradel, m) {
             return realArray(s.world().elementStress());
           },
           "Per-element von Mises stress [Pa]: the element's small strain about its best-fit rotation in its "
-          "region's material (Young's modulus, Poisson's ratio 0).")
+          "region's material (its Young's modulus and Poisson's ratio).")
       .def_property_readonly(
           "strain",
           [](Simulation& s) {

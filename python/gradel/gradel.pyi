@@ -193,10 +193,10 @@ class Simulation:
     def masses(self) -> npt.NDArray[np.float64]: ...
     @property
     def stress(self) -> npt.NDArray[np.float64]:
-        """Per-vertex von Mises stress [Pa] (mean of its elements'; Poisson's ratio 0)."""
+        """Per-vertex von Mises stress [Pa] (mean of its elements')."""
     @property
     def element_stress(self) -> npt.NDArray[np.float64]:
-        """Per-element von Mises stress [Pa] from the element's strain and its region's E."""
+        """Per-element von Mises stress [Pa] from the element's strain and its region's E and nu."""
     @property
     def strain(self) -> npt.NDArray[np.float64]:
         """Per-vertex strain measure [-] (the paper's fig. 1 measure)."""

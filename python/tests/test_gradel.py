@@ -82,6 +82,30 @@ def test_stress_is_von_mises_in_pascal():
     assert 0 < sim.metrics()["max_strain"] < 0.05 and sim.element_strain.max() == pytest.approx(sim.metrics()["max_strain"])
 
 
+def test_poisson_ratio_bulges_a_pressed_box_and_refuses_one_half():
+    body = gradel.Body.from_shape("box", 6)
+    rest = gradel.Simulation(body).rest_positions
+    lo, hi = rest.min(axis=0), rest.max(axis=0)
+    length, cx, strain = hi[0] - lo[0], 0.5 * (lo[0] + hi[0]), 0.02
+    ratios = {}
+    for nu in (0.0, 0.45):
+        # pressed 2 % along x between frictionless walls, free in y and z, settled with damping
+        sim = gradel.Simulation(body, gravity=[0, 0, 0], damping=60, poisson_ratio=nu, restitution=0, friction=0,
+                                domain_min=[cx - 0.5 * length * (1 - strain), -1, -1],
+                                domain_max=[cx + 0.5 * length * (1 - strain), 1, 1])
+        pressed = rest.copy()
+        pressed[:, 0] = cx + (rest[:, 0] - cx) * (1 - strain)
+        sim.positions = pressed
+        sim.step(4000)
+        ext = sim.positions.max(axis=0) - sim.positions.min(axis=0)
+        axial, lateral = ext[0] / length - 1, 0.5 * (ext[1] + ext[2]) / length - 1
+        ratios[nu] = -lateral / axial
+    assert abs(ratios[0.0]) < 0.02  # the paper's element: no bulge
+    assert ratios[0.45] == pytest.approx(0.45, rel=0.1)  # lateral / axial strain = nu
+    with pytest.raises(ValueError, match="poisson_ratio"):
+        gradel.Simulation(body, poisson_ratio=0.5)
+
+
 def test_manipulator_pushes_the_body():
     body = gradel.Body.from_shape("box", 6)
     sim = gradel.Simulation(body, gravity=[0, 0, 0], damping=0.0, youngs_modulus=1e5)

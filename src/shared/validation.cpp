@@ -1,10 +1,15 @@
 #include "gradel/shared/validation.h"
 
+#include <algorithm>
 #include <cmath>
+#include <memory>
 #include <numbers>
 
 #include "gradel/element.h"
+#include "gradel/layout.h"
 #include "gradel/projective.h"
+#include "gradel/shapes.h"
+#include "gradel/world.h"
 
 namespace gradel {
 
@@ -176,6 +181,165 @@ Real dominantFrequency(const std::vector<Real>& signal, Real sampleInterval) {
     if (const Real p = power(f); p > bestP) bestP = p, best = f;
   }
   return best;
+}
+
+Real enclosedVolume(const DisplaySurface& surface, const std::vector<Vec3>& positions) {
+  Real v = 0;
+  for (const auto& t : surface.triangles) {
+    const Vec3& a = positions[surface.modelVertex[t[0]]];
+    const Vec3& b = positions[surface.modelVertex[t[1]]];
+    const Vec3& c = positions[surface.modelVertex[t[2]]];
+    v += a.dot(b.cross(c));
+  }
+  return v / 6;
+}
+
+namespace {
+
+// A preset shape of `size` voxels of edge h, laid out, with its rest model and voxel surface.
+struct Specimen {
+  VoxelVolume volume;
+  Layout layout;
+  std::shared_ptr<const RestModel> model;
+  DisplaySurface surface;
+  Real restVolume = 0;
+};
+Specimen specimen(const ShapeSpec& shape, LayoutKind layout, const MaterialSettings& m) {
+  Specimen s;
+  s.volume = rasterize(shape);
+  s.layout = buildLayout(s.volume, layout);
+  s.model = std::make_shared<RestModel>(buildRestModel(s.layout, s.volume, m, Vec3::Zero()));
+  s.surface = buildDisplaySurface(s.layout, s.volume, SurfaceKind::Voxel);
+  s.restVolume = enclosedVolume(s.surface, s.model->restPositions);
+  return s;
+}
+
+// Extents of a set of positions: hi - lo per axis.
+Vec3 extents(const std::vector<Vec3>& x) {
+  Vec3 lo = Vec3::Constant(1e300), hi = -lo;
+  for (const Vec3& p : x) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  return hi - lo;
+}
+
+// The segments where the surface's triangles cross the plane z = z0, relative to (cx, cy).
+std::vector<std::array<Real, 4>> sectionAt(const DisplaySurface& surface, const std::vector<Vec3>& x, Real z0, Real cx,
+                                           Real cy) {
+  std::vector<std::array<Real, 4>> out;
+  for (const auto& t : surface.triangles) {
+    std::array<Vec3, 3> p;
+    for (int k = 0; k < 3; ++k) p[k] = x[surface.modelVertex[t[k]]];
+    std::vector<Vec3> hits;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 &a = p[k], &b = p[(k + 1) % 3];
+      const Real da = a.z() - z0, db = b.z() - z0;
+      if ((da < 0) != (db < 0)) hits.push_back(a + (b - a) * (da / (da - db)));
+    }
+    if (hits.size() == 2)
+      out.push_back({hits[0].x() - cx, hits[0].y() - cy, hits[1].x() - cx, hits[1].y() - cy});
+  }
+  return out;
+}
+
+}  // namespace
+
+UniaxialResult compressBetweenWalls(const MaterialSettings& m, LayoutKind layout, int n, Real strain,
+                                    IntegratorKind integrator, int steps, Real h) {
+  const Real L = n * h;
+  const Specimen b = specimen(presetShape("box", n, 3, h), layout, m);
+  SimulationSettings s;
+  s.gravity.setZero();
+  s.damping = 60;
+  if (integrator != IntegratorKind::SymplecticEuler) s.integrator = integrator, s.dt = 1.0 / 60;
+  DomainSettings d;
+  d.enabled = true, d.friction = 0, d.restitution = 0;
+  const Vec3 ext0 = extents(b.model->restPositions);
+  const Real cx = 0.5 * ext0.x();  // the box spans [0, L] at rest
+  d.min = Vec3(cx - 0.5 * L * (1 - strain), -1, -1), d.max = Vec3(cx + 0.5 * L * (1 - strain), 1, 1);
+  World w(b.model, s, d, {});
+  for (Vec3& x : w.state().positions) x.x() = cx + (x.x() - cx) * (1 - strain);  // start inside the walls
+  for (int i = 0; i < steps; ++i) w.step();
+  const Vec3 ext = extents(w.state().positions);
+  UniaxialResult r;
+  r.axial = ext.x() / L - 1;
+  r.lateral = 0.5 * (ext.y() + ext.z()) / L - 1;
+  r.volume = enclosedVolume(b.surface, w.state().positions) / b.restVolume;
+  r.vertices = b.model->numVertices(), r.elements = b.model->numElements();
+  return r;
+}
+
+UniaxialResult stretchBetweenGrips(const MaterialSettings& m, LayoutKind layout, int across, Real strain,
+                                   Real duration) {
+  const Real h = 0.02 / across;
+  ShapeSpec shape = presetShape("box", across, 3, h);
+  shape.dims = {4 * across, across, across};
+  shape.primitives.front().max.x() = 4 * across;
+  const Specimen b = specimen(shape, layout, m);
+  const RestModel& model = *b.model;
+  const Real L = 4 * across * h, a = across * h, tol = 1e-6 * L;
+  SimulationSettings s;
+  s.gravity.setZero();
+  s.damping = 100;
+  World w(b.model, s, DomainSettings{}, {});
+  // Start from the stretch alone (no lateral strain): the settling finds the lateral strain.
+  std::vector<uint32_t> gripped, middle;
+  for (size_t i = 0; i < model.numVertices(); ++i) {
+    const Vec3& r = model.restPositions[i];
+    w.state().positions[i].x() = r.x() * (1 + strain);
+    if (r.x() < tol || r.x() > L - tol) gripped.push_back(uint32_t(i));
+    if (std::abs(r.x() - L / 2) < tol) middle.push_back(uint32_t(i));
+  }
+  const size_t steps = size_t(std::ceil(duration / w.dt()));
+  for (size_t k = 0; k < steps; ++k) {
+    w.step();
+    for (uint32_t i : gripped) {  // frictionless grips: x prescribed, y and z free
+      w.state().positions[i].x() = model.restPositions[i].x() * (1 + strain);
+      w.state().velocities[i].x() = 0;
+    }
+  }
+  std::vector<Vec3> mid;
+  for (uint32_t i : middle) mid.push_back(w.state().positions[i]);
+  const Vec3 ext = extents(mid);
+  UniaxialResult r;
+  r.axial = strain;
+  r.lateral = 0.5 * (ext.y() + ext.z()) / a - 1;
+  r.volume = enclosedVolume(b.surface, w.state().positions) / b.restVolume;
+  r.modulus = 2 * w.metrics().elasticEnergy / (L * a * a * strain * strain);
+  r.vertices = model.numVertices(), r.elements = model.numElements();
+  return r;
+}
+
+BallSqueeze squeezeBall(const MaterialSettings& m, int size, Real squeeze) {
+  const Real h = 0.005;
+  const Specimen b = specimen(presetShape("sphere", size, 3, h), LayoutKind::Gradational, m);
+  Vec3 mn = Vec3::Constant(1e300), mx = -mn;
+  for (const Vec3& x : b.model->restPositions) mn = mn.cwiseMin(x), mx = mx.cwiseMax(x);
+  const Vec3 c = 0.5 * (mn + mx);
+  BallSqueeze r;
+  r.ballRadius = 0.5 * (mx.x() - mn.x());
+  r.toolRadius = 2 * r.ballRadius;
+  const Real start = r.ballRadius + r.toolRadius + 0.5 * h, end = r.ballRadius * (1 - squeeze) + r.toolRadius;
+  r.toolX = end;
+  std::vector<ManipulatorSettings> tools;
+  for (Real side : {-1.0, 1.0}) {
+    ManipulatorSettings t;
+    t.radius = r.toolRadius;
+    t.restitution = 0;
+    t.friction = 0;
+    t.path.keys = {Keyframe{0, c + Vec3(side * start, 0, 0), std::nullopt},
+                   Keyframe{0.15, c + Vec3(side * end, 0, 0), std::nullopt}};
+    tools.push_back(t);
+  }
+  SimulationSettings s;
+  s.gravity.setZero();
+  s.damping = 30;
+  World w(b.model, s, DomainSettings{}, tools);
+  const size_t steps = size_t(std::ceil(0.5 / w.dt()));
+  for (size_t k = 0; k < steps; ++k) w.step();
+  r.volume = enclosedVolume(b.surface, w.state().positions) / b.restVolume;
+  r.widthY = extents(w.state().positions).y() / (mx.y() - mn.y());
+  r.restSection = sectionAt(b.surface, b.model->restPositions, c.z() + 0.25 * h, c.x(), c.y());
+  r.endSection = sectionAt(b.surface, w.state().positions, c.z() + 0.25 * h, c.x(), c.y());
+  return r;
 }
 
 }  // namespace gradel

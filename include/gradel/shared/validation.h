@@ -5,9 +5,11 @@
 // The bar is built as a Scene and goes through buildScene like every other body.
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include "gradel/scene.h"
+#include "gradel/surface.h"
 
 namespace gradel {
 
@@ -68,5 +70,50 @@ Real dominantFrequency(const std::vector<Real>& signal, Real sampleInterval);
 
 /// Ids of the vertices on the bar's free end face (x = L at rest).
 std::vector<uint32_t> tipVertices(const RestModel& model, Real length);
+
+// ---- Poisson's ratio (issue 29) ---------------------------------------------------------------
+// Uniaxial stress states and a squeezed ball, each set up as a plain world (no scene file): the
+// material's poisson_ratio is what they measure. Lengths in m, strains signed (compression < 0).
+
+/// What a uniaxial experiment measures once settled.
+struct UniaxialResult {
+  Real axial = 0;    ///< [-] axial strain (x).
+  Real lateral = 0;  ///< [-] lateral strain, mean of y and z.
+  Real volume = 1;   ///< [-] volume enclosed by the deformed voxel surface / the rest volume.
+  Real modulus = 0;  ///< [Pa] 2 U / (V eps^2), U the elastic energy: Young's modulus of a uniaxial stress state.
+  size_t vertices = 0, elements = 0;
+};
+
+/// A box of n^3 voxels (edge h) of material `m` pressed along x by `strain` (> 0) between two
+/// frictionless walls whose gap is (1 - strain) of its length, free in y and z, settled with
+/// damping 60/s over `steps` steps (dt of `integrator`: the stability rule for the explicit step,
+/// 1/60 s for the frame-size ones). Strains from the body's extents (the state is homogeneous).
+UniaxialResult compressBetweenWalls(const MaterialSettings& m, LayoutKind layout, int n, Real strain,
+                                    IntegratorKind integrator = IntegratorKind::SymplecticEuler, int steps = 6000,
+                                    Real h = 0.01);
+
+/// A bar of `across` voxels square section and 4 x `across` along x (section 2 cm) held by two
+/// frictionless grips: the end faces' vertices keep x = 0 and x = (1 + strain) L, free in y and
+/// z, starting from the stretch alone; no gravity, damping 100/s, explicit steps for `duration` s. Lateral strain from the
+/// vertices of the mid-length section, volume from the voxel surface, modulus from the energy.
+UniaxialResult stretchBetweenGrips(const MaterialSettings& m, LayoutKind layout, int across, Real strain,
+                                   Real duration = 0.3);
+
+/// A ball of `size` voxels (5 mm each) squeezed between two sphere manipulators of twice its
+/// radius, frictionless and inelastic, moving in along x until each has pressed `squeeze` of
+/// the ball's radius in (0.15 s), then held (another 0.35 s; no gravity, damping 30/s).
+struct BallSqueeze {
+  Real volume = 1;   ///< [-] enclosed / rest volume at the end.
+  Real widthY = 0;   ///< [-] the ball's extent across (y) at the end / at rest: the bulge.
+  Real toolRadius = 0, toolX = 0;  ///< [m] the manipulators' radius and |x| of their centres from the ball's.
+  Real ballRadius = 0;             ///< [m]
+  /// The mid-plane (z = centre) sections of the voxel surface at rest and at the end, as
+  /// segments (x0, y0, x1, y1) relative to the ball's centre [m].
+  std::vector<std::array<Real, 4>> restSection, endSection;
+};
+BallSqueeze squeezeBall(const MaterialSettings& m, int size, Real squeeze);
+
+/// Volume [m^3] enclosed by a closed display surface at the given model positions.
+Real enclosedVolume(const DisplaySurface& surface, const std::vector<Vec3>& positions);
 
 }  // namespace gradel
