@@ -16,9 +16,10 @@ namespace gradel {
 
 void validate(const BodyContactSettings& s) {
   if (!(s.restitution >= 0 && s.restitution <= 1))
-    throw InputError("body_contact.restitution: expected a number in [0, 1], got " + std::to_string(s.restitution));
+    throw InputError("", "body_contact.restitution",
+                     "expected a number in [0, 1], got " + std::to_string(s.restitution));
   if (!(s.friction >= 0 && std::isfinite(s.friction)))
-    throw InputError("body_contact.friction: expected a finite number >= 0, got " + std::to_string(s.friction));
+    throw InputError("", "body_contact.friction", "expected a finite number >= 0, got " + std::to_string(s.friction));
 }
 
 BodyContacts::BodyContacts(std::vector<ContactBody> bodies, const BodyContactSettings& settings)
