@@ -7,9 +7,11 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
+#include "body_contact_tracks.h"
 #include "body_contact_tuning.h"
 
 namespace gradel {
@@ -22,8 +24,14 @@ void validate(const BodyContactSettings& s) {
     throw InputError("", "body_contact.friction", "expected a finite number >= 0, got " + std::to_string(s.friction));
 }
 
+// Out of line: Grid and Track are complete only here (body_contact_tracks.h).
+BodyContacts::BodyContacts() : grid_(std::make_unique<Grid>()) {}
+BodyContacts::BodyContacts(BodyContacts&&) noexcept = default;
+BodyContacts& BodyContacts::operator=(BodyContacts&&) noexcept = default;
+BodyContacts::~BodyContacts() = default;
+
 BodyContacts::BodyContacts(std::vector<ContactBody> bodies, const BodyContactSettings& settings)
-    : bodies_(std::move(bodies)), settings_(settings) {
+    : bodies_(std::move(bodies)), settings_(settings), grid_(std::make_unique<Grid>()) {
   validate(settings_);
   Real thinnest = std::numeric_limits<Real>::infinity(), thickest = 0;
   for (const ContactBody& b : bodies_)
