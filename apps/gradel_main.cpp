@@ -268,7 +268,7 @@ int runScene(const RunOptions& o) {
   try {
     built = gradel::buildScene(scene, runSizeLimits(scene, duration, o.maxSteps));
   } catch (const InputError& e) {
-    throw InputError(o.scene + ": " + e.what());
+    throw e.at(o.scene);
   }
   gradel::World& world = *built.world;
   const gradel::RestModel& model = world.model();
@@ -279,14 +279,14 @@ int runScene(const RunOptions& o) {
     gradel::checkRunBudget(gradel::estimateRun(duration, dt, model.numVertices(), scene.simulation.integrator), dt,
                            duration, o.maxSteps);
   } catch (const InputError& e) {
-    throw InputError(o.scene + ": " + e.what());
+    throw e.at(o.scene);
   }
   // The frames (frame_loop.h): at t = 0, every frame_interval, the last one exactly at `duration`.
   gradel::FrameSchedule schedule;
   try {
     schedule = gradel::frameSchedule(0, duration, interval, dt);
   } catch (const InputError& e) {
-    throw InputError(o.scene + ": simulation." + e.what());
+    throw e.at(o.scene, "simulation.");
   }
   // Bodies placed overlapping each other, a manipulator or a wall: told, then separated at a
   // capped speed by the world (overlaps.h).

@@ -45,6 +45,7 @@
 #include "gradel/scene.h"
 #include "gradel/shared/rate_window.h"
 #include "gradel/shared/realtime_size.h"
+#include "gradel/shared/step_batch.h"
 #include "gradel/shared/step_pacer.h"
 
 namespace {
@@ -237,7 +238,7 @@ class Viewer {
   void advanceByFrame() {
     World& w = *built_.world;
     if (!stepper_.joinable() && !paused_ && !rebuild_) {  // fixed 1/60 s of simulated time a frame
-      const long n = std::max(1L, std::lround(kFrameSeconds * speed_ / w.dt()));
+      const long n = stepsFor(kFrameSeconds * speed_, w.dt());
       for (long k = 0; k < n && finiteState(w.state()); ++k) w.step();
       steps_ += n;
     }
@@ -480,14 +481,12 @@ class Viewer {
       const auto t0 = Clock::now();
       const double cpu0 = threadCpuSeconds();
       const double batchSim = double(n) * w.dt();
-      for (long k = 0; k < n; ++k) {
-        if (drag) feedDrag(w, *drag, double(k + 1) / double(n), batchSim);
-        w.step();
-      }
+      StepBatchOptions options;
+      if (drag) options.beforeStep = [&](double fraction) { feedDrag(w, *drag, fraction, batchSim); };
+      const bool ok = stepBatch(w, n, options).finite;
       const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
       const double cpu = threadCpuSeconds() - cpu0;
       const size_t vertices = w.model().numVertices();
-      const bool ok = finiteState(w.state());
       const double simTime = w.time();
       std::optional<StressFigures> stress;  // four times a second, here rather than in a frame
       if (const double at = wallNow(); ok && at - stressAt_.load() >= 0.25) stress = stressFigures(w, at);

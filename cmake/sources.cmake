@@ -73,6 +73,7 @@ set(GRADEL_SHARED_SOURCES
   src/shared/rate_window.cpp     # the viewer's rates over the last second
   src/shared/realtime_size.cpp   # which body sizes run in real time, estimated before building
   src/shared/scene_presets.cpp   # scenes built in code (the benchmark's)
+  src/shared/step_batch.cpp      # one batch of a real-time front end's steps (viewer, web page)
   src/shared/step_pacer.cpp      # how many steps the viewer's stepping thread takes next
   src/shared/validation.cpp)     # the cantilever / stretch experiments behind gradel-validate and the tests
 

@@ -192,10 +192,8 @@ Scene parseFragment(const std::string& scene, const std::string& what, const std
   try {
     return parseScene(scene, what);
   } catch (const InputError& e) {
-    std::string m = e.what();
-    const std::string head = what + ": " + prefix;
-    if (m.rfind(head, 0) == 0) m = what + ": " + m.substr(head.size());
-    throw InputError(m);
+    if (e.file() != what || e.field().rfind(prefix, 0) != 0) throw;
+    throw InputError(what, e.field().substr(prefix.size()), e.detail());
   }
 }
 
@@ -619,11 +617,12 @@ PYBIND11_MODULE(gradel, m) {
                 s.world().setPins(next.pins);
                 s.scene = std::move(next);
               }
-            } catch (const InputError& e) {  // "pins[i]: ..." of this pin: "add_pin: ..."
-              std::string m = e.what();
-              if (m.rfind(key + ": ", 0) == 0) m = "add_pin: " + m.substr(key.size() + 2);
-              else if (m.rfind(key + ".", 0) == 0) m = "add_pin: " + m.substr(key.size() + 1);
-              throw InputError(m);
+            } catch (const InputError& e) {  // an error at "pins[i]..." of this pin: at "add_pin: ..."
+              if (!e.file().empty()) throw;
+              if (e.field() == key) throw InputError("add_pin", "", e.detail());
+              if (e.field().rfind(key + ".", 0) == 0)
+                throw InputError("add_pin", e.field().substr(key.size() + 1), e.detail());
+              throw;
             }
             return s.scene.pins.size() - 1;
           },

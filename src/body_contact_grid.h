@@ -8,7 +8,7 @@
 #include <cmath>
 #include <cstdint>
 
-#include "gradel/body_contacts.h"
+#include "body_contact_tracks.h"
 
 namespace gradel {
 namespace {

@@ -179,8 +179,8 @@ void BodyContacts::detectSelf(size_t a, const BodyContactState& s, BodyContactSt
   Box box;
   for (uint32_t u : A.vertices) box.add(s.positions[u]);
   const Box region{box.lo - Vec3::Constant(r), box.hi + Vec3::Constant(r)};
-  buildGrid(grid_, A, region, s.positions, nullptr, r, 0);
-  prepareScratch(grid_);
+  buildGrid(*grid_, A, region, s.positions, nullptr, r, 0);
+  prepareScratch(*grid_);
   const Vec3 *x = s.positions, *x0 = s.previousPositions;
   for (uint32_t i = 0; i < A.vertices.size(); ++i) {
     const uint32_t v = A.vertices[i];
@@ -193,8 +193,8 @@ void BodyContacts::detectSelf(size_t a, const BodyContactState& s, BodyContactSt
     uint32_t bestTri = ContactBody::kNone;
     std::array<Real, 3> bestW{};
     Vec3 bestN;
-    forCandidateTriangles(grid_, p - Vec3::Constant(r), p + Vec3::Constant(r), scratch_[0], [&](uint32_t e) {
-      const uint32_t t = grid_.tri[e];
+    forCandidateTriangles(*grid_, p - Vec3::Constant(r), p + Vec3::Constant(r), scratch_[0], [&](uint32_t e) {
+      const uint32_t t = grid_->tri[e];
       const auto& tri = A.triangles[t];
       const Vec3 f1 = faceNormal(tri, x);
       if (!(f1.dot(p - x[tri[0]]) < 0)) return;  // in front of the face's plane (most candidates)

@@ -36,12 +36,12 @@ void BodyContacts::proximity(const Vec3* x, Real margin, std::vector<Proximity>&
       const Box q{box[a].lo.cwiseMax(box[b].lo - Vec3::Constant(margin)),
                   box[a].hi.cwiseMin(box[b].hi + Vec3::Constant(margin))};
       if ((q.lo.array() > q.hi.array()).any()) continue;
-      buildGrid(grid_, F, {q.lo - Vec3::Constant(margin), q.hi + Vec3::Constant(margin)}, x, nullptr, margin, 0);
-      if (grid_.count == 0) continue;
+      buildGrid(*grid_, F, {q.lo - Vec3::Constant(margin), q.hi + Vec3::Constant(margin)}, x, nullptr, margin, 0);
+      if (grid_->count == 0) continue;
       for (uint32_t v : A.vertices) {
         const Vec3& p = x[v];
         if ((p.array() < q.lo.array()).any() || (p.array() > q.hi.array()).any()) continue;
-        const Nearest near = nearestTriangle(grid_, F, p, margin, x);
+        const Nearest near = nearestTriangle(*grid_, F, p, margin, x);
         if (near.tri == ContactBody::kNone) continue;
         const Real best = near.d2;
         const uint32_t bestTri = near.tri;

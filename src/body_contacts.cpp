@@ -7,22 +7,31 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
+#include "body_contact_tracks.h"
 #include "body_contact_tuning.h"
 
 namespace gradel {
 
 void validate(const BodyContactSettings& s) {
   if (!(s.restitution >= 0 && s.restitution <= 1))
-    throw InputError("body_contact.restitution: expected a number in [0, 1], got " + std::to_string(s.restitution));
+    throw InputError("", "body_contact.restitution",
+                     "expected a number in [0, 1], got " + std::to_string(s.restitution));
   if (!(s.friction >= 0 && std::isfinite(s.friction)))
-    throw InputError("body_contact.friction: expected a finite number >= 0, got " + std::to_string(s.friction));
+    throw InputError("", "body_contact.friction", "expected a finite number >= 0, got " + std::to_string(s.friction));
 }
 
+// Out of line: Grid and Track are complete only here (body_contact_tracks.h).
+BodyContacts::BodyContacts() : grid_(std::make_unique<Grid>()) {}
+BodyContacts::BodyContacts(BodyContacts&&) noexcept = default;
+BodyContacts& BodyContacts::operator=(BodyContacts&&) noexcept = default;
+BodyContacts::~BodyContacts() = default;
+
 BodyContacts::BodyContacts(std::vector<ContactBody> bodies, const BodyContactSettings& settings)
-    : bodies_(std::move(bodies)), settings_(settings) {
+    : bodies_(std::move(bodies)), settings_(settings), grid_(std::make_unique<Grid>()) {
   validate(settings_);
   Real thinnest = std::numeric_limits<Real>::infinity(), thickest = 0;
   for (const ContactBody& b : bodies_)

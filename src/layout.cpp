@@ -318,7 +318,7 @@ LayoutKind parseLayoutKind(const std::string& name) {
   if (name == "gradational") return LayoutKind::Gradational;
   if (name == "uniform") return LayoutKind::Uniform;
   if (name == "voxel") return LayoutKind::Voxel;
-  throw InputError("layout: unknown layout '" + name + "' (expected gradational, uniform or voxel)");
+  throw InputError("", "layout", "unknown layout '" + name + "' (expected gradational, uniform or voxel)");
 }
 
 const char* layoutKindName(LayoutKind k) {

@@ -31,9 +31,10 @@ MaterialSettings regionMaterial(const MaterialSettings& m, uint16_t label) {
   if (label == 1) return out;
   std::string known;
   for (const RegionMaterial& r : m.regions) known += (known.empty() ? "" : ", ") + std::to_string(r.label);
-  throw InputError("regions: label " + std::to_string(label) + " of the volume has no entry (expected one with \"label\": " +
-                   std::to_string(label) + "; the table has " + (known.empty() ? std::string("none") : known) +
-                   ", and label 1 takes the body's own fields)");
+  throw InputError("", "regions",
+                   "label " + std::to_string(label) + " of the volume has no entry (expected one with \"label\": " +
+                       std::to_string(label) + "; the table has " + (known.empty() ? std::string("none") : known) +
+                       ", and label 1 takes the body's own fields)");
 }
 
 // 2D bodies are slabs one voxel thick: a lattice voxel's volume is h^3 in both.

@@ -10,17 +10,17 @@ namespace {
 class LoadedMask {
  public:
   LoadedMask(const PinMask& m, size_t index) : m_(m) {
-    const std::string where = "pins[" + std::to_string(index) + "].mask: ";
+    const std::string where = "pins[" + std::to_string(index) + "].mask";
     if (!(m.voxelSize > 0) || !std::isfinite(m.voxelSize))
-      throw InputError(where + "voxel_size must be a positive finite number");
-    if (!m.origin.allFinite()) throw InputError(where + "origin must be finite");
+      throw InputError("", where, "voxel_size must be a positive finite number");
+    if (!m.origin.allFinite()) throw InputError("", where, "origin must be finite");
     for (size_t b = 0; b < m.boxes.size(); ++b)
       if ((m.boxes[b][1] - m.boxes[b][0]).minCoeff() < 0)
-        throw InputError(where + "boxes[" + std::to_string(b) + "]: max must be >= min on every axis");
-    if (!m.source && !m.volume && m.boxes.empty()) throw InputError(where + "has neither a file nor boxes");
-    if (m.source && !m.volume) throw InputError(where + m.source->describe() + ": not read (loadPinMasks)");
+        throw InputError("", where, "boxes[" + std::to_string(b) + "]: max must be >= min on every axis");
+    if (!m.source && !m.volume && m.boxes.empty()) throw InputError("", where, "has neither a file nor boxes");
+    if (m.source && !m.volume) throw InputError("", where, m.source->describe() + ": not read (loadPinMasks)");
     if (m.volume && m.volume->countFilled() == 0)
-      throw InputError(where + (m.source ? m.source->describe() + ": " : std::string()) + "no filled voxel");
+      throw InputError("", where, (m.source ? m.source->describe() + ": " : std::string()) + "no filled voxel");
   }
 
   bool filled(const Int3& v) const {
@@ -62,7 +62,7 @@ void loadPinMasks(std::vector<PinSettings>& pins) {
     try {
       mask->volume = std::make_shared<const VoxelVolume>(mask->source->load());
     } catch (const InputError& e) {
-      throw InputError("pins[" + std::to_string(p) + "].mask: " + e.what());
+      throw InputError("", "pins[" + std::to_string(p) + "].mask", e.what());
     }
     pins[p].mask = std::move(mask);
   }
@@ -74,8 +74,9 @@ PinSet selectPins(const std::vector<PinSettings>& pins, const std::vector<Vec3>&
   if (bodies.empty()) bodies.push_back({0, uint32_t(restPositions.size())});
   for (size_t p = 0; p < pins.size(); ++p)
     if (pins[p].body >= bodies.size())
-      throw InputError("pins[" + std::to_string(p) + "].body: " + std::to_string(pins[p].body) +
-                       " is out of range (expected a body index below " + std::to_string(bodies.size()) + ")");
+      throw InputError("", "pins[" + std::to_string(p) + "].body",
+                       std::to_string(pins[p].body) + " is out of range (expected a body index below " +
+                           std::to_string(bodies.size()) + ")");
   PinSet s;
   std::vector<size_t> held(pins.size(), 0);
   std::vector<std::unique_ptr<LoadedMask>> masks(pins.size());
@@ -85,7 +86,7 @@ PinSet selectPins(const std::vector<PinSettings>& pins, const std::vector<Vec3>&
       continue;
     }
     if (!pins[p].min.allFinite() || !pins[p].max.allFinite() || (pins[p].max - pins[p].min).minCoeff() < 0)
-      throw InputError("pins[" + std::to_string(p) + "]: max must be >= min on every axis");
+      throw InputError("", "pins[" + std::to_string(p) + "]", "max must be >= min on every axis");
   }
   for (size_t i = 0; i < restPositions.size(); ++i) {
     const Vec3& x = restPositions[i];
@@ -110,8 +111,10 @@ PinSet selectPins(const std::vector<PinSettings>& pins, const std::vector<Vec3>&
   }
   for (size_t p = 0; p < pins.size(); ++p)
     if (held[p] == 0)
-      throw InputError("pins[" + std::to_string(p) + "]: the " + (masks[p] ? "mask" : "box") + " holds no vertex of " +
-                       (bodyVertices.size() > 1 ? "body " + std::to_string(pins[p].body) : std::string("the body")));
+      throw InputError(
+          "", "pins[" + std::to_string(p) + "]",
+          std::string("the ") + (masks[p] ? "mask" : "box") + " holds no vertex of " +
+              (bodyVertices.size() > 1 ? "body " + std::to_string(pins[p].body) : std::string("the body")));
   return s;
 }
 

@@ -475,7 +475,6 @@ ProjectiveSolver::ProjectiveSolver(const RestModel& model, Real dt, const std::v
 ProjectiveSolver::~ProjectiveSolver() = default;
 
 Real ProjectiveSolver::dt() const { return impl_->dt; }
-size_t ProjectiveSolver::numFree() const { return size_t(impl_->rhs.rows()); }
 
 void ProjectiveSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vector<Quat>& q, const Vec3& gravity,
                             Real damping, int iterations, const std::vector<Vec3>& pinTargets, int rotationIterations,

@@ -62,9 +62,8 @@ void buildBody(const BodySettings& settings, int dim, const SizeLimits& limits, 
     model = std::make_shared<RestModel>(buildRestModel(b.layout, b.volume, settings.material, settings.position));
   } catch (const InputError& e) {
     // A label of the volume without a material: name the volume file and the scene key.
-    const std::string m = e.what();
-    if (m.rfind("regions: ", 0) != 0) throw;
-    throw InputError((settings.source ? settings.source->describe() : settings.name) + ": material." + m);
+    if (e.field() != "regions") throw;
+    throw e.at(settings.source ? settings.source->describe() : settings.name, "material.");
   }
   b.model = model;
   const Vec3& origin = model->origin;
@@ -75,7 +74,7 @@ void buildBody(const BodySettings& settings, int dim, const SizeLimits& limits, 
     try {
       b.embedded = embedMesh(rest, b.layout, *model);
     } catch (const InputError& e) {
-      throw InputError(settings.source->describe() + ": " + e.what());
+      throw e.at(settings.source->describe());
     }
     b.sourceMesh = std::move(rest);
   }
@@ -99,8 +98,9 @@ BuiltScene buildScene(const Scene& scene, const SizeLimits& limits) {
       buildBody(scene.bodies[i], scene.dim, left, body);
     } catch (const InputError& e) {
       if (i == 0 || used == 0) throw;
-      throw InputError(std::string(e.what()) + "; the bodies before it take about " + formatBytes(used) + " of " +
-                       formatBytes(memory));
+      throw InputError(
+          e.file(), e.field(),
+          e.detail() + "; the bodies before it take about " + formatBytes(used) + " of " + formatBytes(memory));
     }
     const Layout& l = body.layout;
     used += estimateModelBytes({l.numElements(), l.numVertices(), l.numPairs()}, scene.dim);

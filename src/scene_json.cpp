@@ -98,7 +98,7 @@ std::string quoteList(const std::vector<std::string>& names) {
 }
 
 [[noreturn]] void failAt(const Context& ctx, const std::string& path, const std::string& what) {
-  throw InputError(ctx.file + ": " + (path.empty() ? std::string() : path + ": ") + what);
+  throw InputError(ctx.file, path, what);
 }
 
 namespace {
@@ -193,7 +193,7 @@ json parseStrict(const std::string& text, const Context& ctx) {
         msg = "at line " + std::to_string(line) + ", column " + std::to_string(column) + ": " + msg;
       }
     }
-    throw InputError(ctx.file + ": invalid JSON: " + shown(msg, 200));
+    throw InputError(ctx.file, "", "invalid JSON: " + shown(msg, 200));
   }
 }
 

@@ -183,11 +183,8 @@ class Fields {
       // that the parser's message quotes it safely.
       return parse(shown(text) == text ? text : shown(text));
     } catch (const InputError& e) {
-      // The parsers may already start their message with the key's name; don't repeat it.
-      std::string msg = e.what();
-      const std::string own = std::string(key) + ": ";
-      if (msg.rfind(own, 0) == 0) msg.erase(0, own.size());
-      fail(key, msg);
+      // A parser may already name the key as its error's field; don't repeat it.
+      fail(key, e.field() == key ? e.detail() : std::string(e.what()));
     }
   }
 
@@ -324,19 +321,16 @@ bool isSafeName(const std::string& s);
 // Boxes (primitives, the domain) must have a positive extent on every axis of the scene.
 void checkMaxAboveMin(const Fields& f, const Vec3& min, const Vec3& max);
 
-
 // The core's own check of a settings type (settings_check.h: the same one World and the Python
-// module use), after the reader's per-key checks: its "field: what" is reported at that key of
+// module use), after the reader's per-key checks: its error's field is reported as that key of
 // this object, with the file and key path.
+
 template <class Check>
 void coreCheck(const Fields& f, Check check) {
   try {
     check();
   } catch (const InputError& e) {
-    const std::string m = e.what();
-    const size_t colon = m.find(": ");
-    if (colon == std::string::npos) f.fail("", m);
-    f.fail(m.substr(0, colon), m.substr(colon + 2));
+    f.fail(e.field(), e.detail());
   }
 }
 

@@ -12,7 +12,7 @@ std::string num(Real x) {
   return o.str();
 }
 [[noreturn]] void fail(const char* field, const std::string& what, Real got) {
-  throw InputError(std::string(field) + ": " + what + " (got " + num(got) + ")");
+  throw InputError("", field, what + " (got " + num(got) + ")");
 }
 void unit(const char* field, Real x) {
   if (!(x >= 0 && x <= 1)) fail(field, "must be in [0, 1]", x);
@@ -34,7 +34,7 @@ void validate(const SimulationSettings& s) {
   if (!(s.dtFraction >= 0 && s.dtFraction <= 1))
     fail("dt_fraction", "must be in [0, 1] (0: the dt_period rule's default)", s.dtFraction);
   nonNegative("damping", s.damping);
-  if (!s.gravity.allFinite()) throw InputError("gravity: must be finite");
+  if (!s.gravity.allFinite()) throw InputError("", "gravity", "must be finite");
   if (s.threads < 1 || s.threads > kMaxThreads)
     fail("threads", "must be an integer in [1, " + std::to_string(kMaxThreads) + "]", s.threads);
   if (s.rotationIterations < 1) fail("rotation_iterations", "must be >= 1", s.rotationIterations);
@@ -48,7 +48,8 @@ void validate(const SimulationSettings& s) {
   // step: without damping no dt is stable, so "auto" has nothing to pick (World, docs/scenes.md).
   if (s.integrator == IntegratorKind::ForwardEuler && s.dt == 0 && !(s.damping > 0))
     throw InputError(
-        "integrator: forward_euler is unstable at every dt without damping (each step multiplies a "
+        "", "integrator",
+        "forward_euler is unstable at every dt without damping (each step multiplies a "
         "vibration's energy by 1 + (omega dt)^2); give damping > 0 (dt auto is then damping / (2 omega^2)), "
         "an explicit dt, or use symplectic");
 }
@@ -57,7 +58,8 @@ void validate(const ManipulatorSettings& s) {
   positive("radius", s.radius);
   if (s.shape == ManipulatorShape::Cylinder) {
     positive("half_length", s.halfLength);
-    if (!(s.axis.norm() > 0) || !s.axis.allFinite()) throw InputError("axis: must be a finite non-zero direction");
+    if (!(s.axis.norm() > 0) || !s.axis.allFinite())
+      throw InputError("", "axis", "must be a finite non-zero direction");
   }
   unit("restitution", s.restitution);
   nonNegative("friction", s.friction);
@@ -65,11 +67,12 @@ void validate(const ManipulatorSettings& s) {
 
 void validate(const DomainSettings& s, int dim) {
   if (!s.enabled) return;
-  if (!s.min.allFinite() || !s.max.allFinite()) throw InputError("min, max: must be finite");
+  if (!s.min.allFinite() || !s.max.allFinite()) throw InputError("", "min, max", "must be finite");
   for (int a = 0; a < dim; ++a)
     if (!(s.min[a] < s.max[a]))
-      throw InputError("max: must exceed min on every axis (axis " + std::to_string(a) + ": min " + num(s.min[a]) +
-                       ", max " + num(s.max[a]) + ")");
+      throw InputError("", "max",
+                       "must exceed min on every axis (axis " + std::to_string(a) + ": min " + num(s.min[a]) +
+                           ", max " + num(s.max[a]) + ")");
   unit("restitution", s.restitution);
   nonNegative("friction", s.friction);
 }

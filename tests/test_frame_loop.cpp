@@ -1,10 +1,12 @@
 // shared/frame_loop.h: the frame schedule and loop of `gradel run` and `gradel render`.
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <stdexcept>
 #include <vector>
 
 #include "gradel/shared/frame_loop.h"
+#include "gradel/shared/step_batch.h"
 #include "test_support.h"
 
 using namespace gradel;
@@ -74,4 +76,30 @@ TEST(FrameLoop, SameStepsAsAdvanceToFramesOnDistinctSteps) {
                    c, frameSchedule(0, 1.0, 0.5, dt), [](size_t) {}, checks),
                std::runtime_error);
   EXPECT_NEAR(c.time(), 32 * dt, 1e-12);
+}
+
+// shared/step_batch.h, the real-time front ends' batch (viewer, web page): the same steps as
+// plain World::step calls, the hook before each with the batch's fraction, a budget that cuts it.
+TEST(StepBatch, TakesTheStepsWithTheHookBeforeEach) {
+  EXPECT_EQ(stepsFor(0.0166, 0.001), 17);
+  EXPECT_EQ(stepsFor(0, 0.01), 1);  // at least one
+  World a = smallWorld(1e-3), b = smallWorld(1e-3);
+  std::vector<double> fractions;
+  StepBatchOptions o;
+  o.beforeStep = [&](double f) { fractions.push_back(f); };
+  const StepBatch r = stepBatch(a, 4, o);
+  for (int k = 0; k < 4; ++k) b.step();
+  EXPECT_EQ(r.steps, 4);
+  EXPECT_FALSE(r.cut);
+  EXPECT_TRUE(r.finite);
+  EXPECT_EQ(fractions, (std::vector<double>{0.25, 0.5, 0.75, 1.0}));
+  EXPECT_EQ(a.state().positions, b.state().positions);
+  // A budget no step fits: one step, then cut.
+  o.budgetSeconds = 1e-12;
+  const StepBatch cut = stepBatch(a, 4, o);
+  EXPECT_EQ(cut.steps, 1);
+  EXPECT_TRUE(cut.cut);
+  // A non-finite state is reported.
+  a.state().velocities[0].x() = std::numeric_limits<Real>::quiet_NaN();
+  EXPECT_FALSE(stepBatch(a, 2).finite);
 }

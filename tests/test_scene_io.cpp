@@ -502,5 +502,34 @@ TEST(SceneIo, ParseSceneCoreSettingsCheckNamesFileAndKey) {
             "");
 }
 
+// The file and the key path are data too (types.h InputError): the same parts as the message,
+// the key path whole (a parser's own field under the reader's, a core check's under its object).
+TEST(SceneIo, ErrorsCarryFileAndFieldAsData) {
+  auto errorAt = [](const std::string& text) -> InputError {
+    try {
+      parseScene(text, kFile);
+    } catch (const InputError& e) {
+      return e;
+    }
+    ADD_FAILURE() << "expected an InputError: " << text;
+    return InputError("");
+  };
+  const InputError layout = errorAt(scene3(R"("shape": "sphere", "size": 8, "layout": "octree")"));
+  EXPECT_EQ(layout.file(), kFile);
+  EXPECT_EQ(layout.field(), "body.layout");  // the parser's field "layout" not repeated
+  EXPECT_EQ(layout.detail().rfind("unknown layout 'octree'", 0), 0u) << layout.detail();
+  EXPECT_EQ(std::string(layout.what()), std::string(kFile) + ": body.layout: " + layout.detail());
+  const InputError core =
+      errorAt(scene3(R"("shape": "sphere", "size": 8)", R"("simulation": {"integrator": "forward_euler"})"));
+  EXPECT_EQ(core.field(), "simulation.integrator");
+  EXPECT_EQ(core.detail().rfind("forward_euler is unstable", 0), 0u) << core.detail();
+  // Seen from another file under a prefix (gradel run's "simulation." errors): the parts move along.
+  const InputError moved = InputError("", "frame_interval", "too many").at("a.json", "simulation.");
+  EXPECT_EQ(std::string(moved.what()), "a.json: simulation.frame_interval: too many");
+  EXPECT_EQ(moved.field(), "simulation.frame_interval");
+  EXPECT_EQ(std::string(InputError("plain message").at("a.json", "simulation.").what()),
+            "a.json: simulation.plain message");  // no field known: the old text
+}
+
 }  // namespace
 }  // namespace gradel

@@ -120,7 +120,6 @@ class ProjectiveSolver {
   Real diagonal(uint32_t vertex) const;
 
   Real dt() const;
-  size_t numFree() const;
   bool isFree(uint32_t vertex) const;
 
  private:

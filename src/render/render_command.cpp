@@ -73,7 +73,7 @@ int runRenderCommand(const RenderCommandOptions& o) {
   try {
     built = buildScene(scene);
   } catch (const InputError& e) {
-    throw InputError(o.scene + ": " + e.what());
+    throw e.at(o.scene);
   }
   World& world = *built.world;
   // The frames (frame_loop.h, as `gradel run`): from --start every frame_interval to the end of
@@ -83,7 +83,7 @@ int runRenderCommand(const RenderCommandOptions& o) {
     schedule = frameSchedule(o.start, scene.output.duration, scene.output.frameInterval, world.dt(),
                              o.frames ? std::optional<long>(*o.frames) : std::nullopt);
   } catch (const InputError& e) {
-    throw InputError(o.scene + ": simulation." + e.what());
+    throw e.at(o.scene, "simulation.");
   }
   const Real interval = schedule.interval;
   // auto: none under a section (the section is what is looked at), else the body's own mesh or smooth.

@@ -22,7 +22,7 @@ FrameSchedule frameSchedule(Real start, Real duration, Real interval, Real dt, s
   if (interval < dt) s.interval = dt, s.intervalRaisedToDt = true;
   if (frames) {
     if (*frames < 1 || *frames > kMaxFrames)
-      throw InputError("frames: must be in [1, 1000000] (got " + std::to_string(*frames) + ")");
+      throw InputError("", "frames", "must be in [1, 1000000] (got " + std::to_string(*frames) + ")");
     s.frames = size_t(*frames);
     s.end = std::numeric_limits<Real>::infinity();
     return s;
@@ -31,8 +31,8 @@ FrameSchedule frameSchedule(Real start, Real duration, Real interval, Real dt, s
   // Frames after the first; the last one lands exactly on the end.
   const double after = std::ceil(duration / s.interval - 1e-9);
   if (after > kMaxFrames)
-    throw InputError("frame_interval: " + num(s.interval) + " s gives " + num(after) +
-                     " frames (expected at most 1000000 frames)");
+    throw InputError("", "frame_interval",
+                     num(s.interval) + " s gives " + num(after) + " frames (expected at most 1000000 frames)");
   s.frames = size_t(std::max(1.0, after)) + 1;
   return s;
 }

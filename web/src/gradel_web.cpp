@@ -21,6 +21,7 @@
 #include "gradel/render/manipulator_drag.h"
 #include "gradel/scene.h"
 #include "gradel/shared/scene_presets.h"
+#include "gradel/shared/step_batch.h"
 
 namespace {
 
@@ -82,27 +83,19 @@ class Demo {
   /// budget cut the frame short.
   int advance(double frameSeconds, double budgetMs, double speed) {
     World& w = *built_.world;
-    behind_ = false;
     const double want = std::clamp(frameSeconds, 0.0, kMaxFrameSeconds) * speed;
-    const long n = std::max(1L, std::lround(want / w.dt()));
-    const double start = nowMs();
-    long k = 0;
-    while (k < n) {
-      if (drag_) feedDrag(*built_.world, *drag_, double(k + 1) / double(n), want);
-      w.step();
-      ++k;
-      if (nowMs() - start > budgetMs && k < n) {
-        behind_ = true;
-        if (drag_) feedDrag(*built_.world, *drag_, 1.0, want);
-        break;
-      }
-    }
+    StepBatchOptions options;
+    options.budgetSeconds = budgetMs / 1000;
+    if (drag_) options.beforeStep = [&](double fraction) { feedDrag(w, *drag_, fraction, want); };
+    const StepBatch b = stepBatch(w, stepsFor(want, w.dt()), options);
+    behind_ = b.cut;
+    if (b.cut && drag_) feedDrag(w, *drag_, 1.0, want);
     if (drag_) drag_->from = drag_->to;
-    if (!finite()) {
+    if (!b.finite) {
       diverged_ = true;
       install(buildScene(scene_));
     }
-    return int(k);
+    return int(b.steps);
   }
 
   // ---- drawing ----
