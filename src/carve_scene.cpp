@@ -33,6 +33,18 @@ std::vector<CarveEvent> carveBodies(BuiltScene& scene, const std::vector<std::pa
     events.push_back(e);
     carved[b] = std::move(c), changed[b] = true;
   }
+  // A new vertex interpolated inside a manipulator (a coarse cell the tool had dented: its
+  // trilinear map does not follow the dent) goes to the manipulator's surface, as the contact
+  // would have put it; surviving vertices are left as they are.
+  for (size_t b = 0; b < B; ++b)
+    for (size_t v = 0; changed[b] && v < carved[b].positions.size(); ++v) {
+      if (carved[b].fromVertex[v] != Layout::kNoVertex) continue;
+      for (const Manipulator& m : world.manipulators()) {
+        Vec3 normal;
+        const Real d = m.signedDistance(carved[b].positions[v], &normal);
+        if (d < 0) carved[b].positions[v] -= d * normal;
+      }
+    }
   if (events.empty()) return events;
   // The new state, body by body: the carved bodies' from their event, the others' as they were.
   const State& old = world.state();

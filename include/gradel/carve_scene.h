@@ -1,7 +1,7 @@
 // Carving in a built scene (issue 30): a body of a BuiltScene loses voxels (carve.h carveBody),
 // its volume, layout and rest model are replaced, and its World is made again over the new model
 // (World::replaceModel) with every other body's state as it was and the carved body's carried
-// over; the contact surfaces are rebuilt from the bodies' layouts when the world has body contacts.
+// over (a new vertex that would lie inside a manipulator put on its surface); the contact surfaces are rebuilt from the bodies' layouts when the world has body contacts.
 // A body voxelised from a mesh loses its embedded render mesh (drawn by its voxel surface after).
 #pragma once
 
