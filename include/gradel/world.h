@@ -195,7 +195,9 @@ class World {
 
   /// Carving (carve_scene.h): the world over a new model, e.g. with one body laid out again, and
   /// its state (`state`: one entry per vertex and element of `model`, the time kept). Keeps the
-  /// settings as applied, dt, the manipulators (poses), walls, pins (moved to their targets),
+  /// settings as applied, dt (dt = auto of an explicit integrator shortened by the ratio of the
+  /// models' smallest vertex periods when the new one's is shorter; never lengthened), the
+  /// manipulators (poses), walls, pins (moved to their targets),
   /// the force averages and the work and impulse ledgers; body contacts over `contactBodies`
   /// with the same settings (empty: none). External forces and the frame-size integrators'
   /// warm starts (vertex ids) are dropped; derived rest data, scratch and threads are made anew
