@@ -29,6 +29,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "gradel/carve_scene.h"
 #include "gradel/divergence.h"
 #include "gradel/layout.h"
 #include "gradel/output.h"
@@ -354,7 +355,7 @@ int runScene(const RunOptions& o) {
     const std::vector<gradel::Real> vertexStrain = world.vertexStress(elementStrain);
     for (size_t i = 0; i < built.numBodies(); ++i) {
       const std::string name = gradel::frameFileName(index, several ? built.bodies[i].name : "");
-      gradel::writeVtu(dir.file(name), model, world.state(), built.range(i), vertexStress, elementStress,
+      gradel::writeVtu(dir.file(name), world.model(), world.state(), built.range(i), vertexStress, elementStress,
                        gradel::VtkEncoding::Base64, vertexStrain, elementStrain);
       pvd.push_back({world.time(), name, int(i), several ? built.bodies[i].name : ""});
     }
@@ -378,6 +379,21 @@ int runScene(const RunOptions& o) {
                                  "; nothing written");
   };
   checks.progress = [&](double fraction) { progress.update(fraction); };
+  // Carving manipulators (`"carve": true`, carve_scene.h) remove what they swept after every chunk of steps.
+  const bool carving = std::any_of(world.manipulators().begin(), world.manipulators().end(),
+                                   [](const gradel::Manipulator& m) { return m.settings.carve; });
+  std::vector<gradel::Vec3> carvePrevious;
+  size_t carveEvents = 0, carvedVoxels = 0;
+  double carveSeconds = 0;
+  if (carving) {
+    checks.afterChunk = [&, check = checks.afterChunk] {
+      check();
+      const auto t0 = std::chrono::steady_clock::now();
+      for (const gradel::CarveEvent& e : gradel::carveWithManipulators(built, carvePrevious))
+        ++carveEvents, carvedVoxels += e.removedVoxels;
+      carveSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    };
+  }
   const auto wallStart = std::chrono::steady_clock::now();
   gradel::runFrames(world, schedule, writeFrame, checks);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
@@ -397,9 +413,14 @@ int runScene(const RunOptions& o) {
   j["bodies"] = built.numBodies();
   j["wall_seconds"] = wall;
   j["real_time_factor"] = wall > 0 ? world.time() / wall : 0.0;
-  j["elements"] = model.numElements();
-  j["vertices"] = model.numVertices();
-  j["pairs"] = model.numPairs();
+  j["elements"] = world.model().numElements();
+  j["vertices"] = world.model().numVertices();
+  j["pairs"] = world.model().numPairs();
+  if (carving) {
+    j["carve_events"] = carveEvents;  // body events of the carving manipulators (carve_scene.h)
+    j["carved_voxels"] = carvedVoxels;
+    j["carve_seconds"] = carveSeconds;  // wall time of the events (full re-layout each)
+  }
   j["final_kinetic_energy"] = last.kineticEnergy;
   j["max_penetration"] = maxPenetration;
   j["max_stress"] = maxStress;  // [Pa] von Mises

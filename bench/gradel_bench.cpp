@@ -26,6 +26,11 @@
 // any thread count; integrator = the one that ran (--integrator sets it for the real and scene
 // rows: symplectic by default on the real rows, the scene's own on scene rows; large_step runs
 // at dt = 1/60 s).
+// --carve: instead of the step, the cost of one carving event (carve.h, carve_scene.h) on a
+// gradational n^3 box (--sizes), a burr of radius 3 voxels at a new place on the top face each
+// repetition: its own CSV (set = carve), medians in ms of the tool's voxel set, the event (full
+// re-layout, rest model, state carried over), the re-layout and rest model alone, and the whole
+// scene event (event + the world made again, World::replaceModel).
 // --find-realtime with --sets real: for each modulus, the largest gradational real-scene sphere n
 // that runs in real time with the integrator given (n doubled from 16, then bisected).
 #include <signal.h>
@@ -42,6 +47,7 @@
 #include <optional>
 #include <sstream>
 
+#include "gradel/carve_scene.h"
 #include "gradel/shared/scene_presets.h"
 
 using namespace gradel;
@@ -58,6 +64,47 @@ struct Row {
   double nsPerVertex = 0, nsPerPair = 0, stepsPerSecond = 0, dt = 0, rtf = 0, bytesPerVertex = 0, contactShare = 0;
   uint64_t hash = 0;
 };
+
+double medianOf(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+double msSince(Clock::time_point t0) { return 1e3 * std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// --carve: one row per size and thread count (see the top of this file).
+void measureCarve(int n, int threads, int reps) {
+  Scene scene;
+  scene.bodies[0].shape = presetShape("box", n, 3, 0.005);
+  scene.simulation.gravity = Vec3::Zero();
+  scene.simulation.threads = threads;
+  BuiltScene b = buildScene(scene);
+  b.world->step();
+  const Real h = 0.005, r = 3 * h;
+  std::vector<double> tSet, tEvent, tLayout, tScene;
+  size_t removed = 0, verticesBefore = b.world->model().numVertices();
+  for (int k = 0; k < reps; ++k) {
+    const Vec3 centre(h * (n / 4 + (k * 7) % (n / 2)), h * n, h * (n / 4 + (k * 5) % (n / 2)));
+    auto t0 = Clock::now();
+    size_t count = 0;
+    const std::vector<uint8_t> mask = voxelsInSphere(carveInput(b, 0), centre, r, &count);
+    tSet.push_back(msSince(t0));
+    t0 = Clock::now();
+    const CarvedBody c = carveBody(carveInput(b, 0), mask);
+    tEvent.push_back(msSince(t0));
+    t0 = Clock::now();
+    const Layout l = buildLayout(c.volume, LayoutKind::Gradational);
+    const RestModel m = buildRestModel(l, c.volume, b.bodies[0].model->material, b.bodies[0].model->origin);
+    tLayout.push_back(msSince(t0));
+    t0 = Clock::now();
+    removed = carveSceneBody(b, 0, mask).removedVoxels;
+    tScene.push_back(msSince(t0));
+    b.world->step();
+  }
+  std::printf("carve,%d,%d,%zu,%zu,%zu,%.3f,%.3f,%.3f,%.3f\n", n, threads, removed, verticesBefore,
+              b.world->model().numVertices(), medianOf(tSet), medianOf(tEvent), medianOf(tLayout), medianOf(tScene));
+  std::fflush(stdout);
+}
 
 template <class T>
 std::vector<T> splitList(const std::string& s, T (*conv)(const std::string&)) {
@@ -289,7 +336,7 @@ int main(int argc, char** argv) {
   int reps = 5, contactSteps = 40;
   std::string contactTrace;
   double minTime = 0.2, maxPairs = 4.0e7;
-  bool findRt = false, load = false;
+  bool findRt = false, load = false, carve = false;
   app.add_option("--sets", sets,
                  "Comma-separated: real (SI scenes with gravity, walls, contact, pins, metrics), paper, contact "
                  "(two spheres in soft-soft contact)");
@@ -316,7 +363,22 @@ int main(int argc, char** argv) {
   app.add_flag("--find-realtime", findRt,
                "Also search the largest real-time gradational sphere at the largest thread count (paper setting; "
                "with --sets real: the real scene at each modulus, with --integrator)");
+  app.add_flag("--carve", carve,
+               "Only the cost of one carving event per --sizes and --threads (its own CSV, set = carve)");
   CLI11_PARSE(app, argc, argv);
+  if (carve) {
+    try {
+      std::printf("set,n,threads,removed_voxels,vertices_before,vertices_after,ms_tool_voxels,ms_event,"
+                  "ms_relayout_and_model,ms_scene_event\n");
+      for (int n : splitList<int>(sizes, [](const std::string& x) { return std::stoi(x); }))
+        for (int t : splitList<int>(threads, [](const std::string& x) { return std::stoi(x); }))
+          measureCarve(n, t, reps);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "gradel-bench: %s\n", e.what());
+      return 2;
+    }
+    return 0;
+  }
   try {
     auto str = [](const std::string& s) { return s; };
     const auto setList = splitList<std::string>(sets, str);

@@ -6,6 +6,8 @@
 # readers below); no windowing, no OpenGL, no command-line parser.
 set(GRADEL_CORE_SOURCES
   src/bodies.cpp
+  src/carve.cpp                     # carving: the event (re-layout, state carried over) and a tool's voxels
+  src/carve_scene.cpp               # carving in a built scene: the body replaced in its World
   src/body_contacts.cpp             # body contacts: the stage, resolve()'s loop of rounds over the phases below
   src/body_contact_bounds.cpp       # broad phase per step and round: motion bounds, which candidates to look up
   src/body_contact_tracks.cpp       # broad phase kept across steps: per pair of bodies, candidates and faces
@@ -58,6 +60,7 @@ set(GRADEL_CORE_SOURCES
   src/step_large.cpp             # stage: large-step advance (midpoint substeps away from contacts)
   src/step_obstacles.cpp         # stage: manipulator and wall contacts, the sweep, the force ledger
   src/step_body_contacts.cpp     # stage: body contacts after the advance, the walls' re-pass
+  src/world_replace.cpp          # World::replaceModel: the world over a carved body's new model
   # Scene files (JSON, nlohmann_json as a private build dependency) and the scene builder.
   src/scene_build.cpp
   src/scene_io.cpp               # scene files: the top level (which section when), loadScene
@@ -112,6 +115,7 @@ set(GRADEL_CLI_RENDER_SOURCES apps/render_cli.cpp)
 # gradel_tests (GRADEL_BUILD_TESTS): GoogleTest + rapidcheck, one file per engine part.
 set(GRADEL_TEST_SOURCES
   tests/test_bodies.cpp
+  tests/test_carve.cpp
   tests/test_external_force.cpp
   tests/test_body_contacts.cpp
   tests/test_body_contacts_large.cpp

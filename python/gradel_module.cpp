@@ -17,6 +17,7 @@
 #include <optional>
 #include <sstream>
 
+#include "gradel/carve_scene.h"
 #include "gradel/divergence.h"
 #include "gradel/io/volume_data_source.h"
 #include "gradel/io/volume_file.h"
@@ -150,9 +151,24 @@ struct Simulation {
   std::map<std::pair<size_t, SurfaceKind>, DisplaySurface> surfaces;  ///< Per (body, kind), built on first use.
   /// surface("embedded") of a body from a volume: its isosurface, built on first use (per body).
   std::map<size_t, EmbeddedMesh> isoEmbedded;
+  /// The state buffers before each carving event: views taken before it keep valid memory.
+  std::vector<State> carvedStates;
 
   World& world() { return *built.world; }
 };
+
+/// A carving event (carve_scene.h) under the lock: the old state's buffers kept for the views taken
+/// before, the cached surfaces dropped. Returns the voxels removed.
+template <class F>
+size_t carveLocked(Simulation& s, F&& carve) {
+  State copy = s.world().state();
+  s.carvedStates.push_back(std::move(s.world().state()));
+  s.world().state() = std::move(copy);
+  size_t removed = 0;
+  for (const CarveEvent& e : carve()) removed += e.removedVoxels;
+  if (removed) s.surfaces.clear(), s.isoEmbedded.clear();
+  return removed;
+}
 
 std::unique_ptr<Simulation> makeSimulation(Scene scene) {
   auto s = std::make_unique<Simulation>();
@@ -636,6 +652,46 @@ PYBIND11_MODULE(gradel, m) {
           "the pinned vertices' offset from rest over time (a moving target); none: held at rest. Before the first "
           "step the world is built again (views taken before no longer follow it); after, the live world takes it. "
           "ValueError when it holds no vertex.")
+      .def(
+          "carve_sphere",
+          [](Simulation& s, const std::vector<double>& center, double radius) {
+            if (center.size() != 3) throw InputError("carve_sphere: center: expected 3 numbers [m]");
+            if (!(radius > 0) || !std::isfinite(radius)) throw InputError("carve_sphere: radius: expected a positive number [m]");
+            const Vec3 c(center[0], center[1], center[2]);
+            if (!c.allFinite()) throw InputError("carve_sphere: center: not finite");
+            WorldLock lock(s);
+            return carveLocked(s, [&] { return carveSceneSweep(s.built, c, c, radius); });
+          },
+          py::arg("center"), py::arg("radius"),
+          "Removes from every body the voxels whose centres lie within `radius` [m] of `center` [m] in the deformed "
+          "configuration (docs/carving.md): the body is laid out again, surviving vertices keep their positions and "
+          "velocities. Returns the number of voxels removed. Views of positions and velocities taken before no "
+          "longer follow the world. A body is never emptied (removing every voxel of it does nothing).")
+      .def(
+          "remove_voxels",
+          [](Simulation& s, size_t body, const py::array& maskArray) {
+            const py::array_t<bool, py::array::forcecast> a(maskArray);
+            WorldLock lock(s);
+            bodyRange(s, body);
+            const VoxelVolume& v = s.built.bodies[body].volume;
+            const int dim = v.dim();
+            if (a.ndim() != dim || a.shape(0) != v.nx() || a.shape(1) != v.ny() || (dim == 3 && a.shape(2) != v.nz()))
+              throw InputError("remove_voxels: mask: expected a boolean array of the body's grid shape (" +
+                               std::to_string(v.nx()) + ", " + std::to_string(v.ny()) +
+                               (dim == 3 ? ", " + std::to_string(v.nz()) : std::string()) + ")");
+            std::vector<uint8_t> mask(v.size(), 0);
+            const auto st = a.strides();
+            const char* in = reinterpret_cast<const char*>(a.data());
+            for (int k = 0; k < v.nz(); ++k)
+              for (int j = 0; j < v.ny(); ++j)
+                for (int i = 0; i < v.nx(); ++i)
+                  mask[v.index(i, j, k)] =
+                      *reinterpret_cast<const bool*>(in + i * st[0] + j * st[1] + (dim == 3 ? k * st[2] : 0)) ? 1 : 0;
+            return carveLocked(s, [&] { return std::vector<CarveEvent>{carveSceneBody(s.built, body, mask)}; });
+          },
+          py::arg("body"), py::arg("mask"),
+          "Removes the voxels of body `body` where `mask` (a boolean array [i, j, k] of the body's grid) is true "
+          "(docs/carving.md) and returns how many were removed; as carve_sphere otherwise.")
       .def(
           "apply_force",
           [](Simulation& s, const py::array_t<int64_t, py::array::c_style | py::array::forcecast>& vertices,

@@ -178,6 +178,8 @@ ManipulatorSettings readManipulator(Fields& f, int dim) {
   m.restitution = f.number("restitution", m.restitution, kUnit, "");
   m.friction = f.number("friction", m.friction, kNonNegative, "");
   m.path = readPath(f);
+  m.carve = f.optBool("carve", false);
+  if (m.carve && m.shape != ManipulatorShape::Sphere) f.fail("carve", "only a sphere manipulator carves today");
   coreCheck(f, [&] { validate(m); });
   f.finish();
   return m;

@@ -193,6 +193,17 @@ class World {
 
   void setThreads(int n) { sim_.threads = n < 1 ? 1 : n; }
 
+  /// Carving (carve_scene.h): the world over a new model, e.g. with one body laid out again, and
+  /// its state (`state`: one entry per vertex and element of `model`, the time kept). Keeps the
+  /// settings as applied, dt (dt = auto of an explicit integrator shortened by the ratio of the
+  /// models' smallest vertex periods when the new one's is shorter; never lengthened), the
+  /// manipulators (poses), walls, pins (moved to their targets),
+  /// the force averages and the work and impulse ledgers; body contacts over `contactBodies`
+  /// with the same settings (empty: none). External forces and the frame-size integrators'
+  /// warm starts (vertex ids) are dropped; derived rest data, scratch and threads are made anew
+  /// (src/world_replace.cpp). std::invalid_argument when the state's sizes are not the model's.
+  void replaceModel(std::shared_ptr<const RestModel> model, State state, std::vector<ContactBody> contactBodies);
+
   /// Boundary conditions (pins.h): replaces the pins (WorldSettings::pins at creation) and moves
   /// the pinned vertices to their prescribed positions now (a pin added while running: Python's
   /// add_pin). Throws InputError when a pin holds no vertex.

@@ -127,6 +127,12 @@ class Simulation:
         """Pins (anchors) the vertices of body `body` in the box [min, max] [m] or on the
         voxels of `mask` / `boxes`; `path`: their offset from rest over time. Returns the
         pin's index."""
+    def carve_sphere(self, center: Sequence[float], radius: float) -> int:
+        """Removes every body's voxels whose deformed centres lie within `radius` [m] of
+        `center` [m]; the bodies are laid out again. Returns the voxels removed."""
+    def remove_voxels(self, body: int, mask: npt.ArrayLike) -> int:
+        """Removes the voxels of body `body` where `mask` (its grid's shape) is true. Returns
+        the voxels removed."""
     def apply_force(
         self, vertex_indices: npt.ArrayLike, forces: npt.ArrayLike, *, body: Optional[int] = None
     ) -> None:

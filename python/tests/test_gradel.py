@@ -234,3 +234,22 @@ def test_several_bodies_ranges_views_metrics_and_surfaces(tmp_path):
     assert len(tris) == 6 * 9 * 2 and verts[:, 0].min() >= 0.1 - 1e-9
     with pytest.raises(IndexError):
         sim.body_positions(2)
+
+
+def test_carve_sphere_and_remove_voxels_take_exactly_the_voxels_mass():
+    body = gradel.Body.from_shape("box", 8)
+    sim = gradel.Simulation(body, gravity=[0, 0, 0], dt=1e-4)
+    sim.velocities[:] = [0.1, 0.0, 0.0]
+    mass = sim.masses.sum()
+    removed = sim.carve_sphere([0.0, 0.0, 0.0], 0.025)  # a corner of the box, voxels of 1 cm
+    assert removed > 0
+    assert sim.masses.sum() == pytest.approx(mass - removed * 1000 * 0.01 ** 3, rel=1e-12)
+    assert np.allclose(sim.velocities, [0.1, 0.0, 0.0])  # a uniform motion is carried over exactly
+    mask = np.zeros((8, 8, 8), dtype=bool)
+    mask[7, 7, 7] = True
+    assert sim.remove_voxels(0, mask) == 1
+    assert sim.masses.sum() == pytest.approx(mass - (removed + 1) * 1000 * 0.01 ** 3, rel=1e-12)
+    sim.step(10)
+    assert np.isfinite(sim.positions).all()
+    with pytest.raises(ValueError):
+        sim.remove_voxels(0, np.zeros((3, 3, 3), dtype=bool))

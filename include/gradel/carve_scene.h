@@ -1,0 +1,49 @@
+// Carving in a built scene (issue 30): a body of a BuiltScene loses voxels (carve.h carveBody),
+// its volume, layout and rest model are replaced, and its World is made again over the new model
+// (World::replaceModel) with every other body's state as it was and the carved body's carried
+// over (a new vertex that would lie inside a manipulator put on its surface); the contact surfaces are rebuilt from the bodies' layouts when the world has body contacts.
+// A body voxelised from a mesh loses its embedded render mesh (drawn by its voxel surface after).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "gradel/carve.h"
+#include "gradel/scene.h"
+
+namespace gradel {
+
+/// What one event did to one body.
+struct CarveEvent {
+  size_t body = 0;
+  size_t removedVoxels = 0;
+  Real removedMass = 0;           ///< [kg]
+  Vec3 removedMomentum{0, 0, 0};  ///< [kg m/s]
+  Real removedKineticEnergy = 0;  ///< [J]
+  size_t newVertices = 0;
+  size_t vertices = 0, elements = 0;  ///< The body's, after.
+};
+
+/// The body's part of a world (scene.h BuiltScene::range): its volume, layout, own model and state.
+CarveInput carveInput(const BuiltScene& scene, size_t body);
+
+/// Removes the voxels of `remove` (carve.h) from body `body` and replaces it in the world. An
+/// event that would remove nothing or every voxel changes nothing (removedVoxels 0).
+/// std::out_of_range for a body index past the bodies.
+CarveEvent carveSceneBody(BuiltScene& scene, size_t body, const std::vector<uint8_t>& remove);
+
+/// Every body's voxels whose deformed centres lie within `radius` of the segment from `from` to
+/// `to` (a sphere swept over a step; from == to: a sphere), the radius grown by `reachVoxels` of
+/// each body's voxel size: one event per body that loses any, the world made again once.
+std::vector<CarveEvent> carveSceneSweep(BuiltScene& scene, const Vec3& from, const Vec3& to, Real radius,
+                                        Real reachVoxels = 0);
+
+/// The manipulators with `carve` set (spheres): each removes the voxels within one voxel of what
+/// it swept (a carving tool still pushes the body like any manipulator, so the surface it meets
+/// stays about half a voxel outside it) since `previous` (its centre at
+/// the last call, one entry per manipulator; updated to the centres now; empty or of another
+/// size: the centres now, so the first call carves where the tools are).
+std::vector<CarveEvent> carveWithManipulators(BuiltScene& scene, std::vector<Vec3>& previous);
+
+}  // namespace gradel

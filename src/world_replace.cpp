@@ -1,0 +1,49 @@
+// World::replaceModel: the least invasive correct path to a world over a new model (a carved body,
+// carve_scene.h): a world made anew from the settings as applied, with the same dt (no new
+// stability estimate), then everything that outlives a step moved over from this one.
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "gradel/integrator.h"
+#include "gradel/world.h"
+
+namespace gradel {
+
+void World::replaceModel(std::shared_ptr<const RestModel> model, State state, std::vector<ContactBody> contactBodies) {
+  if (!model) throw std::invalid_argument("World::replaceModel: no model");
+  if (state.positions.size() != model->numVertices() || state.velocities.size() != model->numVertices() ||
+      state.rotations.size() != model->numElements())
+    throw std::invalid_argument("World::replaceModel: the state's sizes are not the model's");
+  // The same step, shortened when the new model's stiffest vertex is faster than the old one's
+  // (a re-layout makes small cells at the new surface): dt = auto scales with the vertex period.
+  Real dt = dt_;
+  const bool frameStep = sim_.integrator == IntegratorKind::Implicit || sim_.integrator == IntegratorKind::LargeStep;
+  const Real p0 = model_->smallestVertexPeriod, p1 = model->smallestVertexPeriod;
+  if (sim_.dt == 0 && !frameStep && p1 > 0 && p1 < p0) dt *= p1 / p0;
+  SimulationSettings sim = sim_;
+  sim.dt = dt;
+  sim.dtPeriod = PeriodRule::Vertex;  // and no new estimate of the highest frequency (Lanczos)
+  World w(std::move(model), sim, domain_, {});
+  w.sim_ = sim_;
+  w.dtRule_ = dt == dt_ ? dtRule_ : dtRule_ + " (shortened by carving)";
+  w.integratorChoice_ = integratorChoice_;
+  w.frequency_ = frequency_;
+  w.state_ = std::move(state);
+  // What may throw first (a pin that holds no vertex any more): this world is still untouched.
+  if (!pins_.empty()) w.setPins(pins_);
+  if (bodyContacts_ && !contactBodies.empty()) w.setBodyContacts(std::move(contactBodies), bodyContacts_->settings());
+  w.manipulators_ = std::move(manipulators_);
+  w.manipulatorScale_ = std::move(manipulatorScale_), w.manipulatorSize_ = std::move(manipulatorSize_);
+  w.manipulatorGrowth_ = std::move(manipulatorGrowth_);
+  w.domainSet_ = domainSet_, w.wallsReleasing_ = wallsReleasing_, w.wallVelocity_ = wallVelocity_;
+  w.startOverlaps_ = std::move(startOverlaps_);
+  if (w.model_->bodies.size() == model_->bodies.size()) w.separations_ = std::move(separations_);
+  w.stepForces_ = stepForces_, w.averageImpulse_ = averageImpulse_, w.averageTime_ = averageTime_;
+  w.contactWork_ = contactWork_, w.externalWork_ = externalWork_, w.externalImpulse_ = externalImpulse_;
+  *this = std::move(w);
+}
+
+}  // namespace gradel
