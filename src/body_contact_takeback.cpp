@@ -18,12 +18,6 @@ namespace gradel {
 // can have come towards each other in the step (plus what a step may leave: kTakeBackDepth) cannot
 // be from a vertex that was outside at the step's start; such a one is asked of the winding number
 // of the other body's closed surface (exact, O(faces), rare) and dropped when that says outside.
-// How far the other body's surface came: its motion in the step before this stage's corrections
-// (movedStart_), not moved_, which adds every correction of its vertices: one vertex of the soft
-// ball pushed out by 0.6 voxel in round 1 let a bogus "0.5 voxel inside" of another through in
-// round 3 (winding number 0 at the step's start and end; the same stiff 6^3 ball into a soft 6^3
-// one at 1.45 m/s: energy x319 and min det -365 -> x2.1, every element upright). A face that a
-// correction pushed into a vertex makes that vertex truly inside: the winding number keeps it.
 // Explicit steps only (s.leapfrog: a step moves a surface a fraction of a voxel): where a frame-size
 // step crushed a ball to half its size within the step, its surface folds through itself and the
 // winding number is no better a judge than the pseudo-normal (two balls at 10 m/s each, dt = 1/60 s:
@@ -36,7 +30,7 @@ void BodyContacts::dropUnreachable(const BodyContactState& s, BodyContactStats& 
   for (size_t k = 0; k < round_.size(); ++k) {
     const Contact& c = round_[k];
     const uint32_t b = bodyOf_[c.face[0]];
-    const Real reach = (x[c.vertex] - x0[c.vertex]).norm() + movedStart_[b] + kTakeBackDepth * bodies_[b].thickness + skin_;
+    const Real reach = (x[c.vertex] - x0[c.vertex]).norm() + moved_[b] + kTakeBackDepth * bodies_[b].thickness + skin_;
     if (!(c.depth > reach) || !(std::abs(windingNumber(x[c.vertex], bodies_[b].triangles, x)) < 0.5)) {
       round_[kept++] = c;
     } else {
