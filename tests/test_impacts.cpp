@@ -16,6 +16,7 @@
 
 #include "gradel/bodies.h"
 #include "gradel/body_contacts.h"
+#include "gradel/scene.h"
 #include "test_support.h"
 
 namespace gradel {
@@ -78,14 +79,20 @@ Real energyOf(const Metrics& m) { return m.kineticEnergy + m.elasticEnergy; }
 
 // Runs an impact: until `duration`, or (0) until the bodies have been apart for a while after
 // they met (at most maxDuration). `trace` prints the energy every `trace` steps.
+ImpactResult runWorld(World& world, const Impact& c, int trace);
+
 ImpactResult runImpact(const Impact& c, int trace = 0) {
   ImpactWorld w(c);
-  World& world = *w.world;
+  return runWorld(*w.world, c, trace);
+}
+
+// The loop of runImpact on a built world (a scene's: runSoakPair below); c gives the durations.
+ImpactResult runWorld(World& world, const Impact& c, int trace) {
   ImpactResult r;
   r.dt = world.dt();
   r.e0 = energyOf(world.metrics());
-  const Vec3 p0 = w.momentum();
-  const Real scale = w.momentumScale();
+  const Vec3 p0 = test::momentum(world);
+  const Real scale = test::momentumScale(world);
   int apartSteps = 0;
   const int apartNeeded = std::max(50, int(0.01 / world.dt()));  // 10 ms apart
   for (;;) {
@@ -95,12 +102,12 @@ ImpactResult runImpact(const Impact& c, int trace = 0) {
     r.takeBacks += st.takeBacks > 0;
     const Metrics m = world.metrics();
     const Real e = energyOf(m);
-    if (!std::isfinite(e) || !std::isfinite(w.momentum().norm())) {
+    if (!std::isfinite(e) || !std::isfinite(test::momentum(world).norm())) {
       r.finite = false;
       break;
     }
     r.peak = std::max(r.peak, e / r.e0);
-    r.momentum = std::max(r.momentum, (w.momentum() - p0).norm() / scale);
+    r.momentum = std::max(r.momentum, (test::momentum(world) - p0).norm() / scale);
     if (trace && r.steps % trace == 0)
       std::printf("  t %.5f E/E0 %.5f contacts %zu depth %.2e takeBacks %d to %.4f minDet %.3f\n", world.time(),
                   e / r.e0, st.contacts, st.maxDepth, st.takeBacks, st.takenBackTo, m.minElementDet);
@@ -245,6 +252,79 @@ TEST(Impacts, FoldedSoftSurfaceIsNotReadAsInside) {
   EXPECT_LE(peak, 1.02) << "energy over its start";
   EXPECT_GT(minDet, 0) << "an element inverted";
   EXPECT_LE((w.momentum() - p0).norm(), 1e-9 * w.momentumScale());
+}
+
+// Pairs scripts/soak found (seed 3, `--kinds impacts`, 2026-11-27), as `gradel run` runs them:
+// the soak's scene (1 cm voxels, a gap of one voxel, dt "auto", no gravity or damping) read and
+// built as the CLI does, run for the soak's duration (the gap's time + 0.15 s).
+ImpactResult runSoakPair(const char* shapeA, int sizeA, Real youngA, const char* shapeB, int sizeB, Real youngB,
+                         Real closing, Real shareA, Real offset, Real restitution, Real friction) {
+  const Real ra = 0.005 * sizeA, rb = 0.005 * sizeB, gap = 0.01;
+  char text[1400];
+  std::snprintf(text, sizeof text,
+                R"({"dim": 3, "bodies": [
+  {"name": "a", "shape": "%s", "size": %d, "voxel_size": 0.01, "material": {"youngs_modulus": %.17g, "density": 1000},
+   "position": [%.17g, %.17g, %.17g], "velocity": [%.17g, 0, 0]},
+  {"name": "b", "shape": "%s", "size": %d, "voxel_size": 0.01, "material": {"youngs_modulus": %.17g, "density": 1000},
+   "position": [%.17g, %.17g, %.17g], "velocity": [%.17g, 0, 0]}],
+ "simulation": {"dt": "auto", "damping": 0, "gravity": [0, 0, 0]},
+ "body_contact": {"restitution": %.17g, "friction": %.17g}})",
+                shapeA, sizeA, youngA, -gap / 2 - 2 * ra, -ra, -ra, closing * shareA, shapeB, sizeB, youngB, gap / 2,
+                -rb + offset, -rb, -closing * (1 - shareA), restitution, friction);
+  Scene scene = parseScene(text, "soak pair");
+  scene.simulation.threads = 1;
+  BuiltScene built = buildScene(scene);
+  Impact c;
+  c.duration = gap / closing + 0.15;
+  return runWorld(*built.world, c, 0);
+}
+
+// A soak pair's checks: finite, met, energy at most `peak` times its start, momentum to 1e-9,
+// every element upright at the end.
+void expectSoakSafe(const ImpactResult& r, Real peak) {
+  std::printf("  %s\n", describe(r).c_str());
+  EXPECT_TRUE(r.finite);
+  EXPECT_TRUE(r.touched);
+  EXPECT_LE(r.peak, peak) << describe(r);
+  EXPECT_LE(r.momentum, 1e-9) << describe(r);
+  EXPECT_GT(r.minDet, 0) << describe(r);
+}
+
+// Not met yet (disabled; issue 26), measured 2026-11-27 through this harness's loop (energy every
+// step) on the library:
+// - a stiff 6^3 ball (E = 8.4e5 Pa) at 1.45 m/s into a soft one (E = 1.7e4 Pa) at rest: x1.22 here
+//   (parameters rounded to 8 digits); the soak's own scene file: x319, min det -365 (`gradel run`:
+//   exit 3 at 0.094 s): the pair is that sensitive. The soft ball folds, and the pseudo-normal test
+//   reads vertices of the stiff one 0.5-1.2 voxels inside where the winding number says outside at
+//   the step's start and end; dropUnreachable lets them through once a correction has moved one
+//   vertex of the soft ball far (moved_ counts every correction of the stage), and pushed out along
+//   far faces they pump. Bounding the reach by the step's own motion (movedStart_) gave x2.15, every
+//   element upright, but froze Impacts/HeadOnFast at dt_fraction 0.25 (reverted, 9308ac4);
+// - a soft 11^3 box (E = 1.3e4 Pa) at 3.54 m/s into a stiff one at rest, glancing: slow, not stuck
+//   (`gradel run` did not end in 4 minutes): taken back to the step's start in every step, the warm
+//   start applies again every contact it kept, which then never moves: 18,000 contacts a step by
+//   step 66 and growing. With movedStart_: 610 steps, energy at most its start, min det -0.1 at the end;
+// - a soft 7^3 box (E = 2.4e4 Pa) at 3.96 m/s into a softer 8^3 ball at rest: dt "auto" 1.1 ms,
+//   0.44 voxel of closing a step; the last resort keeps 1/16 of the step in 123 of 139 steps while
+//   the ball's elements invert (min det -30) and pump: x2.40 (before it kept 1/16: 1.000x, min det
+//   -0.19 at the end). Neither an inelastic impulse at the kept deep contacts (x2.48) nor pushing
+//   them out only by what they gained in the step (x1.79) holds it.
+TEST(Impacts, DISABLED_SoakStiffBallIntoSoftBall) {
+  expectSoakSafe(runSoakPair("sphere", 6, 841179.66, "sphere", 6, 17011.986, 1.4462628, 1, -0.0029662380, 0.38221466,
+                             0.65950389),
+                 1.02);
+}
+
+TEST(Impacts, DISABLED_SoakSoftBoxIntoStiffBox) {
+  expectSoakSafe(runSoakPair("box", 11, 455601.63, "box", 11, 13435.029, 3.5369669, 0, -0.015810840, 0.65772783,
+                             0.77752244),
+                 1.02);
+}
+
+TEST(Impacts, DISABLED_SoakSoftBoxIntoSofterBall) {
+  expectSoakSafe(runSoakPair("box", 7, 23719.777, "sphere", 8, 10575.618, 3.9602686, 1, 0.012325125, 0.26609805,
+                             0.19837221),
+                 1.02);
 }
 
 // Random pairs (shapes, sizes 6..10, E 1e4..1e7, speeds 1..20 m/s, who moves, offset, restitution
