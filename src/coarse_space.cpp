@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 
 namespace gradel {
 
@@ -10,9 +11,22 @@ namespace {
 // The four scalar functions of a node's affine motions at Y.
 inline std::array<Real, 4> affine(const Vec3& y) { return {1, y.x(), y.y(), y.z()}; }
 
+// Eigen sizes the blocks of its dense products and of LLT's blocked rank updates from the CPU's
+// cache sizes, read at run time, and the blocks decide the order of each sum: two CI machines of
+// the same flavour gave the large step different bits (tests/golden). Before every dense
+// product and factorisation the coarse space sets the sizes Eigen reads on the project's 2-core
+// machines (AMD EPYC: 32 KiB, 512 KiB, 256 MiB), so its results are the same on every machine.
+// Process-wide, and written only when they differ (coarse_space.h).
+void pinEigenBlocking() {
+  constexpr std::ptrdiff_t l1 = std::ptrdiff_t(32) << 10, l2 = std::ptrdiff_t(512) << 10, l3 = std::ptrdiff_t(256) << 20;
+  if (Eigen::l1CacheSize() != l1 || Eigen::l2CacheSize() != l2 || Eigen::l3CacheSize() != l3)
+    Eigen::setCpuCacheSizes(l1, l2, l3);
+}
+
 }  // namespace
 
 CoarseSpace::CoarseSpace(const RestModel& m, Real h, const std::vector<char>& free, int maxNodes) : model_(&m) {
+  pinEigenBlocking();
   const size_t V = m.numVertices();
   weightStart_.assign(V + 1, 0);
   uint32_t nodes = 0;
@@ -155,6 +169,7 @@ CoarseSpace::CoarseSpace(const RestModel& m, Real h, const std::vector<char>& fr
 
 void CoarseSpace::update(const std::vector<StiffnessFrame>& frames) {
   const RestModel& m = *model_;
+  pinEigenBlocking();
   E_ = E0_;
   using Block = Eigen::Matrix<Real, 3, 12>;
   std::vector<Block> B, WB;
@@ -208,6 +223,7 @@ void CoarseSpace::prolongAdd(const Eigen::VectorXd& c, std::vector<Vec3>& z) con
 
 void CoarseSpace::addCorrection(const std::vector<Vec3>& r, std::vector<Vec3>& z) const {
   if (!size() || !valid_) return;
+  pinEigenBlocking();
   prolongAdd(factor_.solve(restrictTo(r)), z);
 }
 

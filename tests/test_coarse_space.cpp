@@ -112,5 +112,31 @@ TEST(CoarseSpace, CorrectionIsExactOnTheCoarseSpace) {
   EXPECT_LT(err, 1e-6 * size);
 }
 
+// Eigen sizes the blocks of its dense products and of LLT's rank updates from the CPU's cache
+// sizes, which decide the order of each sum; the coarse space pins them, so its correction has
+// the same bits on every machine (tests/golden's large-step hashes differed between two CI
+// machines of the same flavour before).
+TEST(CoarseSpace, CorrectionBitsDoNotDependOnTheCpuCaches) {
+  Bent s;
+  const RestModel& m = *s.body.model;
+  const std::vector<Vec3> r(m.numVertices(), Vec3(0.3, -0.2, 0.1));
+  const std::ptrdiff_t native[3] = {Eigen::l1CacheSize(), Eigen::l2CacheSize(), Eigen::l3CacheSize()};
+  auto correction = [&](std::ptrdiff_t l1, std::ptrdiff_t l2, std::ptrdiff_t l3) {
+    Eigen::setCpuCacheSizes(l1, l2, l3);  // as another CPU would report them
+    CoarseSpace coarse(m, s.h, s.free, 64);
+    coarse.update(s.frames);
+    std::vector<Vec3> z(m.numVertices(), Vec3::Zero());
+    coarse.addCorrection(r, z);
+    return z;
+  };
+  const std::vector<Vec3> small = correction(8 << 10, 64 << 10, 1 << 20);
+  const std::vector<Vec3> large = correction(64 << 10, 2 << 20, 64 << 20);
+  Eigen::setCpuCacheSizes(native[0], native[1], native[2]);
+  size_t differ = 0;
+  for (size_t i = 0; i < m.numVertices(); ++i) differ += small[i] != large[i];
+  EXPECT_EQ(differ, 0u) << "of " << m.numVertices() << " vertices";
+  EXPECT_GT(small[0].norm() + small.back().norm(), 0);
+}
+
 }  // namespace
 }  // namespace gradel

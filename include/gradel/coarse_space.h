@@ -37,6 +37,10 @@
 
 namespace gradel {
 
+///
+/// Same bits on every machine: Eigen sizes its dense products' blocks (which order each sum) from
+/// the CPU's cache sizes; CoarseSpace sets them to fixed values (Eigen::setCpuCacheSizes, process-
+/// wide) before it factors or solves. A program that sets other sizes meanwhile gets them back.
 class CoarseSpace {
  public:
   /// The grids (at most maxNodes nodes per body, >= 2 per axis where the body has extent) and
