@@ -29,7 +29,10 @@ void World::replaceModel(std::shared_ptr<const RestModel> model, State state, st
   sim.dtPeriod = PeriodRule::Vertex;  // and no new estimate of the highest frequency (Lanczos)
   World w(std::move(model), sim, domain_, {});
   w.sim_ = sim_;
-  w.dtRule_ = dt == dt_ ? dtRule_ : dtRule_ + " (shortened by carving)";
+  const std::string shortened = " (shortened by carving)";  // said once, however many events
+  const bool said = dtRule_.size() >= shortened.size() &&
+                    dtRule_.compare(dtRule_.size() - shortened.size(), shortened.size(), shortened) == 0;
+  w.dtRule_ = dt == dt_ || said ? dtRule_ : dtRule_ + shortened;
   w.integratorChoice_ = integratorChoice_;
   w.frequency_ = frequency_;
   w.state_ = std::move(state);

@@ -292,6 +292,8 @@ TEST_F(CliTest, CarvingRunReportsRemovedMaterialAndEvents) {
   EXPECT_LE(j.at("carve_event_max_seconds").get<double>(), j.at("carve_event_seconds").get<double>());
   EXPECT_LE(j.at("carve_event_seconds").get<double>(), j.at("carve_seconds").get<double>());
   EXPECT_GT(j.at("carve_event_max_seconds").get<double>(), 0);
+  const std::string rule = j.at("dt_rule");  // dt shortened by the events: said once
+  EXPECT_EQ(rule.find("(shortened by carving)"), rule.rfind("(shortened by carving)")) << rule;
 
   std::istringstream csv(readFile(dir_ / "res" / "metrics.csv"));
   std::string header, line;
