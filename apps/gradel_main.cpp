@@ -388,13 +388,17 @@ int runScene(const RunOptions& o) {
   std::vector<gradel::Vec3> carvePrevious;
   size_t carveEvents = 0, carveBodyEvents = 0, carvedVoxels = 0;
   double carveSeconds = 0, carveEventSeconds = 0, carveEventMaxSeconds = 0;
+  long long carveSteps = 0;  // events shorten dt: the steps counted per chunk at the chunk's dt
+  Real chunkStart = world.time();
   if (carving) {
     checks.afterChunk = [&, check = checks.afterChunk] {
       check();
+      carveSteps += std::llround((world.time() - chunkStart) / world.dt());
       const auto t0 = std::chrono::steady_clock::now();
       const std::vector<gradel::CarveEvent> events = gradel::carveWithManipulators(built, carvePrevious);
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       carveSeconds += seconds;
+      chunkStart = world.time();
       if (events.empty()) return;
       ++carveEvents, carveEventSeconds += seconds, carveEventMaxSeconds = std::max(carveEventMaxSeconds, seconds);
       for (const gradel::CarveEvent& e : events) ++carveBodyEvents, carvedVoxels += e.removedVoxels;
@@ -409,8 +413,9 @@ int runScene(const RunOptions& o) {
 
   json j;
   j["scene"] = scene.name;
-  j["steps"] = std::llround(world.time() / dt);
+  j["steps"] = carving ? carveSteps : std::llround(world.time() / dt);
   j["dt"] = dt;
+  if (carving) j["final_dt"] = world.dt();  // dt = auto is shortened by carving events
   j["dt_rule"] = world.dtRule();  // where dt came from: given, one frame, or the rule and its fraction
   j["integrator"] = gradel::integratorKindName(world.settings().integrator);
   if (!world.integratorChoice().empty()) j["integrator_choice"] = world.integratorChoice();  // why auto picked it

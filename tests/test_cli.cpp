@@ -292,7 +292,11 @@ TEST_F(CliTest, CarvingRunReportsRemovedMaterialAndEvents) {
   EXPECT_LE(j.at("carve_event_max_seconds").get<double>(), j.at("carve_event_seconds").get<double>());
   EXPECT_LE(j.at("carve_event_seconds").get<double>(), j.at("carve_seconds").get<double>());
   EXPECT_GT(j.at("carve_event_max_seconds").get<double>(), 0);
-  const std::string rule = j.at("dt_rule");  // dt shortened by the events: said once
+  // dt shortened by the events: the steps counted at each chunk's dt, not the first one's.
+  EXPECT_LE(j.at("final_dt").get<double>(), j.at("dt").get<double>());
+  EXPECT_GE(j.at("steps").get<double>(), 0.1 / j.at("dt").get<double>() - 1);
+  EXPECT_LE(j.at("steps").get<double>(), 0.1 / j.at("final_dt").get<double>() + 1);
+  const std::string rule = j.at("dt_rule");  // said once
   EXPECT_EQ(rule.find("(shortened by carving)"), rule.rfind("(shortened by carving)")) << rule;
 
   std::istringstream csv(readFile(dir_ / "res" / "metrics.csv"));
