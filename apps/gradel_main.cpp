@@ -325,7 +325,11 @@ int runScene(const RunOptions& o) {
   // Several bodies: one file per body and frame, all listed per time in run.pvd (parts), and
   // per frame a metrics row per body and one for the world (docs/scenes.md, "Output").
   const bool several = built.numBodies() > 1;
-  gradel::MetricsCsv csv(dir.file("metrics.csv"), world.manipulators().size(), several);
+  // Carving manipulators (`"carve": true`, carve_scene.h) remove what they swept after every chunk
+  // of steps; metrics.csv then carries the removed material (docs/carving.md, "Feedback").
+  const bool carving = std::any_of(world.manipulators().begin(), world.manipulators().end(),
+                                   [](const gradel::Manipulator& m) { return m.settings.carve; });
+  gradel::MetricsCsv csv(dir.file("metrics.csv"), world.manipulators().size(), several, carving);
   std::vector<gradel::PvdFrame> pvd;
   Real maxPenetration = 0, maxStress = 0, maxStrain = 0;
   gradel::Metrics last;
@@ -379,19 +383,25 @@ int runScene(const RunOptions& o) {
                                  "; nothing written");
   };
   checks.progress = [&](double fraction) { progress.update(fraction); };
-  // Carving manipulators (`"carve": true`, carve_scene.h) remove what they swept after every chunk of steps.
-  const bool carving = std::any_of(world.manipulators().begin(), world.manipulators().end(),
-                                   [](const gradel::Manipulator& m) { return m.settings.carve; });
+  // Carving: after every chunk the tools' sweeps; an event is a chunk that removed voxels (the
+  // world made again once), its wall time the tools' voxel sets, the re-layouts and the new World.
   std::vector<gradel::Vec3> carvePrevious;
-  size_t carveEvents = 0, carvedVoxels = 0;
-  double carveSeconds = 0;
+  size_t carveEvents = 0, carveBodyEvents = 0, carvedVoxels = 0;
+  double carveSeconds = 0, carveEventSeconds = 0, carveEventMaxSeconds = 0;
+  long long carveSteps = 0;  // events shorten dt: the steps counted per chunk at the chunk's dt
+  Real chunkStart = world.time();
   if (carving) {
     checks.afterChunk = [&, check = checks.afterChunk] {
       check();
+      carveSteps += std::llround((world.time() - chunkStart) / world.dt());
       const auto t0 = std::chrono::steady_clock::now();
-      for (const gradel::CarveEvent& e : gradel::carveWithManipulators(built, carvePrevious))
-        ++carveEvents, carvedVoxels += e.removedVoxels;
-      carveSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const std::vector<gradel::CarveEvent> events = gradel::carveWithManipulators(built, carvePrevious);
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      carveSeconds += seconds;
+      chunkStart = world.time();
+      if (events.empty()) return;
+      ++carveEvents, carveEventSeconds += seconds, carveEventMaxSeconds = std::max(carveEventMaxSeconds, seconds);
+      for (const gradel::CarveEvent& e : events) ++carveBodyEvents, carvedVoxels += e.removedVoxels;
     };
   }
   const auto wallStart = std::chrono::steady_clock::now();
@@ -403,8 +413,9 @@ int runScene(const RunOptions& o) {
 
   json j;
   j["scene"] = scene.name;
-  j["steps"] = std::llround(world.time() / dt);
+  j["steps"] = carving ? carveSteps : std::llround(world.time() / dt);
   j["dt"] = dt;
+  if (carving) j["final_dt"] = world.dt();  // dt = auto is shortened by carving events
   j["dt_rule"] = world.dtRule();  // where dt came from: given, one frame, or the rule and its fraction
   j["integrator"] = gradel::integratorKindName(world.settings().integrator);
   if (!world.integratorChoice().empty()) j["integrator_choice"] = world.integratorChoice();  // why auto picked it
@@ -416,10 +427,17 @@ int runScene(const RunOptions& o) {
   j["elements"] = world.model().numElements();
   j["vertices"] = world.model().numVertices();
   j["pairs"] = world.model().numPairs();
-  if (carving) {
-    j["carve_events"] = carveEvents;  // body events of the carving manipulators (carve_scene.h)
+  if (carving) {  // docs/carving.md, "Feedback"
+    j["carve_events"] = carveEvents;            // chunks that removed voxels (the world made again once each)
+    j["carve_body_events"] = carveBodyEvents;   // bodies that lost voxels, summed over the events
     j["carved_voxels"] = carvedVoxels;
-    j["carve_seconds"] = carveSeconds;  // wall time of the events (full re-layout each)
+    gradel::RemovedMaterial total;
+    for (const gradel::RemovedMaterial& r : world.removedMaterial()) total.volume += r.volume, total.mass += r.mass;
+    j["carved_volume"] = total.volume;  // [m^3]
+    j["carved_mass"] = total.mass;      // [kg]
+    j["carve_seconds"] = carveSeconds;  // wall time of all the tools' sweeps, events or not
+    j["carve_event_seconds"] = carveEventSeconds;         // of the events only (full re-layout each)
+    j["carve_event_max_seconds"] = carveEventMaxSeconds;  // the slowest event
   }
   j["final_kinetic_energy"] = last.kineticEnergy;
   j["max_penetration"] = maxPenetration;

@@ -383,6 +383,11 @@ py::dict metricsDict(Metrics x, bool finite) {
   d["max_strain"] = x.maxStrain;  // [-]
   d["max_penetration"] = x.maxPenetration;
   d["min_element_det"] = x.minElementDet;
+  // Carving since t = 0 (World::removedMaterial; docs/carving.md, "Feedback").
+  d["removed_voxels"] = x.removed.voxels;
+  d["removed_volume"] = x.removed.volume;  // [m^3]
+  d["removed_mass"] = x.removed.mass;      // [kg]
+  d["removed_momentum"] = std::vector<double>{x.removed.momentum.x(), x.removed.momentum.y(), x.removed.momentum.z()};
   return d;
 }
 

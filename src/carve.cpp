@@ -1,4 +1,5 @@
-// Carving: the event (carveBody) and the voxel sets of a tool (voxelsInSphere, voxelsInCapsule).
+// Carving: the event (carveBody) and the voxel sets of a tool (voxelsInSphere, voxelsInCapsule,
+// voxelsInCylinder).
 // carve.h says what is kept and why.
 #include "gradel/carve.h"
 
@@ -179,6 +180,7 @@ CarvedBody carveBody(const CarveInput& b, const std::vector<uint8_t>& remove) {
     out.removedVoxels = 0, out.removedMass = 0, out.removedMomentum.setZero(), out.removedKineticEnergy = 0;
     out.volume = old;
   }
+  out.removedVolume = Real(out.removedVoxels) * h * h * h;
   if (out.removedVoxels == 0) {
     out.layout = oldLayout;
     out.model = std::make_shared<const RestModel>(oldModel);
@@ -267,6 +269,31 @@ std::vector<uint8_t> voxelsInCapsule(const CarveInput& body, const Vec3& from, c
         return ((bmin - hi).cwiseMax(lo - bmax).cwiseMax(Vec3::Zero())).norm() <= radius;
       },
       [&](const Vec3& x) { return distance(x) <= radius; }, count);
+}
+
+std::vector<uint8_t> voxelsInCylinder(const CarveInput& body, const Vec3& from, const Vec3& to, const Vec3& axis,
+                                      Real radius, Real halfLength, size_t* count) {
+  if (!(axis.norm() > 0) || !axis.allFinite()) throw std::invalid_argument("carve: the cylinder's axis is zero");
+  const Vec3 a = axis.normalized(), d = to - from;
+  const Real along = d.dot(a);
+  const Vec3 across = d - along * a;  // the move across the axis: the disc sweeps a stadium
+  const Real across2 = across.squaredNorm();
+  const Real zLo = std::min(Real(0), along) - halfLength, zHi = std::max(Real(0), along) + halfLength;
+  auto inside = [&](const Vec3& x) {
+    const Vec3 y = x - from;
+    const Real z = y.dot(a);
+    if (z < zLo || z > zHi) return false;
+    const Vec3 p = y - z * a;
+    const Real t = across2 > 0 ? std::clamp(p.dot(across) / across2, Real(0), Real(1)) : Real(0);
+    return (p - t * across).squaredNorm() <= radius * radius;
+  };
+  // The cylinder's box (half extents per axis), at both ends of the move.
+  Vec3 e;
+  for (int k = 0; k < 3; ++k) e[k] = halfLength * std::abs(a[k]) + radius * std::sqrt(std::max(Real(0), 1 - a[k] * a[k]));
+  const Vec3 lo = from.cwiseMin(to) - e, hi = from.cwiseMax(to) + e;
+  return voxelsWhere(
+      body, [&](const Vec3& bmin, const Vec3& bmax) { return (bmin.array() <= hi.array()).all() && (lo.array() <= bmax.array()).all(); },
+      inside, count);
 }
 
 }  // namespace gradel

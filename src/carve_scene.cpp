@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -27,7 +28,7 @@ std::vector<CarveEvent> carveBodies(BuiltScene& scene, const std::vector<std::pa
     CarvedBody c = carveBody(carveInput(scene, b), mask);
     if (c.removedVoxels == 0) continue;
     CarveEvent e;
-    e.body = b, e.removedVoxels = c.removedVoxels, e.removedMass = c.removedMass;
+    e.body = b, e.removedVoxels = c.removedVoxels, e.removedVolume = c.removedVolume, e.removedMass = c.removedMass;
     e.removedMomentum = c.removedMomentum, e.removedKineticEnergy = c.removedKineticEnergy;
     e.newVertices = c.newVertices, e.vertices = c.layout.numVertices(), e.elements = c.layout.numElements();
     events.push_back(e);
@@ -84,6 +85,8 @@ std::vector<CarveEvent> carveBodies(BuiltScene& scene, const std::vector<std::pa
     contactBodies = buildContactBodies(*model, layouts, volumes);
   }
   world.replaceModel(std::move(model), std::move(state), std::move(contactBodies));
+  for (const CarveEvent& e : events)
+    world.recordRemoval(e.body, RemovedMaterial{e.removedVoxels, e.removedVolume, e.removedMass, e.removedMomentum});
   return events;
 }
 
@@ -108,16 +111,30 @@ CarveEvent carveSceneBody(BuiltScene& scene, size_t body, const std::vector<uint
   return none;
 }
 
-std::vector<CarveEvent> carveSceneSweep(BuiltScene& scene, const Vec3& from, const Vec3& to, Real radius,
-                                        Real reachVoxels) {
+// Every body's voxels of `toolVoxels(input, reach [m], &count)`: one event per body that loses any.
+template <class ToolVoxels>
+std::vector<CarveEvent> carveSceneTool(BuiltScene& scene, Real reachVoxels, ToolVoxels&& toolVoxels) {
   std::vector<std::pair<size_t, std::vector<uint8_t>>> masks;
   for (size_t b = 0; b < scene.numBodies(); ++b) {
     size_t n = 0;
-    std::vector<uint8_t> mask = voxelsInCapsule(carveInput(scene, b), from, to,
-                                                  radius + reachVoxels * scene.bodies[b].volume.voxelSize(), &n);
+    std::vector<uint8_t> mask = toolVoxels(carveInput(scene, b), reachVoxels * scene.bodies[b].volume.voxelSize(), &n);
     if (n) masks.emplace_back(b, std::move(mask));
   }
   return carveBodies(scene, masks);
+}
+
+std::vector<CarveEvent> carveSceneSweep(BuiltScene& scene, const Vec3& from, const Vec3& to, Real radius,
+                                        Real reachVoxels) {
+  return carveSceneTool(scene, reachVoxels, [&](const CarveInput& in, Real reach, size_t* n) {
+    return voxelsInCapsule(in, from, to, radius + reach, n);
+  });
+}
+
+std::vector<CarveEvent> carveSceneCylinderSweep(BuiltScene& scene, const Vec3& from, const Vec3& to, const Vec3& axis,
+                                                Real radius, Real halfLength, Real reachVoxels) {
+  return carveSceneTool(scene, reachVoxels, [&](const CarveInput& in, Real reach, size_t* n) {
+    return voxelsInCylinder(in, from, to, axis, radius + reach, halfLength + reach, n);
+  });
 }
 
 std::vector<CarveEvent> carveWithManipulators(BuiltScene& scene, std::vector<Vec3>& previous) {
@@ -131,8 +148,12 @@ std::vector<CarveEvent> carveWithManipulators(BuiltScene& scene, std::vector<Vec
     const Manipulator& m = scene.world->manipulators()[i];  // the world may have been made again
     const Vec3 now = m.position, from = previous[i];
     previous[i] = now;
-    if (!m.settings.carve || m.settings.shape != ManipulatorShape::Sphere) continue;
-    std::vector<CarveEvent> e = carveSceneSweep(scene, from, now, m.settings.radius, 1.0);
+    if (!m.settings.carve) continue;
+    std::vector<CarveEvent> e;
+    if (m.settings.shape == ManipulatorShape::Sphere)
+      e = carveSceneSweep(scene, from, now, m.settings.radius, 1.0);
+    else if (m.settings.shape == ManipulatorShape::Cylinder)
+      e = carveSceneCylinderSweep(scene, from, now, m.settings.axis, m.settings.radius, m.settings.halfLength, 1.0);
     events.insert(events.end(), e.begin(), e.end());
   }
   return events;

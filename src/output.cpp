@@ -249,7 +249,7 @@ void writePvd(const fs::path& file, const std::vector<PvdFrame>& frames) {
 
 // ---- metrics ----------------------------------------------------------------------
 
-std::string MetricsCsv::header(size_t manipulators, bool bodyColumn) {
+std::string MetricsCsv::header(size_t manipulators, bool bodyColumn, bool carving) {
   std::string h = std::string(bodyColumn ? "body," : "") +
                   "time,kinetic_energy,elastic_energy,gravity_energy,px,py,pz,Lx,Ly,Lz,max_stress,max_penetration,"
                   "max_contact_depth,min_element_det";
@@ -259,14 +259,17 @@ std::string MetricsCsv::header(size_t manipulators, bool bodyColumn) {
   for (size_t k = 0; k < manipulators; ++k) forceColumns("m" + std::to_string(k) + "_");
   forceColumns("wall_");
   for (int w = 0; w < kWalls; ++w) forceColumns(std::string("wall_") + wallName(w) + "_");  // per wall (contacts.h)
-  return h + ",max_strain";  // last: the columns before it kept their places when it came (issue 28)
+  h += ",max_strain";  // after the forces: the columns before it kept their places when it came (issue 28)
+  if (carving) h += ",removed_voxels,removed_volume,removed_mass";  // carving runs only (issue 30)
+  return h;
 }
 
-std::string MetricsCsv::row(const std::string& body, const Metrics& m, size_t manipulators, bool forces) {
-  return body + "," + row(m, manipulators, forces);
+std::string MetricsCsv::row(const std::string& body, const Metrics& m, size_t manipulators, bool forces,
+                            bool carving) {
+  return body + "," + row(m, manipulators, forces, carving);
 }
 
-std::string MetricsCsv::row(const Metrics& m, size_t manipulators, bool forces) {
+std::string MetricsCsv::row(const Metrics& m, size_t manipulators, bool forces, bool carving) {
   const ContactForces& cf = m.contactForces;
   if (forces && cf.manipulators.size() != manipulators)
     throw std::invalid_argument("MetricsCsv::row: " + std::to_string(cf.manipulators.size()) +
@@ -302,14 +305,16 @@ std::string MetricsCsv::row(const Metrics& m, size_t manipulators, bool forces) 
     for (const ContactForce& f : cf.wall) appendForce(f);
   }
   out += ',', appendNumber(out, m.maxStrain);
+  if (carving)
+    for (const double x : {double(m.removed.voxels), m.removed.volume, m.removed.mass}) out += ',', appendNumber(out, x);
   return out;
 }
 
-MetricsCsv::MetricsCsv(const fs::path& file, size_t manipulators, bool bodyColumn)
-    : path_(file), manipulators_(manipulators), bodyColumn_(bodyColumn) {
+MetricsCsv::MetricsCsv(const fs::path& file, size_t manipulators, bool bodyColumn, bool carving)
+    : path_(file), manipulators_(manipulators), bodyColumn_(bodyColumn), carving_(carving) {
   file_ = std::fopen(file.c_str(), "wb");
   if (!file_) throwWriteError(file, errno);
-  std::fputs(header(manipulators, bodyColumn).c_str(), file_);
+  std::fputs(header(manipulators, bodyColumn, carving).c_str(), file_);
   std::fputc('\n', file_);
 }
 
@@ -319,12 +324,12 @@ MetricsCsv::~MetricsCsv() {
 
 void MetricsCsv::append(const Metrics& m) {
   if (bodyColumn_) throw std::logic_error("MetricsCsv::append without a body in a file with a body column");
-  writeLine(row(m, manipulators_));
+  writeLine(row(m, manipulators_, true, carving_));
 }
 
 void MetricsCsv::append(const std::string& body, const Metrics& m, bool forces) {
   if (!bodyColumn_) throw std::logic_error("MetricsCsv::append with a body in a file without a body column");
-  writeLine(row(body, m, manipulators_, forces));
+  writeLine(row(body, m, manipulators_, forces, carving_));
 }
 
 void MetricsCsv::writeLine(std::string line) {

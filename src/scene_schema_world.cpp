@@ -179,7 +179,8 @@ ManipulatorSettings readManipulator(Fields& f, int dim) {
   m.friction = f.number("friction", m.friction, kNonNegative, "");
   m.path = readPath(f);
   m.carve = f.optBool("carve", false);
-  if (m.carve && m.shape != ManipulatorShape::Sphere) f.fail("carve", "only a sphere manipulator carves today");
+  if (m.carve && m.shape == ManipulatorShape::Circle)
+    f.fail("carve", "only a sphere or a cylinder manipulator carves (a 2D scene: \"sphere\")");
   coreCheck(f, [&] { validate(m); });
   f.finish();
   return m;

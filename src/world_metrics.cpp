@@ -62,6 +62,8 @@ Metrics combineMetrics(const std::vector<Metrics>& each) {
     r.maxStress = std::max(r.maxStress, b.maxStress), r.maxStrain = std::max(r.maxStrain, b.maxStrain);
     r.maxPenetration = std::max(r.maxPenetration, b.maxPenetration);
     r.minElementDet = std::min(r.minElementDet, b.minElementDet);
+    r.removed.voxels += b.removed.voxels, r.removed.volume += b.removed.volume;
+    r.removed.mass += b.removed.mass, r.removed.momentum += b.removed.momentum;
   }
   return r;
 }
@@ -71,6 +73,7 @@ std::vector<Metrics> World::bodyMetrics(std::vector<Real>* elementStress, std::v
   if (elementStrain) elementStrain->assign(model_->numElements(), 0.0);
   std::vector<Metrics> r;
   for (const BodyRange& b : model_->bodies) r.push_back(metricsOf(b, elementStress, elementStrain));
+  for (size_t b = 0; b < r.size() && b < removed_.size(); ++b) r[b].removed = removed_[b];
   return r;
 }
 

@@ -1,6 +1,7 @@
 // World::replaceModel: the least invasive correct path to a world over a new model (a carved body,
 // carve_scene.h): a world made anew from the settings as applied, with the same dt (no new
-// stability estimate), then everything that outlives a step moved over from this one.
+// stability estimate), then everything that outlives a step moved over from this one; and carving's
+// ledger of removed material (World::recordRemoval).
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -28,7 +29,10 @@ void World::replaceModel(std::shared_ptr<const RestModel> model, State state, st
   sim.dtPeriod = PeriodRule::Vertex;  // and no new estimate of the highest frequency (Lanczos)
   World w(std::move(model), sim, domain_, {});
   w.sim_ = sim_;
-  w.dtRule_ = dt == dt_ ? dtRule_ : dtRule_ + " (shortened by carving)";
+  const std::string shortened = " (shortened by carving)";  // said once, however many events
+  const bool said = dtRule_.size() >= shortened.size() &&
+                    dtRule_.compare(dtRule_.size() - shortened.size(), shortened.size(), shortened) == 0;
+  w.dtRule_ = dt == dt_ || said ? dtRule_ : dtRule_ + shortened;
   w.integratorChoice_ = integratorChoice_;
   w.frequency_ = frequency_;
   w.state_ = std::move(state);
@@ -43,7 +47,17 @@ void World::replaceModel(std::shared_ptr<const RestModel> model, State state, st
   if (w.model_->bodies.size() == model_->bodies.size()) w.separations_ = std::move(separations_);
   w.stepForces_ = stepForces_, w.averageImpulse_ = averageImpulse_, w.averageTime_ = averageTime_;
   w.contactWork_ = contactWork_, w.externalWork_ = externalWork_, w.externalImpulse_ = externalImpulse_;
+  w.removed_ = std::move(removed_);
   *this = std::move(w);
+}
+
+void World::recordRemoval(size_t body, const RemovedMaterial& removed) {
+  if (body >= model_->bodies.size())
+    throw std::out_of_range("World::recordRemoval: body " + std::to_string(body) + " of " +
+                            std::to_string(model_->bodies.size()));
+  if (removed_.size() < model_->bodies.size()) removed_.resize(model_->bodies.size());
+  RemovedMaterial& r = removed_[body];
+  r.voxels += removed.voxels, r.volume += removed.volume, r.mass += removed.mass, r.momentum += removed.momentum;
 }
 
 }  // namespace gradel

@@ -263,6 +263,71 @@ TEST_F(CliTest, RunMetricsHaveContactForceColumns) {
     }
 }
 
+// A carving run (docs/carving.md, "Feedback"): metrics.csv ends with the removed material since
+// t = 0 (voxels, volume, mass; h = 2^-7 m so that n h^3 and rho h^3 are exact), its last row is
+// the summary's totals, the rows never decrease; the summary counts the events and their cost.
+TEST_F(CliTest, CarvingRunReportsRemovedMaterialAndEvents) {
+  write("drill.json", R"({
+  "body": {"shape": "box", "size": 8, "voxel_size": 0.0078125},
+  "material": {"density": 1000},
+  "simulation": {"gravity": [0, 0, 0], "duration": 0.1, "frame_interval": 0.02},
+  "domain": {"min": [-0.1, 0.0, -0.1], "max": [0.2, 0.2, 0.2], "restitution": 0},
+  "manipulators": [{"type": "sphere", "radius": 0.015, "restitution": 0, "carve": true,
+                    "path": [{"t": 0, "position": [0.03125, 0.085, 0.03125]},
+                             {"t": 0.1, "position": [0.03125, 0.02, 0.03125]}]}]
+})");
+  const Result r = run("run drill.json --out res --threads 1");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json j = json::parse(r.out);
+  for (const char* key : {"carve_events", "carve_body_events", "carved_voxels", "carved_volume", "carved_mass",
+                          "carve_seconds", "carve_event_seconds", "carve_event_max_seconds"})
+    ASSERT_TRUE(j.contains(key)) << key;
+  const size_t voxels = j.at("carved_voxels").get<size_t>();
+  const double h3 = 0.0078125 * 0.0078125 * 0.0078125;
+  EXPECT_GT(voxels, 20u);
+  EXPECT_GE(j.at("carve_events").get<size_t>(), 2u);
+  EXPECT_EQ(j.at("carve_body_events"), j.at("carve_events"));  // one body, one tool
+  EXPECT_EQ(j.at("carved_volume").get<double>(), double(voxels) * h3);
+  EXPECT_EQ(j.at("carved_mass").get<double>(), double(voxels) * 1000 * h3);
+  EXPECT_LE(j.at("carve_event_max_seconds").get<double>(), j.at("carve_event_seconds").get<double>());
+  EXPECT_LE(j.at("carve_event_seconds").get<double>(), j.at("carve_seconds").get<double>());
+  EXPECT_GT(j.at("carve_event_max_seconds").get<double>(), 0);
+  // dt shortened by the events: the steps counted at each chunk's dt, not the first one's.
+  EXPECT_LE(j.at("final_dt").get<double>(), j.at("dt").get<double>());
+  EXPECT_GE(j.at("steps").get<double>(), 0.1 / j.at("dt").get<double>() - 1);
+  EXPECT_LE(j.at("steps").get<double>(), 0.1 / j.at("final_dt").get<double>() + 1);
+  const std::string rule = j.at("dt_rule");  // said once
+  EXPECT_EQ(rule.find("(shortened by carving)"), rule.rfind("(shortened by carving)")) << rule;
+
+  std::istringstream csv(readFile(dir_ / "res" / "metrics.csv"));
+  std::string header, line;
+  std::getline(csv, header);
+  std::vector<std::string> names;
+  for (std::istringstream h(header); std::getline(h, line, ',');) names.push_back(line);
+  ASSERT_EQ(names.size(), 14u + 6u + 6u + 36u + 1u + 3u);
+  EXPECT_EQ(names[62], "max_strain");  // the columns before the carving ones kept their places
+  EXPECT_EQ(names[63], "removed_voxels");
+  EXPECT_EQ(names[64], "removed_volume");
+  EXPECT_EQ(names[65], "removed_mass");
+  double before = 0;
+  std::vector<std::string> cells;
+  int rows = 0;
+  while (std::getline(csv, line)) {
+    cells.clear();
+    for (std::istringstream c(line); std::getline(c, line, ',');) cells.push_back(line);
+    ASSERT_EQ(cells.size(), names.size());
+    EXPECT_GE(std::stod(cells[63]), before);
+    before = std::stod(cells[63]);
+    EXPECT_EQ(std::stod(cells[64]), std::stod(cells[63]) * h3);
+    ++rows;
+  }
+  EXPECT_EQ(rows, 6);
+  EXPECT_NEAR(std::stod(cells[0]), 0.1, 1e-3);  // the last frame, at the step nearest the duration
+  EXPECT_EQ(std::stod(cells[63]), double(voxels));
+  EXPECT_EQ(std::stod(cells[64]), j.at("carved_volume").get<double>());
+  EXPECT_EQ(std::stod(cells[65]), j.at("carved_mass").get<double>());
+}
+
 TEST_F(CliTest, RunDefaultOutIsOutSlashSceneName) {
   write("tiny.json", R"({"name": "named", "body": {"shape": "box", "size": 2}, "simulation": {"duration": 0.001}})");
   const Result r = run("run tiny.json");

@@ -60,6 +60,7 @@ struct CarvedBody {
   std::vector<uint32_t> fromVertex;  ///< Per new vertex: its old id, or Layout::kNoVertex for a new vertex.
   size_t removedVoxels = 0;          ///< Filled voxels of the mask (empty or masked-twice voxels not counted).
   size_t newVertices = 0;            ///< Vertices that were not vertices before.
+  Real removedVolume = 0;            ///< [m^3] removedVoxels x h^3 (2D: a voxel is a slab one voxel thick).
   Real removedMass = 0;              ///< [kg] sum of the removed voxels' masses.
   Vec3 removedMomentum{0, 0, 0};     ///< [kg m/s] the removed voxels' momentum (see above).
   Real removedKineticEnergy = 0;     ///< [J] 1/2 m |v|^2 per removed voxel, v at its centre.
@@ -80,5 +81,13 @@ std::vector<uint8_t> voxelsInSphere(const CarveInput& body, const Vec3& centre, 
 /// The voxels swept by a sphere moving from `from` to `to` (a capsule) this step, as voxelsInSphere.
 std::vector<uint8_t> voxelsInCapsule(const CarveInput& body, const Vec3& from, const Vec3& to, Real radius,
                                      size_t* count = nullptr);
+
+/// The voxels swept by a cylinder (a rod: `radius` [m], half its length `halfLength` [m] along
+/// `axis`, flat caps) whose centre moves from `from` to `to` without turning, as voxelsInSphere.
+/// The swept solid is a prism: across the axis the disc swept along the move's part across it (a
+/// stadium), along the axis [min(0, d.a) - halfLength, max(0, d.a) + halfLength] from `from` (d
+/// the move, a the unit axis). std::invalid_argument for a zero or non-finite axis.
+std::vector<uint8_t> voxelsInCylinder(const CarveInput& body, const Vec3& from, const Vec3& to, const Vec3& axis,
+                                      Real radius, Real halfLength, size_t* count = nullptr);
 
 }  // namespace gradel

@@ -18,6 +18,7 @@ namespace gradel {
 struct CarveEvent {
   size_t body = 0;
   size_t removedVoxels = 0;
+  Real removedVolume = 0;         ///< [m^3]
   Real removedMass = 0;           ///< [kg]
   Vec3 removedMomentum{0, 0, 0};  ///< [kg m/s]
   Real removedKineticEnergy = 0;  ///< [J]
@@ -39,9 +40,15 @@ CarveEvent carveSceneBody(BuiltScene& scene, size_t body, const std::vector<uint
 std::vector<CarveEvent> carveSceneSweep(BuiltScene& scene, const Vec3& from, const Vec3& to, Real radius,
                                         Real reachVoxels = 0);
 
-/// The manipulators with `carve` set (spheres): each removes the voxels within one voxel of what
-/// it swept (a carving tool still pushes the body like any manipulator, so the surface it meets
-/// stays about half a voxel outside it) since `previous` (its centre at
+/// The same for a cylinder (carve.h voxelsInCylinder: `axis`, `radius`, `halfLength` [m]) moved
+/// from `from` to `to`, its radius and half length grown by `reachVoxels` of each body's voxel size.
+std::vector<CarveEvent> carveSceneCylinderSweep(BuiltScene& scene, const Vec3& from, const Vec3& to, const Vec3& axis,
+                                                Real radius, Real halfLength, Real reachVoxels = 0);
+
+/// The manipulators with `carve` set (spheres and cylinders): each removes the voxels within one
+/// voxel of what it swept (a cylinder: grown by one voxel in radius and half length; a carving
+/// tool still pushes the body like any manipulator, so the surface it meets stays about half a
+/// voxel outside it) since `previous` (its centre at
 /// the last call, one entry per manipulator; updated to the centres now; empty or of another
 /// size: the centres now, so the first call carves where the tools are).
 std::vector<CarveEvent> carveWithManipulators(BuiltScene& scene, std::vector<Vec3>& previous);

@@ -69,7 +69,7 @@ struct ManipulatorSettings {
   Real restitution = 1.0;  ///< [-] 1 = elastic bounce (the paper), 0 = no bounce.
   Real friction = 0.0;     ///< [-] Coulomb coefficient; 0 = frictionless (the paper).
   Path path;               ///< Scripted motion; empty = pose set from outside (setPose).
-  bool carve = false;      ///< Sphere only: removes the voxels whose centres it sweeps (carve_scene.h).
+  bool carve = false;      ///< Sphere or cylinder: removes the voxels whose centres it sweeps (carve_scene.h).
 };
 
 /// The walls of the domain box, by index: 2 a + 1 for the wall at max[a], 2 a at min[a] (a the

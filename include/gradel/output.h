@@ -79,19 +79,23 @@ class MetricsCsv {
   /// wall_fx,wall_fy,wall_fz,wall_tx,wall_ty,wall_tz (all walls together, torque about the
   /// origin), then the same six per wall, wall_<w>_fx .. wall_<w>_tz for w = xmin, xmax, ymin,
   /// ymax, zmin, zmax (contacts.h kWalls; zero for a wall no vertex touched), then max_strain [-]
-  /// (Metrics::maxStrain, last so that the columns before it kept their places). With a body
-  /// column, "body," first.
-  static std::string header(size_t manipulators = 0, bool bodyColumn = false);
+  /// (Metrics::maxStrain, last so that the columns before it kept their places). With `carving`
+  /// (a run with carving tools) then removed_voxels,removed_volume [m^3],removed_mass [kg]: what
+  /// carving took since t = 0 (Metrics::removed; a body's own on its row, all bodies' on "all").
+  /// With a body column, "body," first.
+  static std::string header(size_t manipulators = 0, bool bodyColumn = false, bool carving = false);
   /// One data line (no newline); std::invalid_argument if m has forces for another number of
   /// manipulators. Without `forces` the force fields are left empty (a body's row: the forces are
   /// the world's, on the "all" row).
-  static std::string row(const Metrics& m, size_t manipulators = 0, bool forces = true);
+  static std::string row(const Metrics& m, size_t manipulators = 0, bool forces = true, bool carving = false);
   /// One data line with the body column first.
-  static std::string row(const std::string& body, const Metrics& m, size_t manipulators = 0, bool forces = true);
+  static std::string row(const std::string& body, const Metrics& m, size_t manipulators = 0, bool forces = true,
+                         bool carving = false);
 
-  /// Creates the file and writes the header (with the body column when asked). Throws IoError on
-  /// I/O errors.
-  explicit MetricsCsv(const std::filesystem::path& file, size_t manipulators = 0, bool bodyColumn = false);
+  /// Creates the file and writes the header (with the body column and the carving columns when
+  /// asked). Throws IoError on I/O errors.
+  explicit MetricsCsv(const std::filesystem::path& file, size_t manipulators = 0, bool bodyColumn = false,
+                      bool carving = false);
   ~MetricsCsv();
   MetricsCsv(const MetricsCsv&) = delete;
   MetricsCsv& operator=(const MetricsCsv&) = delete;
@@ -108,6 +112,7 @@ class MetricsCsv {
   std::FILE* file_ = nullptr;
   int err_ = 0;  ///< errno of the first failed append.
   bool bodyColumn_ = false;
+  bool carving_ = false;
   void writeLine(std::string line);
 };
 

@@ -59,6 +59,14 @@ struct ContactForces {
   ContactForce walls;                     ///< All walls: the sum of `wall` in index order.
 };
 
+/// Material carving took from one body since t = 0 (carve_scene.h; World::recordRemoval).
+struct RemovedMaterial {
+  size_t voxels = 0;       ///< Voxels removed.
+  Real volume = 0;         ///< [m^3] voxels x h^3 (a 2D body's voxel is a slab one voxel thick).
+  Real mass = 0;           ///< [kg] the removed voxels' mass (rho h^3 each, their region's rho).
+  Vec3 momentum{0, 0, 0};  ///< [kg m/s] the removed material's momentum when it left (carve.h).
+};
+
 /// Figures written per frame to metrics.csv.
 struct Metrics {
   Real time = 0;                  ///< [s]
@@ -82,9 +90,10 @@ struct Metrics {
   Real maxContactDepth = 0;       ///< [m] deepest vertex found (and corrected) in the last step.
   Real minElementDet = 0;         ///< [-] min det of the elements' deformation estimate (< 0: inverted).
   ContactForces contactForces;    ///< Averaged since the last restartForceAverage() (the frame, in `gradel run`).
+  RemovedMaterial removed;        ///< Carved away since t = 0 (World::removedMaterial); summed over bodies.
 };
 
-/// The figures of several bodies together: energies and momenta summed in order, the largest
+/// The figures of several bodies together: energies, momenta and removed material summed in order, the largest
 /// stress, strain and penetration, the smallest determinant; time and maxContactDepth the first's.
 Metrics combineMetrics(const std::vector<Metrics>& bodies);
 
@@ -203,6 +212,13 @@ class World {
   /// warm starts (vertex ids) are dropped; derived rest data, scratch and threads are made anew
   /// (src/world_replace.cpp). std::invalid_argument when the state's sizes are not the model's.
   void replaceModel(std::shared_ptr<const RestModel> model, State state, std::vector<ContactBody> contactBodies);
+  /// Carving's ledger (carve_scene.h): adds what an event took from body `body` (RestModel::bodies
+  /// index) to its total since t = 0, kept across replaceModel. The linear momentum of body b now
+  /// plus removedMaterial()[b].momentum is what it would have been without carving.
+  void recordRemoval(size_t body, const RemovedMaterial& removed);
+  /// Per body, what carving took from it since t = 0 (empty before the first event); also in
+  /// metrics() and bodyMetrics() (Metrics::removed).
+  const std::vector<RemovedMaterial>& removedMaterial() const { return removed_; }
 
   /// Boundary conditions (pins.h): replaces the pins (WorldSettings::pins at creation) and moves
   /// the pinned vertices to their prescribed positions now (a pin added while running: Python's
@@ -332,6 +348,7 @@ class World {
   std::vector<Vec3> externalForce_;    ///< [N] per vertex (empty: none); addExternalForces().
   Real externalWork_ = 0;              ///< [J] World::externalWork().
   Vec3 externalImpulse_{0, 0, 0};      ///< [N s] World::externalImpulse().
+  std::vector<RemovedMaterial> removed_;  ///< Per body: World::removedMaterial().
   // Start overlaps (overlaps.h), released from the first step on at kStartSeparationSpeed.
   DomainSettings domainSet_;             ///< The walls as set (domain_: where they are while released).
   bool wallsReleasing_ = false;

@@ -21,6 +21,10 @@ class _Metrics(TypedDict):
     max_strain: float  # [-]
     max_penetration: float
     min_element_det: float
+    removed_voxels: int  # carving since t = 0 (docs/carving.md, "Feedback")
+    removed_volume: float  # [m^3]
+    removed_mass: float  # [kg]
+    removed_momentum: list[float]  # [kg m/s] the removed material's
 
 def load_volume(
     path: str,

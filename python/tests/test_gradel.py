@@ -249,6 +249,11 @@ def test_carve_sphere_and_remove_voxels_take_exactly_the_voxels_mass():
     mask[7, 7, 7] = True
     assert sim.remove_voxels(0, mask) == 1
     assert sim.masses.sum() == pytest.approx(mass - (removed + 1) * 1000 * 0.01 ** 3, rel=1e-12)
+    m = sim.metrics()  # carving's ledger since t = 0
+    assert m["removed_voxels"] == removed + 1
+    assert m["removed_volume"] == pytest.approx((removed + 1) * 0.01 ** 3, rel=1e-12)
+    assert m["removed_mass"] == pytest.approx(mass - sim.masses.sum(), rel=1e-9)
+    assert m["removed_momentum"] == pytest.approx([0.1 * m["removed_mass"], 0, 0], rel=1e-9, abs=1e-15)
     sim.step(10)
     assert np.isfinite(sim.positions).all()
     with pytest.raises(ValueError):
