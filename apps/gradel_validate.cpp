@@ -1,6 +1,7 @@
 // gradel-validate: physical validity, measured (issue 5). Runs the experiments of
 // include/gradel/shared/validation.h for both scalings and the three layouts and writes
-// OUT/report.md, OUT/*.csv, OUT/plots.py and (with matplotlib) OUT/*.png.
+// OUT/report.md, OUT/*.csv and (with matplotlib) OUT/*.png, drawn by the plotting scripts
+// docs/validation/*.py (findPlotScript).
 //
 //   gradel-validate [--out docs/validation] [--quick] [--materials-only | --large-step-only | --poisson-only]
 //
@@ -18,7 +19,10 @@
 #include <iostream>
 #include <map>
 #include <sstream>
+#include <string>
+#include <system_error>
 #include <tuple>
+#include <vector>
 
 #include "gradel/shapes.h"
 #include "gradel/shared/validation.h"
@@ -54,6 +58,36 @@ std::string pct(double ratio) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%+.1f %%", 100 * (ratio - 1));
   return buf;
+}
+
+// The plotting scripts are files of the source tree, docs/validation/*.py: next to the committed
+// CSV files they read, so `python3 docs/validation/plots.py` redraws the committed pictures, and
+// `python3 SCRIPT DIR` draws those of any output folder. A build tree runs them in place;
+// `cmake --install` copies them to share/gradel/validation. The installed copy (relative to this
+// binary) comes first, then the source tree this binary was built from (cmake/validate.cmake
+// defines both); an empty path, with a message naming the file and the places looked in, when
+// neither has it.
+fs::path findPlotScript(const std::string& name) {
+  std::vector<fs::path> dirs;
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) dirs.push_back(exe.parent_path() / GRADEL_VALIDATION_SCRIPTS_FROM_BIN);
+  dirs.push_back(GRADEL_VALIDATION_SCRIPTS_SOURCE);
+  for (const fs::path& d : dirs)
+    if (fs::is_regular_file(d / name, ec)) return (d / name).lexically_normal();
+  std::cerr << "gradel-validate: plotting script " << name << " not found; looked for";
+  for (const fs::path& d : dirs) std::cerr << ' ' << (d / name).lexically_normal().string();
+  std::cerr << " (the source tree's docs/validation/" << name
+            << ", which cmake --install copies to share/gradel/validation)\n";
+  return {};
+}
+
+// Runs a plotting script on the CSV files in dir, which writes its pictures there; false without
+// /usr/bin/python3 with matplotlib.
+bool runPlot(const fs::path& script, const fs::path& dir) {
+  if (!fs::exists("/usr/bin/python3")) return false;
+  const std::string cmd = "/usr/bin/python3 '" + script.string() + "' '" + dir.string() + "'";
+  return std::system(cmd.c_str()) == 0;
 }
 
 struct Vibration {
@@ -419,7 +453,8 @@ std::string poissonTimeStep(const fs::path& dir) {
   return md.str();
 }
 
-std::string poissonSection(const fs::path& dir, bool quick) {
+// Section 7; its pictures by `script` (poisson_plot.py).
+std::string poissonSection(const fs::path& dir, bool quick, const fs::path& script) {
   std::ostringstream md;
   md << "## 7. Poisson's ratio (issue 29)\n\n"
      << "`material.poisson_ratio` nu (material.h): k_e / (1 + nu) (shear modulus E / (2 (1 + nu))) plus a "
@@ -435,47 +470,7 @@ std::string poissonSection(const fs::path& dir, bool quick) {
   std::cerr << "Poisson's ratio: cantilever...\n";
   md << poissonCantilever(dir, quick ? 8 : 16);  // sections 2 and 3's finest resolution
   md << poissonTimeStep(dir);
-  {
-    std::ofstream py(dir / "poisson_plot.py");
-    py << R"PY(# The Poisson section's pictures from the CSV files next to it (gradel-validate writes and runs it).
-import csv, os, sys
-import matplotlib
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
-from matplotlib.patches import Circle
-here = os.path.dirname(os.path.abspath(__file__))
-rows = list(csv.DictReader(open(os.path.join(here, "poisson_ball_sections.csv"))))
-ratios = sorted({r["nu"] for r in rows}, key=float)
-shown = [ratios[0], ratios[-1]]
-fig, axes = plt.subplots(1, 2, figsize=(10, 5), sharey=True)
-for ax, nu in zip(axes, shown):
-    for state, style in (("rest", "k:"), ("end", "b-")):
-        for r in rows:
-            if r["nu"] == nu and r["state"] == state:
-                ax.plot([1000 * float(r["x0"]), 1000 * float(r["x1"])], [1000 * float(r["y0"]), 1000 * float(r["y1"])], style, lw=1)
-    r0 = next(r for r in rows if r["nu"] == nu)
-    for side in (-1, 1):
-        ax.add_patch(Circle((side * 1000 * float(r0["tool_x"]), 0), 1000 * float(r0["tool_radius"]), color="0.8", zorder=0))
-    ax.set_aspect("equal"); ax.set_xlim(-70, 70); ax.set_ylim(-60, 60)
-    ax.set_title("nu = %s" % nu); ax.set_xlabel("x [mm]")
-axes[0].set_ylabel("y [mm]")
-fig.suptitle("ball squeezed between two spheres: mid-plane section at rest (dotted) and squeezed (blue)")
-fig.tight_layout(); fig.savefig(os.path.join(here, "poisson_ball.png"), dpi=110)
-uni = list(csv.DictReader(open(os.path.join(here, "poisson_uniaxial.csv"))))
-fig, ax = plt.subplots(figsize=(6, 5))
-ax.plot([0, 0.5], [0, 0.5], "k:", lw=1, label="lateral / axial = nu")
-for (exp, integ, layout), m in (
-        (("compression 2 %", "symplectic", "uniform"), "o"), (("compression 2 %", "symplectic", "gradational"), "s"),
-        (("compression 2 %", "implicit", "uniform"), "^"), (("stretch 0.1 %", "symplectic", "gradational"), "x"),
-        (("stretch 10 %", "symplectic", "gradational"), "+")):
-    r = [x for x in uni if (x["experiment"], x["integrator"], x["layout"]) == (exp, integ, layout)]
-    ax.plot([float(x["nu"]) for x in r], [float(x["ratio"]) for x in r], m, ms=8, mfc="none", label="%s, %s, %s" % (exp, integ, layout))
-ax.set_xlabel("material.poisson_ratio"); ax.set_ylabel("measured lateral / axial strain"); ax.legend(fontsize=8)
-fig.tight_layout(); fig.savefig(os.path.join(here, "poisson_ratio.png"), dpi=110)
-)PY";
-  }
-  const std::string cmd = "/usr/bin/python3 '" + (dir / "poisson_plot.py").string() + "'";
-  if (std::system(cmd.c_str()) == 0)
+  if (runPlot(script, dir))
     md << "\n![squeezed ball](poisson_ball.png) ![measured ratio](poisson_ratio.png)\n";
   else
     std::cerr << "poisson plots: /usr/bin/python3 with matplotlib not available, section written without pictures\n";
@@ -529,8 +524,9 @@ Cost measureCost(const std::string& sceneFile, IntegratorKind kind, Real eScale,
 // Section 4b: the large step (include/gradel/large_step.h, issue 11) on `bar`: amplitude kept and
 // frequency against the explicit one (fExplicit [Hz]) over dt, CG iterations per substep and the
 // coarse space's node budget; the damped sag against the static one (staticSag [m]). Writes
-// large_step.csv and large_step_sweep.png (large_step_plot.py, when matplotlib is there).
-std::string largeStepSection(const fs::path& dir, const BarSpec& bar, Real fExplicit, Real staticSag) {
+// large_step.csv and large_step_sweep.png (`script`, large_step_plot.py, when matplotlib is there).
+std::string largeStepSection(const fs::path& dir, const BarSpec& bar, Real fExplicit, Real staticSag,
+                             const fs::path& script) {
   std::cerr << "large step...\n";
   struct SweepRow {
     Real dt;
@@ -566,41 +562,7 @@ std::string largeStepSection(const fs::path& dir, const BarSpec& bar, Real fExpl
     for (uint32_t i : tip) sag += b.bodies[0].model->restPositions[i].y() - b.world->state().positions[i].y();
     sag /= Real(tip.size());
   }
-  {
-    std::ofstream py(dir / "large_step_plot.py");
-    py << R"PY(# The large step's sweep (large_step.csv next to it): amplitude kept per period and frequency over
-# CG iterations per substep at dt = 1/60 s, per coarse-space node budget (gradel-validate writes and runs it).
-import csv, os
-import matplotlib
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
-d = os.path.dirname(os.path.abspath(__file__))
-with open(os.path.join(d, "large_step.csv")) as f:
-    data = [x for x in csv.DictReader(f) if abs(float(x["dt"]) - 1 / 60) < 1e-6]
-fig, axes = plt.subplots(1, 2, figsize=(10, 4))
-# Amplitude kept per period (0 when no vibration is left); a red x where the frequency is more than 10 % off.
-kept = lambda x: 0.0 if float(x["f"]) <= 0 else 1 - float(x["decay_per_period"])
-off = lambda x: abs(float(x["f_over_explicit"]) - 1) > 0.1
-for nodes in dict.fromkeys(x["coarse_nodes"] for x in data):
-    r = [x for x in data if x["coarse_nodes"] == nodes]
-    label = "projective preconditioner alone" if nodes == "0" else "+ coarse space, %s nodes" % nodes
-    for ax, cost in zip(axes, [lambda x: int(x["passes"]), lambda x: float(x["cpu_us_per_step"]) / 1000]):
-        ax.plot([cost(x) for x in r], [kept(x) for x in r], "o-", label=label)
-        bad = [x for x in r if off(x)]
-        ax.plot([cost(x) for x in bad], [kept(x) for x in bad], "rx", ms=10, mew=2)
-for ax in axes:
-    ax.axhline(0.9, color="k", lw=0.8, ls="--"); ax.grid(alpha=0.3); ax.set_ylabel("amplitude kept per period")
-axes[0].set_xscale("log"); axes[0].set_xlabel("CG iterations per substep"); axes[0].legend()
-axes[1].set_xscale("log"); axes[1].set_xlabel("CPU ms per step (one thread)")
-fig.suptitle("large step on the clamped bar, dt = 1/60 s")
-fig.tight_layout(); fig.savefig(os.path.join(d, "large_step_sweep.png"), dpi=110)
-)PY";
-  }
-  bool plot = false;
-  if (fs::exists("/usr/bin/python3")) {
-    const std::string cmd = "/usr/bin/python3 '" + (dir / "large_step_plot.py").string() + "'";
-    plot = std::system(cmd.c_str()) == 0;
-  }
+  const bool plot = runPlot(script, dir);
   std::ostringstream md;
   md << "### Large step (include/gradel/large_step.h, issue 11)\n\n"
      << "Implicit midpoint, 2 substeps per step, Newton with `passes` CG iterations per substep, preconditioned by "
@@ -647,6 +609,18 @@ int main(int argc, char** argv) {
   app.add_flag("--poisson-only", poissonOnly,
                "Only the Poisson's-ratio section: writes poisson.md, poisson_*.csv and its plots, not report.md");
   CLI11_PARSE(app, argc, argv);
+  // The plotting scripts this run needs, found before minutes of experiments (exit 2 without).
+  bool missing = false;
+  auto script = [&](const std::string& name, bool needed) {
+    const fs::path path = needed ? findPlotScript(name) : fs::path();
+    missing = missing || (needed && path.empty());
+    return path;
+  };
+  const bool full = !(largeStepOnly || poissonOnly || materialsOnly);
+  const fs::path reportPlot = script("plots.py", full);
+  const fs::path largeStepPlot = script("large_step_plot.py", full || largeStepOnly);
+  const fs::path poissonPlot = script("poisson_plot.py", full || poissonOnly);
+  if (missing) return 2;
   fs::create_directories(out);
   const fs::path dir(out);
   const std::vector<int> resolutions = quick ? std::vector<int>{2, 4, 8} : std::vector<int>{2, 4, 8, 16};
@@ -655,7 +629,7 @@ int main(int argc, char** argv) {
     const BarSpec bar = makeBar(Scaling::Consistent, LayoutKind::Gradational, resolutions.back());
     const Vibration vx =
         vibrate(bar, IntegratorKind::SymplecticEuler, 0, 6 / beamFrequency(kAspect * kWidth, kWidth, kRho, kE), false);
-    const std::string section = largeStepSection(dir, bar, vx.frequency, staticTipSag(bar).sag);
+    const std::string section = largeStepSection(dir, bar, vx.frequency, staticTipSag(bar).sag, largeStepPlot);
     std::ofstream(dir / "large_step.md") << "# Large step (`gradel-validate" << (quick ? " --quick" : "")
                                          << " --large-step-only`, "
                                          << fmt(std::chrono::duration<double>(Clock::now() - t0).count(), 3)
@@ -666,7 +640,7 @@ int main(int argc, char** argv) {
   }
   if (poissonOnly) {
     const auto t0 = Clock::now();
-    const std::string section = poissonSection(dir, quick);
+    const std::string section = poissonSection(dir, quick, poissonPlot);
     std::ofstream(dir / "poisson.md") << "# Poisson's ratio (`gradel-validate" << (quick ? " --quick" : "")
                                       << " --poisson-only`, "
                                       << fmt(std::chrono::duration<double>(Clock::now() - t0).count(), 3) << " s)\n\n"
@@ -805,7 +779,7 @@ int main(int argc, char** argv) {
   const SagResult staticSag = staticTipSag(bar);
 
   // ---- 4b. large step (issue 11) ----
-  const std::string largeStep = largeStepSection(dir, bar, vx.frequency, staticSag.sag);
+  const std::string largeStep = largeStepSection(dir, bar, vx.frequency, staticSag.sag, largeStepPlot);
 
   // ---- 5. gradational vs uniform: the strike scene's surface field ----
   std::cerr << "strike field...\n";
@@ -827,48 +801,7 @@ int main(int argc, char** argv) {
   costs.push_back(measureCost(grasp, IntegratorKind::SymplecticEuler, 1, quick ? 0.3 : 1.5));
 
   // ---- plots ----
-  {
-    std::ofstream py(dir / "plots.py");
-    py << R"PY(# Makes the report's pictures from the CSV files next to it (gradel-validate writes and runs it).
-import csv, os, sys
-import matplotlib
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
-d = os.path.dirname(os.path.abspath(__file__))
-def rows(name):
-    with open(os.path.join(d, name)) as f:
-        return list(csv.DictReader(f))
-def convergence(name, value, ylabel, png):
-    data = rows(name)
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
-    for ax, scaling in zip(axes, ["consistent", "paper"]):
-        for layout, m in [("gradational", "o-"), ("uniform", "s--"), ("voxel", "^:")]:
-            r = [x for x in data if x["scaling"] == scaling and x["layout"] == layout]
-            ax.plot([int(x["across"]) for x in r], [value(x) for x in r], m, label=layout)
-        ax.axhline(1.0, color="k", lw=0.8)
-        ax.set_xscale("log", base=2); ax.set_xlabel("voxels across the section"); ax.set_title(scaling + " scaling")
-        ax.grid(alpha=0.3)
-    axes[0].set_ylabel(ylabel); axes[0].legend()
-    fig.tight_layout(); fig.savefig(os.path.join(d, png), dpi=110)
-convergence("sag.csv", lambda x: float(x["sag"]) / float(x["theory_nominal"]),
-            "tip sag / Euler-Bernoulli (E = 1e7 Pa)", "sag_convergence.png")
-convergence("frequency.csv", lambda x: float(x["f_explicit"]) / float(x["f_theory_nominal"]),
-            "first frequency / Euler-Bernoulli", "frequency_convergence.png")
-tip = rows("tip.csv")
-fig, ax = plt.subplots(figsize=(10, 4))
-for run in dict.fromkeys(x["run"] for x in tip):
-    r = [x for x in tip if x["run"] == run]
-    ax.plot([float(x["time"]) for x in r], [1000 * float(x["tip"]) for x in r], label=run, lw=1)
-ax.set_xlim(0, 0.6); ax.set_xlabel("time [s]"); ax.set_ylabel("tip displacement [mm]"); ax.grid(alpha=0.3); ax.legend()
-ax.set_title("clamped bar released under gravity: explicit vs implicit")
-fig.tight_layout(); fig.savefig(os.path.join(d, "tip_explicit_implicit.png"), dpi=110)
-)PY";
-  }
-  bool plots = false;
-  if (fs::exists("/usr/bin/python3")) {
-    const std::string cmd = "/usr/bin/python3 '" + (dir / "plots.py").string() + "'";
-    plots = std::system(cmd.c_str()) == 0;
-  }
+  const bool plots = runPlot(reportPlot, dir);
   if (!plots) std::cerr << "plots: /usr/bin/python3 with matplotlib not available, report written without pictures\n";
 
   // ---- report ----
@@ -1056,7 +989,7 @@ fig.tight_layout(); fig.savefig(os.path.join(d, "tip_explicit_implicit.png"), dp
 
   std::cerr << "two materials...\n";
   md << "\n" << materialsSection(dir, resolutions);
-  md << "\n" << poissonSection(dir, quick);
+  md << "\n" << poissonSection(dir, quick, poissonPlot);
 
   std::ofstream(dir / "report.md") << md.str();
   std::cerr << "wrote " << (dir / "report.md").string() << "\n";

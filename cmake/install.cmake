@@ -27,6 +27,9 @@ foreach(app gradel gradel-view gradel-bench gradel-validate)
     install(TARGETS ${app} RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT gradel_apps)
   endif()
 endforeach()
+if(TARGET gradel-validate)  # its plotting scripts (validate.cmake)
+  install(FILES ${GRADEL_VALIDATE_SCRIPTS} DESTINATION ${CMAKE_INSTALL_DATADIR}/gradel/validation COMPONENT gradel_apps)
+endif()
 
 # ctest install_consumer: installs the library component from this build tree into a scratch
 # prefix (a copy), then configures, builds and runs examples/consumer against it.

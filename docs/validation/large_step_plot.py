@@ -1,10 +1,11 @@
-# The large step's sweep (large_step.csv next to it): amplitude kept per period and frequency over
-# CG iterations per substep at dt = 1/60 s, per coarse-space node budget (gradel-validate writes and runs it).
-import csv, os
+# The large step's sweep (large_step.csv): amplitude kept per period and frequency over CG iterations
+# per substep at dt = 1/60 s, per coarse-space node budget. python3 large_step_plot.py [DIR] reads and
+# writes DIR, by default the folder of this file (gradel-validate runs it on its --out folder).
+import csv, os, sys
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
-d = os.path.dirname(os.path.abspath(__file__))
+d = sys.argv[1] if len(sys.argv) > 1 else os.path.dirname(os.path.abspath(__file__))
 with open(os.path.join(d, "large_step.csv")) as f:
     data = [x for x in csv.DictReader(f) if abs(float(x["dt"]) - 1 / 60) < 1e-6]
 fig, axes = plt.subplots(1, 2, figsize=(10, 4))

@@ -1,10 +1,11 @@
-# The Poisson section's pictures from the CSV files next to it (gradel-validate writes and runs it).
+# The Poisson section's pictures from its CSV files: python3 poisson_plot.py [DIR] reads and writes DIR,
+# by default the folder of this file (gradel-validate runs it on its --out folder).
 import csv, os, sys
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 from matplotlib.patches import Circle
-here = os.path.dirname(os.path.abspath(__file__))
+here = sys.argv[1] if len(sys.argv) > 1 else os.path.dirname(os.path.abspath(__file__))
 rows = list(csv.DictReader(open(os.path.join(here, "poisson_ball_sections.csv"))))
 ratios = sorted({r["nu"] for r in rows}, key=float)
 shown = [ratios[0], ratios[-1]]

@@ -214,11 +214,16 @@ Specimen specimen(const ShapeSpec& shape, LayoutKind layout, const MaterialSetti
   return s;
 }
 
-// Extents of a set of positions: hi - lo per axis.
-Vec3 extents(const std::vector<Vec3>& x) {
+// The axis-aligned bounds of a set of positions [m]: lo and hi per axis.
+struct Bounds {
   Vec3 lo = Vec3::Constant(1e300), hi = -lo;
-  for (const Vec3& p : x) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-  return hi - lo;
+  Vec3 extent() const { return hi - lo; }
+  Vec3 centre() const { return 0.5 * (lo + hi); }
+};
+Bounds bounds(const std::vector<Vec3>& x) {
+  Bounds b;
+  for (const Vec3& p : x) b.lo = b.lo.cwiseMin(p), b.hi = b.hi.cwiseMax(p);
+  return b;
 }
 
 // The segments where the surface's triangles cross the plane z = z0, relative to (cx, cy).
@@ -252,13 +257,13 @@ UniaxialResult compressBetweenWalls(const MaterialSettings& m, LayoutKind layout
   if (integrator != IntegratorKind::SymplecticEuler) s.integrator = integrator, s.dt = 1.0 / 60;
   DomainSettings d;
   d.enabled = true, d.friction = 0, d.restitution = 0;
-  const Vec3 ext0 = extents(b.model->restPositions);
+  const Vec3 ext0 = bounds(b.model->restPositions).extent();
   const Real cx = 0.5 * ext0.x();  // the box spans [0, L] at rest
   d.min = Vec3(cx - 0.5 * L * (1 - strain), -1, -1), d.max = Vec3(cx + 0.5 * L * (1 - strain), 1, 1);
   World w(b.model, s, d, {});
   for (Vec3& x : w.state().positions) x.x() = cx + (x.x() - cx) * (1 - strain);  // start inside the walls
   for (int i = 0; i < steps; ++i) w.step();
-  const Vec3 ext = extents(w.state().positions);
+  const Vec3 ext = bounds(w.state().positions).extent();
   UniaxialResult r;
   r.axial = ext.x() / L - 1;
   r.lateral = 0.5 * (ext.y() + ext.z()) / L - 1;
@@ -298,7 +303,7 @@ UniaxialResult stretchBetweenGrips(const MaterialSettings& m, LayoutKind layout,
   }
   std::vector<Vec3> mid;
   for (uint32_t i : middle) mid.push_back(w.state().positions[i]);
-  const Vec3 ext = extents(mid);
+  const Vec3 ext = bounds(mid).extent();
   UniaxialResult r;
   r.axial = strain;
   r.lateral = 0.5 * (ext.y() + ext.z()) / a - 1;
@@ -311,11 +316,10 @@ UniaxialResult stretchBetweenGrips(const MaterialSettings& m, LayoutKind layout,
 BallSqueeze squeezeBall(const MaterialSettings& m, int size, Real squeeze) {
   const Real h = 0.005;
   const Specimen b = specimen(presetShape("sphere", size, 3, h), LayoutKind::Gradational, m);
-  Vec3 mn = Vec3::Constant(1e300), mx = -mn;
-  for (const Vec3& x : b.model->restPositions) mn = mn.cwiseMin(x), mx = mx.cwiseMax(x);
-  const Vec3 c = 0.5 * (mn + mx);
+  const Bounds rest = bounds(b.model->restPositions);
+  const Vec3 c = rest.centre(), restExtent = rest.extent();
   BallSqueeze r;
-  r.ballRadius = 0.5 * (mx.x() - mn.x());
+  r.ballRadius = 0.5 * restExtent.x();
   r.toolRadius = 2 * r.ballRadius;
   const Real start = r.ballRadius + r.toolRadius + 0.5 * h, end = r.ballRadius * (1 - squeeze) + r.toolRadius;
   r.toolX = end;
@@ -336,7 +340,7 @@ BallSqueeze squeezeBall(const MaterialSettings& m, int size, Real squeeze) {
   const size_t steps = size_t(std::ceil(0.5 / w.dt()));
   for (size_t k = 0; k < steps; ++k) w.step();
   r.volume = enclosedVolume(b.surface, w.state().positions) / b.restVolume;
-  r.widthY = extents(w.state().positions).y() / (mx.y() - mn.y());
+  r.widthY = bounds(w.state().positions).extent().y() / restExtent.y();
   r.restSection = sectionAt(b.surface, b.model->restPositions, c.z() + 0.25 * h, c.x(), c.y());
   r.endSection = sectionAt(b.surface, w.state().positions, c.z() + 0.25 * h, c.x(), c.y());
   return r;
