@@ -415,7 +415,7 @@ int runScene(const RunOptions& o) {
   j["scene"] = scene.name;
   j["steps"] = carving ? carveSteps : std::llround(world.time() / dt);
   j["dt"] = dt;
-  if (carving) j["final_dt"] = world.dt();  // dt = auto is shortened by carving events
+  if (carving) j["final_dt"] = world.dt();  // dt = auto follows the carved body (World::replaceModel)
   j["dt_rule"] = world.dtRule();  // where dt came from: given, one frame, or the rule and its fraction
   j["integrator"] = gradel::integratorKindName(world.settings().integrator);
   if (!world.integratorChoice().empty()) j["integrator_choice"] = world.integratorChoice();  // why auto picked it

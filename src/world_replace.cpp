@@ -1,7 +1,9 @@
 // World::replaceModel: the least invasive correct path to a world over a new model (a carved body,
-// carve_scene.h): a world made anew from the settings as applied, with the same dt (no new
-// stability estimate), then everything that outlives a step moved over from this one; and carving's
+// carve_scene.h): a world made anew from the settings as applied, with dt following the new model
+// (below), then everything that outlives a step moved over from this one; and carving's
 // ledger of removed material (World::recordRemoval).
+#include <cmath>
+#include <cstdio>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -9,6 +11,7 @@
 #include <vector>
 
 #include "gradel/integrator.h"
+#include "gradel/stability.h"
 #include "gradel/world.h"
 
 namespace gradel {
@@ -18,23 +21,42 @@ void World::replaceModel(std::shared_ptr<const RestModel> model, State state, st
   if (state.positions.size() != model->numVertices() || state.velocities.size() != model->numVertices() ||
       state.rotations.size() != model->numElements())
     throw std::invalid_argument("World::replaceModel: the state's sizes are not the model's");
-  // The same step, shortened when the new model's stiffest vertex is faster than the old one's
-  // (a re-layout makes small cells at the new surface): dt = auto scales with the vertex period.
+  // dt = auto of the explicit step follows the new model. Under the operator rule (the default) the
+  // carved body's own fastest vibration is estimated again (stability.h, Lanczos: about 150
+  // explicit steps' work, small beside the re-layout), so dt is what a scene of the carved body
+  // would get, shorter or longer. Under the vertex or element rule, or forward Euler (its damping
+  // cap), dt is shortened by the ratio of the models' smallest vertex periods, never lengthened.
   Real dt = dt_;
+  FrequencyEstimate frequency = frequency_;
+  std::string rule = dtRule_;
   const bool frameStep = sim_.integrator == IntegratorKind::Implicit || sim_.integrator == IntegratorKind::LargeStep;
-  const Real p0 = model_->smallestVertexPeriod, p1 = model->smallestVertexPeriod;
-  if (sim_.dt == 0 && !frameStep && p1 > 0 && p1 < p0) dt *= p1 / p0;
+  if (sim_.dt == 0 && !frameStep) {
+    const FrequencyEstimate f = sim_.dtPeriod == PeriodRule::Operator && sim_.integrator == IntegratorKind::SymplecticEuler
+                                    ? highestFrequency(*model)
+                                    : FrequencyEstimate{};
+    const Real p0 = model_->smallestVertexPeriod, p1 = model->smallestVertexPeriod;
+    if (f.omega > 0) {
+      frequency = f, dt = sim_.dtFraction * 2 * M_PI / f.omega;
+      char buf[200];
+      std::snprintf(buf, sizeof buf, "operator x %.3g: 2 pi / omega_max, omega_max %.4g rad/s (estimated again after carving)",
+                    sim_.dtFraction, f.omega);
+      rule = buf;
+    } else if (p1 > 0 && p1 < p0) {
+      dt *= p1 / p0;
+      const std::string shortened = " (shortened by carving)";  // said once, however many events
+      const bool said = rule.size() >= shortened.size() &&
+                        rule.compare(rule.size() - shortened.size(), shortened.size(), shortened) == 0;
+      if (!said) rule += shortened;
+    }
+  }
   SimulationSettings sim = sim_;
   sim.dt = dt;
-  sim.dtPeriod = PeriodRule::Vertex;  // and no new estimate of the highest frequency (Lanczos)
+  sim.dtPeriod = PeriodRule::Vertex;  // no estimate in the constructor: dt is given
   World w(std::move(model), sim, domain_, {});
   w.sim_ = sim_;
-  const std::string shortened = " (shortened by carving)";  // said once, however many events
-  const bool said = dtRule_.size() >= shortened.size() &&
-                    dtRule_.compare(dtRule_.size() - shortened.size(), shortened.size(), shortened) == 0;
-  w.dtRule_ = dt == dt_ || said ? dtRule_ : dtRule_ + shortened;
+  w.dtRule_ = rule;
   w.integratorChoice_ = integratorChoice_;
-  w.frequency_ = frequency_;
+  w.frequency_ = frequency;
   w.state_ = std::move(state);
   // What may throw first (a pin that holds no vertex any more): this world is still untouched.
   if (!pins_.empty()) w.setPins(pins_);

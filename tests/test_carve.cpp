@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "gradel/carve.h"
+#include "gradel/stability.h"
 #include "gradel/carve_scene.h"
 #include "gradel/output.h"
 #include "test_support.h"
@@ -327,6 +328,8 @@ size_t drillAndCheckTheLedger(ManipulatorSettings tool, bool expectPush) {
     EXPECT_LT((p0 - e[0].removedMomentum - worldMomentum(w)).norm(), 1e-12 * mass0);
     EXPECT_TRUE(sameForces(force, w.averageContactForces()));  // the frame's average survives the event
     EXPECT_EQ(forceTime, w.forceAverageTime());
+    // dt = auto is the carved body's own (operator rule, estimated again), not shrunk per event.
+    EXPECT_EQ(w.dt(), defaultDtFraction(PeriodRule::Operator) * 2 * M_PI / highestFrequency(w.model()).omega);
     pushedWhileCarving |= force.manipulators[0].force.y() > 0;  // the block pushes the tool up
     const RemovedMaterial& r = w.removedMaterial().at(0);
     EXPECT_EQ(r.voxels, removed);

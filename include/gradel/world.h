@@ -204,8 +204,9 @@ class World {
 
   /// Carving (carve_scene.h): the world over a new model, e.g. with one body laid out again, and
   /// its state (`state`: one entry per vertex and element of `model`, the time kept). Keeps the
-  /// settings as applied, dt (dt = auto of an explicit integrator shortened by the ratio of the
-  /// models' smallest vertex periods when the new one's is shorter; never lengthened), the
+  /// settings as applied, dt (dt = auto of symplectic Euler under the operator rule: estimated
+  /// again on the new model; under the other rules shortened by the ratio of the models' smallest
+  /// vertex periods when the new one's is shorter, never lengthened; a given dt as it is), the
   /// manipulators (poses), walls, pins (moved to their targets),
   /// the force averages and the work and impulse ledgers; body contacts over `contactBodies`
   /// with the same settings (empty: none). External forces and the frame-size integrators'
