@@ -2,8 +2,6 @@
 // carve_scene.h): a world made anew from the settings as applied, with dt following the new model
 // (below), then everything that outlives a step moved over from this one; and carving's
 // ledger of removed material (World::recordRemoval).
-#include <cmath>
-#include <cstdio>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -11,7 +9,6 @@
 #include <vector>
 
 #include "gradel/integrator.h"
-#include "gradel/stability.h"
 #include "gradel/world.h"
 
 namespace gradel {
@@ -26,37 +23,29 @@ void World::replaceModel(std::shared_ptr<const RestModel> model, State state, st
   // explicit steps' work, small beside the re-layout), so dt is what a scene of the carved body
   // would get, shorter or longer. Under the vertex or element rule, or forward Euler (its damping
   // cap), dt is shortened by the ratio of the models' smallest vertex periods, never lengthened.
-  Real dt = dt_;
-  FrequencyEstimate frequency = frequency_;
-  std::string rule = dtRule_;
   const bool frameStep = sim_.integrator == IntegratorKind::Implicit || sim_.integrator == IntegratorKind::LargeStep;
-  if (sim_.dt == 0 && !frameStep) {
-    const FrequencyEstimate f = sim_.dtPeriod == PeriodRule::Operator && sim_.integrator == IntegratorKind::SymplecticEuler
-                                    ? highestFrequency(*model)
-                                    : FrequencyEstimate{};
+  const bool estimate =
+      sim_.dt == 0 && sim_.integrator == IntegratorKind::SymplecticEuler && sim_.dtPeriod == PeriodRule::Operator;
+  SimulationSettings sim = sim_;  // estimate: the constructor's own dt = auto, Lanczos on the new model
+  std::string rule = dtRule_;
+  if (!estimate) {
+    Real dt = dt_;
     const Real p0 = model_->smallestVertexPeriod, p1 = model->smallestVertexPeriod;
-    if (f.omega > 0) {
-      frequency = f, dt = sim_.dtFraction * 2 * M_PI / f.omega;
-      char buf[200];
-      std::snprintf(buf, sizeof buf, "operator x %.3g: 2 pi / omega_max, omega_max %.4g rad/s (estimated again after carving)",
-                    sim_.dtFraction, f.omega);
-      rule = buf;
-    } else if (p1 > 0 && p1 < p0) {
+    if (sim_.dt == 0 && !frameStep && p1 > 0 && p1 < p0) {
       dt *= p1 / p0;
       const std::string shortened = " (shortened by carving)";  // said once, however many events
       const bool said = rule.size() >= shortened.size() &&
                         rule.compare(rule.size() - shortened.size(), shortened.size(), shortened) == 0;
       if (!said) rule += shortened;
     }
+    sim.dt = dt;
+    sim.dtPeriod = PeriodRule::Vertex;  // no estimate in the constructor: dt is given
   }
-  SimulationSettings sim = sim_;
-  sim.dt = dt;
-  sim.dtPeriod = PeriodRule::Vertex;  // no estimate in the constructor: dt is given
   World w(std::move(model), sim, domain_, {});
   w.sim_ = sim_;
-  w.dtRule_ = rule;
+  w.dtRule_ = estimate ? w.dtRule_ + " (estimated again after carving)" : rule;
   w.integratorChoice_ = integratorChoice_;
-  w.frequency_ = frequency;
+  if (!estimate) w.frequency_ = frequency_;
   w.state_ = std::move(state);
   // What may throw first (a pin that holds no vertex any more): this world is still untouched.
   if (!pins_.empty()) w.setPins(pins_);

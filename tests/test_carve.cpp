@@ -329,7 +329,7 @@ size_t drillAndCheckTheLedger(ManipulatorSettings tool, bool expectPush) {
     EXPECT_TRUE(sameForces(force, w.averageContactForces()));  // the frame's average survives the event
     EXPECT_EQ(forceTime, w.forceAverageTime());
     // dt = auto is the carved body's own (operator rule, estimated again), not shrunk per event.
-    EXPECT_EQ(w.dt(), defaultDtFraction(PeriodRule::Operator) * 2 * M_PI / highestFrequency(w.model()).omega);
+    EXPECT_EQ(w.dt(), defaultDtFraction(PeriodRule::Operator) * (2 * M_PI / highestFrequency(w.model()).omega));
     pushedWhileCarving |= force.manipulators[0].force.y() > 0;  // the block pushes the tool up
     const RemovedMaterial& r = w.removedMaterial().at(0);
     EXPECT_EQ(r.voxels, removed);
