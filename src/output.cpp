@@ -39,17 +39,22 @@ void appendNumber(std::string& out, T x) {
 
 void appendBase64(std::string& out, const unsigned char* data, size_t n) {
   static const char kTable[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  // Sized once and filled through a pointer: appending a character at a time (a capacity check
+  // each) made this 7 % of box-realtime's `gradel run` (perf), more than the file writes.
+  const size_t start = out.size();
+  out.resize(start + (n + 2) / 3 * 4);
+  char* o = out.data() + start;
   size_t i = 0;
-  for (; i + 3 <= n; i += 3) {
+  for (; i + 3 <= n; i += 3, o += 4) {
     const uint32_t v = uint32_t(data[i]) << 16 | uint32_t(data[i + 1]) << 8 | data[i + 2];
-    out += kTable[v >> 18], out += kTable[(v >> 12) & 63], out += kTable[(v >> 6) & 63], out += kTable[v & 63];
+    o[0] = kTable[v >> 18], o[1] = kTable[(v >> 12) & 63], o[2] = kTable[(v >> 6) & 63], o[3] = kTable[v & 63];
   }
   if (n - i == 1) {
     const uint32_t v = uint32_t(data[i]) << 16;
-    out += kTable[v >> 18], out += kTable[(v >> 12) & 63], out += "==";
+    o[0] = kTable[v >> 18], o[1] = kTable[(v >> 12) & 63], o[2] = '=', o[3] = '=';
   } else if (n - i == 2) {
     const uint32_t v = uint32_t(data[i]) << 16 | uint32_t(data[i + 1]) << 8;
-    out += kTable[v >> 18], out += kTable[(v >> 12) & 63], out += kTable[(v >> 6) & 63], out += '=';
+    o[0] = kTable[v >> 18], o[1] = kTable[(v >> 12) & 63], o[2] = kTable[(v >> 6) & 63], o[3] = '=';
   }
 }
 
@@ -194,7 +199,7 @@ void writeVtu(const fs::path& file, const RestModel& model, const State& state, 
   const std::vector<uint8_t> level(model.level.begin() + e0, model.level.begin() + e0 + ne);
 
   std::string out;
-  out.reserve(64 * nv + 16 * connectivity.size() + 1024);
+  out.reserve(96 * nv + 12 * connectivity.size() + 64 * ne + 1024);  // base64: 4 characters per 3 bytes
   out += "<?xml version=\"1.0\"?>\n";
   out += std::string("<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"") + kByteOrder + "\">\n";
   out += "  <UnstructuredGrid>\n";
