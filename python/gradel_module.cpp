@@ -673,6 +673,27 @@ PYBIND11_MODULE(gradel, m) {
           "velocities. Returns the number of voxels removed. Views of positions and velocities taken before no "
           "longer follow the world. A body is never emptied (removing every voxel of it does nothing).")
       .def(
+          "carve_cylinder",
+          [](Simulation& s, const std::vector<double>& center, const std::vector<double>& axis, double radius,
+             double halfLength) {
+            if (center.size() != 3) throw InputError("carve_cylinder: center: expected 3 numbers [m]");
+            if (axis.size() != 3) throw InputError("carve_cylinder: axis: expected 3 numbers");
+            if (!(radius > 0) || !std::isfinite(radius))
+              throw InputError("carve_cylinder: radius: expected a positive number [m]");
+            if (!(halfLength > 0) || !std::isfinite(halfLength))
+              throw InputError("carve_cylinder: half_length: expected a positive number [m]");
+            const Vec3 c(center[0], center[1], center[2]), a(axis[0], axis[1], axis[2]);
+            if (!c.allFinite()) throw InputError("carve_cylinder: center: not finite");
+            if (!a.allFinite() || !(a.norm() > 0)) throw InputError("carve_cylinder: axis: expected a non-zero finite vector");
+            WorldLock lock(s);
+            return carveLocked(s, [&] { return carveSceneCylinderSweep(s.built, c, c, a.normalized(), radius, halfLength); });
+          },
+          py::arg("center"), py::arg("axis"), py::arg("radius"), py::arg("half_length"),
+          "Removes from every body the voxels whose centres lie in the solid cylinder of `radius` [m] and half "
+          "length `half_length` [m] (flat caps) about `center` [m] along `axis` (any length, normalised), in the "
+          "deformed configuration (docs/carving.md): a rod's or a core drill's bore. As carve_sphere otherwise; "
+          "returns the number of voxels removed.")
+      .def(
           "remove_voxels",
           [](Simulation& s, size_t body, const py::array& maskArray) {
             const py::array_t<bool, py::array::forcecast> a(maskArray);

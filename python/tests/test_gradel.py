@@ -258,3 +258,24 @@ def test_carve_sphere_and_remove_voxels_take_exactly_the_voxels_mass():
     assert np.isfinite(sim.positions).all()
     with pytest.raises(ValueError):
         sim.remove_voxels(0, np.zeros((3, 3, 3), dtype=bool))
+
+
+def test_carve_cylinder_bores_exactly_the_voxels_it_holds():
+    # A box of 8 voxels of 1 cm at rest, corner at the origin. A rod of radius 1.7 cm along z
+    # through (4, 4) cm holds the voxel columns whose centres lie within 1.7 cm of its axis: the
+    # 2 x 2 around it (0.71 cm) and the 8 beside those (1.58 cm), not the diagonal ones (2.12 cm),
+    # over all 8 layers: 96 voxels.
+    body = gradel.Body.from_shape("box", 8)
+    sim = gradel.Simulation(body, gravity=[0, 0, 0], dt=1e-4)
+    mass = sim.masses.sum()
+    assert sim.carve_cylinder([0.04, 0.04, 0.04], [0, 0, 3], 0.017, 0.05) == 96
+    assert sim.masses.sum() == pytest.approx(mass - 96 * 1000 * 0.01 ** 3, rel=1e-12)
+    assert sim.metrics()["removed_voxels"] == 96
+    assert sim.carve_cylinder([0.04, 0.04, 0.04], [0, 0, 1], 0.012, 0.015) == 0  # the bore is empty already
+    # A short rod along x through the voxel row at y = z = 1.5 cm (its neighbours 1 cm away, outside
+    # the radius of 0.8 cm), caps at 1.3 and 6.7 cm: the 6 centres 1.5 ... 6.5 cm.
+    assert sim.carve_cylinder([0.04, 0.015, 0.015], [1, 0, 0], 0.008, 0.027) == 6
+    for bad in ([[0, 0], [0, 0, 1], 0.01, 0.01], [[0, 0, 0], [0, 0, 0], 0.01, 0.01],
+                [[0, 0, 0], [0, 0, 1], -1, 0.01], [[0, 0, 0], [0, 0, 1], 0.01, float("nan")]):
+        with pytest.raises(ValueError):
+            sim.carve_cylinder(*bad)
