@@ -120,13 +120,45 @@ Real restMomentTrace(const Vec3* R0, int n) {
   return t;
 }
 
+Mat3 fitAffineRotation(int dim, const Mat3& F, const Quat& warm) {
+  if (dim == 2) {
+    const Real th = fitRotation2(F);
+    Mat3 M = Mat3::Identity();
+    M(0, 0) = std::cos(th), M(0, 1) = -std::sin(th), M(1, 0) = std::sin(th), M(1, 1) = std::cos(th);
+    return M;
+  }
+  Quat q = warm;
+  fitRotation3(F, q, 20, 1e-12);
+  return q.toRotationMatrix();
+}
+
+bool volumeStrainMatrix(int dim, const Vec3* R0, int n, Mat3& V) {
+  Mat3 S = Mat3::Zero();
+  for (int i = 0; i < n; ++i) S.noalias() += R0[i] * R0[i].transpose();
+  const bool isotropic = S(0, 1) == 0 && S(1, 0) == 0 && S(0, 0) == S(1, 1) &&
+                         (dim == 2 || (S(0, 2) == 0 && S(2, 0) == 0 && S(1, 2) == 0 && S(2, 1) == 0 && S(1, 1) == S(2, 2)));
+  if (isotropic) return false;
+  V = restMomentInverse(dim, S);
+  return true;
+}
+
 Real elementVolumeForces(int dim, const Vec3* x, const uint32_t* verts, const Vec3* R0, int n, const Quat& q,
                          Real kappa, Vec3* f) {
   const Moments mo = moments(x, verts, R0, n);
   const Mat3 M = q.toRotationMatrix();
-  const Real D = dim == 2 ? 2 : 3, g = D / restMomentTrace(R0, n);
-  const Real ev = g * (M.cwiseProduct(mo.A).sum() - 1 / g * D);  // D (tr(M^T A) - tr S) / tr S
-  const Mat3 H = -kappa * ev * g * M;
+  const Real D = dim == 2 ? 2 : 3;
+  Mat3 V, H;
+  Real ev;
+  if (volumeStrainMatrix(dim, R0, n, V)) {
+    const Mat3 F = mo.A * V;
+    const Mat3 MF = fitAffineRotation(dim, F, q);
+    ev = MF.cwiseProduct(F).sum() - D;  // tr(M_F^T F) - D
+    H = -kappa * ev * (MF * V);
+  } else {
+    const Real g = D / restMomentTrace(R0, n);
+    ev = g * (M.cwiseProduct(mo.A).sum() - 1 / g * D);  // D (tr(M^T A) - tr S) / tr S
+    H = -kappa * ev * g * M;
+  }
   const Vec3 mean = mo.sumR0 / Real(n);  // rounding residue, removed so the forces sum to zero
   for (int i = 0; i < n; ++i) f[i] += H * (R0[i] - mean);
   return 0.5 * kappa * ev * ev;

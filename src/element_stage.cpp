@@ -95,6 +95,11 @@ ElementStageRest::ElementStageRest(const RestModel& m)
       const Real g = Real(m.dim == 2 ? 2 : 3) / restMomentTrace(&m.restOffsets[b], int(n));
       vg.strainScale[l] = g * h;
       vg.stiffness[l] = m.volumeStiffness[e] * g;
+      Mat3 V;
+      if (volumeStrainMatrix(m.dim, &m.restOffsets[b], int(n), V)) vg.anisotropic = 1;
+      else V = g * Mat3::Identity();
+      for (int k = 0; k < 9; ++k) vg.shape[k][l] = h * V(k / 3, k % 3);
+      vg.kappaOverH[l] = m.volumeStiffness[e] / h;
     }
   }
   // Transpose element -> vertex into vertex -> elements, ascending per vertex.
@@ -129,15 +134,54 @@ namespace {
 // The volumetric term of four elements into their frames (element_stage.h):
 // e_v = (D h / tr S) tr(M^T A / h) - D, H = -(kappa D / tr S) e_v M; G += H, t -= H (C + mean R0).
 // K as in elementFrames; Fr[col][row] the frames before the transpose.
-inline void addVolumeTerm(const ElementVolumeGroup& vg, int dim, const RotationBatch& batch, const d4* M, const d4* K,
-                          d4 (*Fr)[4]) {
+// H = -kappa e_v M_F V per lane (element.h's general form): F = (A / h) shape, M_F its own fit
+// (3D: four lanes at once, warm-started from A's rotations; 2D: the closed form),
+// e_v = tr(M_F^T F) - D, H = -(kappa / h) e_v M_F shape.
+inline void anisotropicVolumeTerm(const ElementVolumeGroup& vg, int dim, const RotationBatch& batch, int maxIterations,
+                                  d4* H) {
+  RotationBatch fit;
+  d4 P[9];
+  for (int k = 0; k < 9; ++k) P[k] = load4(vg.shape[k]);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      store4(fit.A[3 * r + c], load4(batch.A[3 * r]) * P[c] + load4(batch.A[3 * r + 1]) * P[3 + c] +
+                                   load4(batch.A[3 * r + 2]) * P[6 + c]);
+  if (dim == 2) {
+    for (int l = 0; l < kRotationLanes; ++l) {
+      Mat3 F;
+      for (int k = 0; k < 9; ++k) F(k / 3, k % 3) = fit.A[k][l];
+      const Real th = fitRotation2(F), cs = std::cos(th), sn = std::sin(th);
+      const Real M[9] = {cs, -sn, 0, sn, cs, 0, 0, 0, 1};
+      for (int k = 0; k < 9; ++k) fit.M[k][l] = M[k];
+    }
+  } else {
+    for (int k = 0; k < 4; ++k) store4(fit.q[k], load4(batch.q[k]));
+    fitRotation3Batch(fit, maxIterations, kFrameRotationTolerance);
+  }
+  d4 MF[9];
+  for (int k = 0; k < 9; ++k) MF[k] = load4(fit.M[k]);
+  d4 tr = MF[0] * load4(fit.A[0]);
+  for (int j = 1; j < 9; ++j) tr += MF[j] * load4(fit.A[j]);
+  const d4 s = load4(vg.kappaOverH) * (splat(dim == 2 ? 2 : 3) - tr);  // -(kappa / h) e_v
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) H[3 * r + c] = s * (MF[3 * r] * P[c] + MF[3 * r + 1] * P[3 + c] + MF[3 * r + 2] * P[6 + c]);
+}
+
+inline void addVolumeTerm(const ElementVolumeGroup& vg, int dim, const RotationBatch& batch, int maxIterations,
+                          const d4* M, const d4* K, d4 (*Fr)[4]) {
   const d4 kappa = load4(vg.stiffness);
   if (kappa[0] == 0 && kappa[1] == 0 && kappa[2] == 0 && kappa[3] == 0) return;
-  d4 tr = M[0] * load4(batch.A[0]);
-  for (int j = 1; j < 9; ++j) tr += M[j] * load4(batch.A[j]);
-  const d4 s = kappa * (splat(dim == 2 ? 2 : 3) - load4(vg.strainScale) * tr);  // -kappa D / tr S e_v
+  d4 H[9];
+  if (vg.anisotropic) {
+    anisotropicVolumeTerm(vg, dim, batch, maxIterations, H);
+  } else {
+    d4 tr = M[0] * load4(batch.A[0]);
+    for (int j = 1; j < 9; ++j) tr += M[j] * load4(batch.A[j]);
+    const d4 s = kappa * (splat(dim == 2 ? 2 : 3) - load4(vg.strainScale) * tr);  // -kappa D / tr S e_v
+    for (int j = 0; j < 9; ++j) H[j] = s * M[j];
+  }
   for (int r = 0; r < 3; ++r) {
-    const d4 h0 = s * M[3 * r], h1 = s * M[3 * r + 1], h2 = s * M[3 * r + 2];
+    const d4 h0 = H[3 * r], h1 = H[3 * r + 1], h2 = H[3 * r + 2];
     Fr[0][r] += h0, Fr[1][r] += h1, Fr[2][r] += h2;
     Fr[3][r] -= h0 * (K[4] + K[8]) + h1 * (K[5] + K[9]) + h2 * (K[6] + K[10]);
   }
@@ -209,7 +253,7 @@ void elementFrames(const RestModel& m, const ElementStageRest& rest, size_t begi
       F[3][r] = k * (c[r] - (M[3 * r] * K[8] + M[3 * r + 1] * K[9] + M[3 * r + 2] * K[10]) -
                      (M[3 * r] * K[4] + M[3 * r + 1] * K[5] + M[3 * r + 2] * K[6]));
     F[3][3] = k;
-    if (!rest.volume.empty()) addVolumeTerm(rest.volume[e0 / L], m.dim, batch, M, K, F);
+    if (!rest.volume.empty()) addVolumeTerm(rest.volume[e0 / L], m.dim, batch, maxIterations, M, K, F);
     for (int col = 0; col < 4; ++col) transpose(F[col][0], F[col][1], F[col][2], F[col][3]);
     d4 q[4] = {load4(batch.q[1]), load4(batch.q[2]), load4(batch.q[3]), load4(batch.q[0])};
     transpose(q[0], q[1], q[2], q[3]);

@@ -70,6 +70,13 @@ struct alignas(32) ElementConstantGroup {
 struct alignas(32) ElementVolumeGroup {
   Real strainScale[4];
   Real stiffness[4];
+  /// A group with an element whose S_e is anisotropic (element.h volumeStrainMatrix) takes the
+  /// general form: shape = h V_e per lane (an isotropic lane's h (D / tr S_e) I), F = (A / h) shape,
+  /// its own rotation fit M_F, and kappaOverH = kappa_e / h [N/m]. Otherwise (anisotropic 0) the
+  /// scalar form above, and these are unused.
+  Real shape[9][4];
+  Real kappaOverH[4];
+  int32_t anisotropic = 0;
 };
 
 /// Per element-vertex pair, in the model's pair order: the vertex (as the byte offset of its

@@ -170,7 +170,7 @@ int LargeStepSolver::minimise(const ProjectiveSolver& pre, Real h, const std::ve
   // at any thread count).
   std::vector<StiffnessFrame> frames(m.numElements());
   // The volumetric term's Gauss-Newton Hessian kappa g g^T, g_i = (D / tr S) M R0_i = de_v/dx_i
-  // at the iterate (element.h; positive semi-definite, as element_stiffness.h clamps the rotation
+  // (an anisotropic S: M_F V R0_i) at the iterate (element.h; positive semi-definite, as element_stiffness.h clamps the rotation
   // term's; the rotation's own change is left out): (D / tr S) M per element.
   std::vector<Mat3> volumeFrames(m.hasVolumeTerm() ? m.numElements() : 0);
   auto fitFrames = [&] {
@@ -182,8 +182,12 @@ int LargeStepSolver::minimise(const ProjectiveSolver& pre, Real h, const std::ve
             const Mat3 A = elementCovariance(x.data(), &m.elemVerts[b], &m.restOffsets[b], int(n));
             frames[el] = elementStiffnessFrame(m.dim, A, q[el], &m.restOffsets[b], int(n));
             if (!volumeFrames.empty() && m.volumeStiffness[el] > 0) {
-              volumeFrames[el] = Real(m.dim == 2 ? 2 : 3) / restMomentTrace(&m.restOffsets[b], int(n)) *
-                                 q[el].toRotationMatrix();
+              Mat3 V;  // an anisotropic S: M_F V (element.h), else (D / tr S) M
+              if (volumeStrainMatrix(m.dim, &m.restOffsets[b], int(n), V))
+                volumeFrames[el] = fitAffineRotation(m.dim, A * V, q[el]) * V;
+              else
+                volumeFrames[el] = Real(m.dim == 2 ? 2 : 3) / restMomentTrace(&m.restOffsets[b], int(n)) *
+                                   q[el].toRotationMatrix();
             }
           }
         },

@@ -263,7 +263,13 @@ size_t RestModel::memoryBytes() const {
 Real RestModel::elementStiffnessBound(size_t e) const {
   if (volumeStiffness.empty() || volumeStiffness[e] == 0) return stiffness[e];
   const uint32_t b = elemStart[e], n = elemStart[e + 1] - b;
-  const Real D = dim == 2 ? 2 : 3;
+  Mat3 V;  // the volumetric Hessian kappa g g^T's eigenvalue kappa sum |g_i|^2, g_i = V R0_i (element.h)
+  if (volumeStrainMatrix(dim, &restOffsets[b], int(n), V)) {
+    Real sum = 0;
+    for (uint32_t i = 0; i < n; ++i) sum += (V * restOffsets[b + i]).squaredNorm();
+    return stiffness[e] + volumeStiffness[e] * sum;
+  }
+  const Real D = dim == 2 ? 2 : 3;  // isotropic: g_i = (D / tr S) R0_i, sum |g_i|^2 = D^2 / tr S
   return stiffness[e] + volumeStiffness[e] * D * D / restMomentTrace(&restOffsets[b], int(n));
 }
 

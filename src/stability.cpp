@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <utility>
+#include <vector>
 
 #include "gradel/element.h"
 #include "gradel/element_stiffness.h"
@@ -14,11 +16,14 @@ namespace gradel {
 namespace {
 
 // y = M^-1/2 K M^-1/2 x over every element (frames at rest, fixed), z zeroed in 2D. K includes
-// the volumetric term's rest Hessian kappa_e g g^T, g_i = (D / tr S_e) R0_i (element.h, M = I).
+// the volumetric term's rest Hessian kappa_e g g^T, g_i = (D / tr S_e) R0_i (element.h, M = I;
+// an anisotropic S_e: g_i = V_e R0_i).
 struct RestOperator {
   const RestModel& m;
   std::vector<StiffnessFrame> frames;
   std::vector<Real> restScale;  ///< D / tr S_e per element (empty without a volumetric term).
+  /// Per element: whether S_e is anisotropic, and then V_e (g_i = V_e R0_i, element.h).
+  std::vector<std::pair<bool, Mat3>> restStrain;
   std::vector<Real> invSqrtMass;
   mutable std::vector<Vec3> scaled, elementOut;
 
@@ -33,10 +38,11 @@ struct RestOperator {
       largest = std::max<size_t>(largest, n);
     }
     if (m.hasVolumeTerm()) {
-      restScale.resize(E);
+      restScale.resize(E), restStrain.resize(E);
       for (size_t e = 0; e < E; ++e) {
         const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
         restScale[e] = Real(m.dim == 2 ? 2 : 3) / restMomentTrace(&m.restOffsets[b], int(n));
+        if (volumeStrainMatrix(m.dim, &m.restOffsets[b], int(n), restStrain[e].second)) restStrain[e].first = true;
       }
     }
     invSqrtMass.resize(V);
@@ -53,7 +59,13 @@ struct RestOperator {
       elementStiffnessProduct(frames[e], scaled.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[e],
                               elementOut.data());
       for (uint32_t k = 0; k < n; ++k) y[m.elemVerts[b + k]] += elementOut[k];
-      if (!restScale.empty() && m.volumeStiffness[e] > 0) {
+      if (!restScale.empty() && m.volumeStiffness[e] > 0 && restStrain[e].first) {
+        const Mat3& Ve = restStrain[e].second;
+        Real s = 0;
+        for (uint32_t k = 0; k < n; ++k) s += (Ve * m.restOffsets[b + k]).dot(scaled[m.elemVerts[b + k]]);
+        s *= m.volumeStiffness[e];
+        for (uint32_t k = 0; k < n; ++k) y[m.elemVerts[b + k]] += s * (Ve * m.restOffsets[b + k]);
+      } else if (!restScale.empty() && m.volumeStiffness[e] > 0) {
         Real s = 0;
         for (uint32_t k = 0; k < n; ++k) s += m.restOffsets[b + k].dot(scaled[m.elemVerts[b + k]]);
         s *= m.volumeStiffness[e] * restScale[e] * restScale[e];
@@ -80,7 +92,7 @@ FrequencyEstimate highestFrequency(const RestModel& m, int iterations) {
   const size_t V = m.numVertices();
   if (m.numElements() == 0 || V == 0) return est;
 
-  // The upper bound: every element's K_e <= k_e I (with a volumetric term, + kappa_e D^2 / tr S_e:
+  // The upper bound: every element's K_e <= k_e I (with a volumetric term, + kappa_e sum |g_i|^2:
   // RestModel::elementStiffnessBound), so K <= diag(sum of the bounds at each vertex).
   std::vector<Real> kSum(V, 0.0);
   for (size_t e = 0; e < m.numElements(); ++e) {

@@ -87,6 +87,61 @@ TEST(PoissonElement, ForcesAreTheEnergyGradientWithoutNetForceOrTorque) {
   for (const Vec3& fi : f) EXPECT_LT(fi.norm(), 1e-10 * kappa / s);
 }
 
+// An anisotropic element (the 18 corners of a plate of 2 x 2 x 1 cells, as an incomplete element
+// of the gradational layout; element.h): e_v is tr(eps) of a small strain in any pose, where the
+// scalar form D (tr(M^T A) - tr S) / tr S weighed the plate's in-plane strains 1.26x and its
+// normal strain 0.47x (S = diag(12, 12, 4.5) s^2); forces are -dE/dx with no net force or torque.
+TEST(PoissonElement, AnisotropicElementMeasuresTheTraceOfItsStrain) {
+  const Real s = 0.01, kappa = 50.0;
+  std::vector<Vec3> rest, R0;
+  std::vector<uint32_t> ids;
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 3; ++j)
+      for (int i = 0; i < 3; ++i) rest.emplace_back(s * i, s * j, s * k), ids.push_back(uint32_t(ids.size()));
+  const int n = int(rest.size());
+  Vec3 centre = Vec3::Zero();
+  for (const Vec3& p : rest) centre += p / Real(n);
+  for (const Vec3& p : rest) R0.push_back(p - centre);
+  Mat3 V;
+  ASSERT_TRUE(volumeStrainMatrix(3, R0.data(), n, V));
+  auto energy = [&](const std::vector<Vec3>& x, std::vector<Vec3>* f = nullptr) {
+    std::vector<Vec3> g(size_t(n), Vec3::Zero());
+    const Quat q = fitRotation3Cold(elementCovariance(x.data(), ids.data(), R0.data(), n));
+    const Real e = elementVolumeForces(3, x.data(), ids.data(), R0.data(), n, q, kappa, g.data());
+    if (f) *f = g;
+    return e;
+  };
+  const Quat turn(Eigen::AngleAxisd(0.7, Vec3(1, 2, -1).normalized()));
+  for (const Mat3& eps : {Mat3(Vec3(1e-4, 0, 0).asDiagonal()), Mat3(Vec3(0, 0, 1e-4).asDiagonal()),
+                          Mat3(Vec3(2e-5, -3e-5, 7e-5).asDiagonal())}) {
+    std::vector<Vec3> x;
+    for (const Vec3& p : rest) x.push_back(turn * (p + eps * (p - centre)) + Vec3(0.1, 0.2, 0.3));
+    const Real trace = eps.trace();
+    EXPECT_NEAR(energy(x), 0.5 * kappa * trace * trace, 1e-3 * 0.5 * kappa * trace * trace) << eps.diagonal().transpose();
+  }
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<Real> u(-1, 1);
+  for (int trial = 0; trial < 3; ++trial) {
+    std::vector<Vec3> x;
+    for (const Vec3& p : rest) x.push_back(turn * p + 0.15 * s * Vec3(u(rng), u(rng), u(rng)));
+    std::vector<Vec3> f;
+    energy(x, &f);
+    Vec3 sum = Vec3::Zero(), torque = Vec3::Zero();
+    Real scale = 0;
+    for (int i = 0; i < n; ++i) sum += f[i], torque += x[i].cross(f[i]), scale += f[i].norm();
+    ASSERT_GT(scale, 0);
+    EXPECT_LT(sum.norm(), 1e-12 * scale);
+    EXPECT_LT(torque.norm(), 1e-10 * scale * s);
+    const Real h = 1e-7 * s;
+    for (int i = 0; i < n; ++i)
+      for (int a = 0; a < 3; ++a) {
+        std::vector<Vec3> xp = x, xm = x;
+        xp[i][a] += h, xm[i][a] -= h;
+        EXPECT_NEAR(f[i][a], -(energy(xp) - energy(xm)) / (2 * h), 1e-6 * scale) << "vertex " << i << " axis " << a;
+      }
+  }
+}
+
 // An element turned inside out is pushed back: a small step along the force lowers the energy
 // and raises J, kappa/2 (J - 1)^2 on these squashes (the corotated
 // volumetric strain tr(M^T F) - 3 equals J - 1 for F = diag(a, 1, 1)).

@@ -11,11 +11,23 @@
 // element_stage.h's data-parallel layout.
 //
 // The volumetric term (material.h, Poisson's ratio nu > 0): with M the element's best-fit
-// rotation above, S = sum_i R0_i R0_i^T and D the dimension (3, or 2 in 2D),
-//   e_v = D (tr(M^T A) - tr S) / tr S      (the volumetric strain in the element's rotated frame:
-//                                            tr(eps) for a small strain eps when S is isotropic)
+// rotation above, S = sum_i R0_i R0_i^T, D the dimension (3, or 2 in 2D) and F = A S^-1 the
+// element's affine fit,
+//   e_v = tr(M_F^T F) - D                  (the volumetric strain in the element's rotated frame:
+//                                            tr(eps) for a small strain eps)
 //   E_v = kappa_e / 2 e_v^2
-//   f_i = -dE_v/dx_i = -kappa_e e_v (D / tr S) M R0_i
+//   f_i = -dE_v/dx_i = -kappa_e e_v M_F V R0_i
+// with V = S^-1 (volumeStrainMatrix; in 2D the x-y block) and M_F the best-fit rotation of F
+// (not of A: M_F maximises tr(M^T F), so d tr(M_F^T F) / dF = M_F, and the forces are the exact
+// gradient with zero torque, sum r_i (M_F V R0_i)^T = F M_F^T being symmetric; M of A would leave
+// a torque of second order in the strain). A complete element without hanging vertices has an
+// isotropic S = (tr S / D) I, V = (D / tr S) I, M_F = M, and the term is computed in that scalar
+// form: e_v = D (tr(M^T A) - tr S) / tr S. An incomplete element (a line or plate of cells) or one
+// carrying hanging vertices on some faces has an anisotropic S; the scalar form there weighed each
+// strain by S (a plate of 2 x 2 x 1 cells: its in-plane strains 1.26x, its normal one 0.47x), which
+// made a gradational bar 1.11 / 1.19 / 1.22 x stiffer than E in tension at nu = 0.3 / 0.45 / 0.49,
+// with a lateral / axial ratio of 0.37 / 0.56 / 0.62 (docs/validation/poisson.md before
+// 2026-11-28). In the scalar form:
 // M maximises tr(M^T A) over rotations, so d tr(M^T A) / dA = M (the envelope theorem: M's own
 // change does not count) and dA/dx_i [u] = u R0_i^T. The forces sum to zero (sum R0_i = 0; the
 // rounding residue's share removed as above) and have zero torque for the same reason as eq. 1
@@ -58,6 +70,14 @@ Real elementVolumeForces(int dim, const Vec3* x, const uint32_t* verts, const Ve
                          Real kappa, Vec3* f);
 /// tr S = sum_i |R0_i|^2 [m^2] (the term's normalisation).
 Real restMomentTrace(const Vec3* R0, int n);
+/// The volumetric term's V = S^-1 above [1/m^2], when S is not isotropic: returns true and sets
+/// V (in 2D the x-y block, z row and column zero). Returns false for an isotropic S (exactly:
+/// zero off-diagonals and equal diagonal entries), where V = (D / tr S) I and every user keeps
+/// that scalar form.
+bool volumeStrainMatrix(int dim, const Vec3* R0, int n, Mat3& V);
+/// M_F above: the best-fit proper rotation of F (3D: fitRotation3 warm-started from `warm`, the
+/// element's rotation of A, to 1e-12; 2D: the closed form about z).
+Mat3 fitAffineRotation(int dim, const Mat3& F, const Quat& warm);
 
 /// F = A S^-1 (F_zz = 1 in 2D) and its cofactor matrix cof(F) = dJ/dF.
 Mat3 elementDeformationGradient(int dim, const Mat3& A, const Mat3& Sinv);
