@@ -949,8 +949,7 @@ class Viewer {
     const auto& [lo, hi] = figures_.bounds.at(size_t(editBody_));
     const Vec3 c = (lo + hi) / 2;
     const Real side = scene_.manipulators.size() % 2 == 0 ? -1 : 1;
-    Vec3 p = c + Vec3(side * (0.5 * extent + m.radius + 0.05), 0, 0);
-    if (scene_.dim == 2) p.z() = 0;
+    const Vec3 p = c + Vec3(side * (0.5 * extent + m.radius + 0.05), 0, 0);  // 2D: buildScene puts it in the plane
     m.path.keys = {Keyframe{0, p, std::nullopt}};
     scene_.manipulators.push_back(m);
   }

@@ -39,6 +39,7 @@ set(GRADEL_CORE_SOURCES
   src/output.cpp
   src/overlaps.cpp
   src/pins.cpp
+  src/plane.cpp                  # a 2D scene put into its plane z = 0 once (normalizeFor2D)
   src/factor_solve.cpp
   src/projective.cpp
   src/large_step.cpp
@@ -152,6 +153,7 @@ set(GRADEL_TEST_SOURCES
   tests/test_model.cpp
   tests/test_output.cpp
   tests/test_pins.cpp
+  tests/test_plane.cpp
   tests/test_region_damping.cpp
   tests/test_regions.cpp
   tests/test_rotation_fit.cpp

@@ -492,8 +492,7 @@ PYBIND11_MODULE(gradel, m) {
                if (!domainMin || !domainMax) throw InputError("domain: give both domain_min and domain_max");
                s.domain.enabled = true;
                s.domain.min = vec(*domainMin, "domain_min", s.dim);
-               s.domain.max = vec(*domainMax, "domain_max", s.dim);
-               if (s.dim == 2) s.domain.min.z() = -1, s.domain.max.z() = 1;
+               s.domain.max = vec(*domainMax, "domain_max", s.dim);  // 2D: z range set by buildScene
                s.domain.restitution = restitution;
                s.domain.friction = friction;
                validate(s.domain, s.dim);

@@ -231,7 +231,6 @@ CarvedBody carveBody(const CarveInput& b, const std::vector<uint8_t>& remove) {
   }
   if (newMass > 0) {
     out.momentumCorrection = (before - out.removedMomentum - after) / newMass;
-    if (D == 2) out.momentumCorrection.z() = 0;
     for (size_t v = 0; v < V; ++v)
       if (out.fromVertex[v] == Layout::kNoVertex) out.velocities[v] += out.momentumCorrection;
   }

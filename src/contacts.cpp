@@ -252,12 +252,11 @@ void reflectVelocity(Vec3& v, const Vec3& surfaceVelocity, const Vec3& n, Real r
 
 }  // namespace
 
-ContactResult resolveManipulator(const Manipulator& m, const Vec3& xPrev, Vec3& x, Vec3& v, int dim, bool bounce,
+ContactResult resolveManipulator(const Manipulator& m, const Vec3& xPrev, Vec3& x, Vec3& v, bool bounce,
                                  const StepStart* start) {
   ContactResult res;
   const Vec3 p0 = xPrev - m.previousPosition;  // start of the step, in the moving frame
-  Vec3 p1 = x - m.position;                    // end of the step, in the moving frame
-  if (dim == 2) p1.z() = 0;
+  const Vec3 p1 = x - m.position;              // end of the step, in the moving frame (2D: in the plane)
   Vec3 n1;
   const Real d1 = frameDistance(m, p1, &n1);
   Real tEntry = 0, tExit = 1;
@@ -299,7 +298,6 @@ ContactResult resolveManipulator(const Manipulator& m, const Vec3& xPrev, Vec3& 
   } else {
     return res;
   }
-  if (dim == 2) target.z() = 0, n.z() = 0;
   x = m.position + target;
   reflectVelocity(v, m.velocity, n, bounce ? m.settings.restitution : 0.0, m.settings.friction, d0, start,
                   (target - p1).dot(n));

@@ -8,6 +8,7 @@
 
 #include "gradel/element.h"
 #include "gradel/settings_check.h"
+#include "plane.h"
 
 namespace gradel {
 
@@ -225,8 +226,7 @@ RestModel buildRestModel(const Layout& layout, const VoxelVolume& volume, const 
   m.dim = layout.dim;
   m.voxelSize = layout.voxelSize;
   m.material = material;
-  m.origin = origin;
-  if (m.dim == 2) m.origin.z() = 0;  // a 2D body lies in the plane z = 0
+  m.origin = projectToPlane(origin, m.dim);  // a 2D body lies in the plane z = 0 (plane.h)
   if (!m.origin.allFinite()) throw InputError("origin: must be finite");
   placeVertices(layout, m.origin, m);
   assignMaterials(layout, m);

@@ -68,11 +68,9 @@ Manipulator scaled(const Manipulator& m, Real s) {
   r.settings.radius *= s, r.settings.halfLength *= s;
   return r;
 }
-bool anyInside(const Manipulator& m, const Vec3* x, size_t n, int dim) {
+bool anyInside(const Manipulator& m, const Vec3* x, size_t n) {
   for (size_t i = 0; i < n; ++i) {
-    Vec3 q = x[i];
-    if (dim == 2) q.z() = m.position.z();
-    if (m.signedDistance(q, nullptr) < 0) return true;
+    if (m.signedDistance(x[i], nullptr) < 0) return true;
   }
   return false;
 }
@@ -85,13 +83,13 @@ Vec3 centroid(const RestModel& model, const State& s, const BodyRange& b, Real* 
 }
 }  // namespace
 
-Real freeManipulatorScale(const Manipulator& m, const Vec3* x, size_t n, int dim) {
-  if (!anyInside(m, x, n, dim)) return 1;
+Real freeManipulatorScale(const Manipulator& m, const Vec3* x, size_t n) {
+  if (!anyInside(m, x, n)) return 1;
   Real lo = 1e-6, hi = 1;
-  if (anyInside(scaled(m, lo), x, n, dim)) return lo;
+  if (anyInside(scaled(m, lo), x, n)) return lo;
   for (int it = 0; it < 50; ++it) {
     const Real mid = 0.5 * (lo + hi);
-    (anyInside(scaled(m, mid), x, n, dim) ? hi : lo) = mid;
+    (anyInside(scaled(m, mid), x, n) ? hi : lo) = mid;
   }
   return lo;
 }
@@ -119,13 +117,11 @@ std::vector<StartOverlap> findStartOverlaps(const World& world) {
       const Manipulator& m = world.manipulators()[k];
       StartOverlap o{StartOverlap::With::Manipulator, b, k};
       for (uint32_t u = body.vertexBegin; u < body.vertexEnd; ++u) {
-        Vec3 q = s.positions[u];
-        if (dim == 2) q.z() = m.position.z();
-        const Real sd = m.signedDistance(q, nullptr);
+        const Real sd = m.signedDistance(s.positions[u], nullptr);
         if (sd < 0) o.depth = std::max(o.depth, -sd), ++o.vertices;
       }
       if (o.vertices) {
-        o.scale = freeManipulatorScale(m, s.positions.data(), s.positions.size(), dim);
+        o.scale = freeManipulatorScale(m, s.positions.data(), s.positions.size());
         const ManipulatorSettings& ms = m.settings;
         o.reach = ms.shape == ManipulatorShape::Cylinder ? std::max(ms.radius, ms.halfLength) : ms.radius;
         r.push_back(o);

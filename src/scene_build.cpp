@@ -5,6 +5,7 @@
 #include "gradel/bodies.h"
 #include "gradel/scene.h"
 #include "gradel/slow_stage.h"
+#include "plane.h"
 
 namespace gradel {
 
@@ -82,8 +83,10 @@ void buildBody(const BodySettings& settings, int dim, const SizeLimits& limits, 
 
 }  // namespace
 
-BuiltScene buildScene(const Scene& scene, const SizeLimits& limits) {
-  if (scene.bodies.empty()) throw InputError(scene.name + ": no body (expected \"body\" or \"bodies\")");
+BuiltScene buildScene(const Scene& given, const SizeLimits& limits) {
+  if (given.bodies.empty()) throw InputError(given.name + ": no body (expected \"body\" or \"bodies\")");
+  Scene scene = given;
+  normalizeFor2D(scene);  // a 2D scene into its plane, once (plane.h)
   BuiltScene b;
   b.bodies.resize(scene.bodies.size());
   // The memory limit holds all bodies: each body is checked against what the ones before leave.

@@ -169,8 +169,7 @@ void readBody(Fields& f, int dim, BodySettings& body) {
     const Real reach = kMaxPositionVoxels * body.shape.voxelSize;
     body.position = f.optVec("position", Bound{-reach, reach, false, false}, "m").value_or(body.position);
   }
-  body.velocity = f.vec("velocity", body.velocity, "m/s");
-  if (dim == 2) body.position.z() = 0, body.velocity.z() = 0;
+  body.velocity = f.vec("velocity", body.velocity, "m/s");  // 2D: z = 0 (a vector of 2 numbers)
 }
 
 void readMaterial(Fields f, MaterialSettings& m) {

@@ -49,12 +49,7 @@ void readDomain(Fields f, Scene& scene) {
   DomainSettings& d = scene.domain;
   d.enabled = true;  // a "domain" object means walls
   d.min = f.vec("min", d.min, "m");
-  d.max = f.vec("max", d.max, "m");
-  if (scene.dim == 2) {
-    // z is unused in 2D; a non-empty z range keeps the z = 0 plane inside the box.
-    d.min.z() = -1;
-    d.max.z() = 1;
-  }
+  d.max = f.vec("max", d.max, "m");  // 2D: z is unused (its range set by normalizeFor2D, plane.h)
   checkMaxAboveMin(f, d.min, d.max);
   d.restitution = f.number("restitution", d.restitution, kUnit, "");
   d.friction = f.number("friction", d.friction, kNonNegative, "");
@@ -117,9 +112,7 @@ PinSettings readPin(Fields& f, const Scene& scene) {
       const std::array<int, 3> o = mf->requireIntVec("offset", -kMaxGridEdge, kMaxGridEdge);
       offset = Vec3(o[0], o[1], dim == 3 ? o[2] : 0);
     }
-    Vec3 origin = body.position;
-    if (dim == 2) origin.z() = 0;
-    mask->origin = origin + offset * mask->voxelSize;
+    mask->origin = body.position + offset * mask->voxelSize;  // 2D: z = 0, as read
     for (Fields& bf : mf->objectArray("boxes", false)) {
       const std::array<int, 3> lo = bf.requireIntVec("min", 0, kMaxGridEdge),
                                hi = bf.requireIntVec("max", 0, kMaxGridEdge);
@@ -139,11 +132,7 @@ PinSettings readPin(Fields& f, const Scene& scene) {
     p.mask = mask;
   } else {
     p.min = f.requireVec("min", kAny, "m");
-    p.max = f.requireVec("max", kAny, "m");
-    if (dim == 2) {
-      p.min.z() = -1;  // the z = 0 plane is inside, as for the domain
-      p.max.z() = 1;
-    }
+    p.max = f.requireVec("max", kAny, "m");  // 2D: z is unused (normalizeFor2D, plane.h)
     checkMaxAboveMin(f, p.min, p.max);
   }
   p.path = readPath(f);

@@ -42,7 +42,7 @@ void World::releaseStartOverlaps() {
       Real& scale = manipulatorScale_[o.other];
       if (scale < 1) continue;  // (found for all bodies' vertices at once)
       Manipulator& m = manipulators_[o.other];
-      scale = freeManipulatorScale(m, state_.positions.data(), state_.positions.size(), rm.dim);
+      scale = freeManipulatorScale(m, state_.positions.data(), state_.positions.size());
       m.settings.radius = scale * manipulatorSize_[o.other][0];
       m.settings.halfLength = scale * manipulatorSize_[o.other][1];
     } else if (!pinnedBody[o.body] || !pinnedBody[o.other]) {

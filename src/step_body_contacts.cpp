@@ -72,7 +72,7 @@ void World::stageBodyContacts() {
     // The walls' impulses go into the step's force ledger (closed after this stage, World::step).
     for (int wall = 0; wall < kWalls; ++wall)
       if (wallDv[wall] != Vec3::Zero()) {
-        addImpulse(scratch_->impulse[K + size_t(wall)], model_->mass[u] * wallDv[wall], x[u], Vec3::Zero(), model_->dim);
+        addImpulse(scratch_->impulse[K + size_t(wall)], model_->mass[u] * wallDv[wall], x[u], Vec3::Zero());
         scratch_->work += model_->mass[u] * wallDv[wall].dot(wallVelocity_[size_t(wall)]);
       }
   }

@@ -26,11 +26,10 @@ constexpr size_t kVertexBlock = 16;
 // Pair constraints (body contacts in the implicit solve) hold a vertex this far [voxel size of
 // the face's body] outside the face: the post-step stage (skin 1e-6) then has nothing to do.
 constexpr Real kPairGap = 1e-4;
-// One vertex's contact impulse J = m dv on the body from `surface` at x, about `centre` (2D: in the plane).
-inline void addImpulse(ContactForce& acc, const Vec3& J, const Vec3& x, const Vec3& centre, int dim) {
-  Vec3 r = x - centre;
-  if (dim == 2) r.z() = 0;
-  acc.force += J, acc.torque += r.cross(J);
+// One vertex's contact impulse J = m dv on the body from `surface` at x, about `centre` (2D: x,
+// centre and J in the plane z = 0, so the torque is about z).
+inline void addImpulse(ContactForce& acc, const Vec3& J, const Vec3& x, const Vec3& centre) {
+  acc.force += J, acc.torque += (x - centre).cross(J);
 }
 
 /// The step's context: what one step's stages pass on to each other. Set once per step by

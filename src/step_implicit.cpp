@@ -116,7 +116,7 @@ void World::solveHeld(const State& start, const std::vector<Vec3>& targets, cons
   for (size_t j = 0; j < held.vertices.size(); ++j) {
     const size_t k = size_t(std::max(0, held.surface[j]));
     const Vec3 centre = k < manipulators_.size() ? manipulators_[k].position : Vec3::Zero();
-    addImpulse(c.impulse[k], heldForces[j] * dt_, held.at[j], centre, model_->dim);
+    addImpulse(c.impulse[k], heldForces[j] * dt_, held.at[j], centre);
     // The contacts' work (contact_work.h): the hold's impulse times its surface's velocity, so
     // a manipulator that presses a body into a wall at a frame-size step supplies the energy
     // the press stores (a fixed wall none).

@@ -61,11 +61,7 @@ bool World::largeStepNearObstacles() const {
   const int dim = model_->dim;
   auto gap = [&](const Vec3& p) {
     Real best = std::numeric_limits<Real>::infinity();
-    for (const Manipulator& mp : atEnd) {
-      Vec3 q = p;
-      if (dim == 2) q.z() = mp.position.z();
-      best = std::min(best, mp.signedDistance(q, nullptr));
-    }
+    for (const Manipulator& mp : atEnd) best = std::min(best, mp.signedDistance(p, nullptr));
     if (domain_.enabled)
       for (int a = 0; a < dim; ++a) best = std::min({best, p[a] - domain_.min[a], domain_.max[a] - p[a]});
     return best;

@@ -35,9 +35,9 @@ Real World::resolveVertexContacts(const Vec3& previous, const Vec3& previousVelo
     for (size_t k = 0; k < K; ++k) {
       const Vec3 before = v;
       const Manipulator& mp = manipulators_[k];
-      const Real d = resolveManipulator(mp, previous, x, v, dim, bounce, &start).depth;
+      const Real d = resolveManipulator(mp, previous, x, v, bounce, &start).depth;
       if (d > 0 || v != before) {
-        addImpulse(impulse[k], mass * (v - before), x, mp.position, dim);
+        addImpulse(impulse[k], mass * (v - before), x, mp.position);
         // A manipulator growing back from a start overlap (overlaps.h) moves its surface outwards too.
         Vec3 u = mp.velocity;
         const Real growth = k < manipulatorGrowth_.size() ? manipulatorGrowth_[k] : 0;
@@ -52,7 +52,7 @@ Real World::resolveVertexContacts(const Vec3& previous, const Vec3& previousVelo
     const Real d = r.depth;
     for (int wall = 0; wall < kWalls; ++wall)
       if (wallDv[wall] != Vec3::Zero()) {
-        addImpulse(impulse[K + size_t(wall)], mass * wallDv[wall], x, Vec3::Zero(), dim);
+        addImpulse(impulse[K + size_t(wall)], mass * wallDv[wall], x, Vec3::Zero());
         w += mass * wallDv[wall].dot(wallVelocity_[size_t(wall)]);
         travel = std::max(travel, wallVelocity_[size_t(wall)].norm() * dt_);
       }
@@ -189,7 +189,7 @@ void World::sweepManipulatorPaths(Real t0) {
         Vec3 xk = depth > 0 ? Vec3(x + h * v) : Vec3(xs + (xe - xs) * (Real(k) / K));
         Vec3 vk = depth > 0 ? v : state_.velocities[i];
         const StepStart start{v, h};
-        const Real d = resolveManipulator(sub, x, xk, vk, m.dim, true, &start).depth;
+        const Real d = resolveManipulator(sub, x, xk, vk, true, &start).depth;
         if (d > 0 || depth > 0) v = vk;
         depth = std::max(depth, d);
         x = xk;
@@ -197,7 +197,7 @@ void World::sweepManipulatorPaths(Real t0) {
       if (depth == 0) continue;
       // Contact forces: the velocity the sweep gave the vertex, against the one it ended the solve with.
       addImpulse(scratch_->impulse[size_t(&mp - manipulators_.data())], m.mass[i] * (v - state_.velocities[i]), x,
-                 mp.position, m.dim);
+                 mp.position);
       scratch_->work += m.mass[i] * (v - state_.velocities[i]).dot((mp.position - mp.previousPosition) / dt_);
       state_.positions[i] = x, state_.velocities[i] = v;
       scratch_->previousPositions[i] = x - (mp.position - mp.previousPosition);

@@ -13,6 +13,7 @@
 #include "gradel/settings_check.h"
 #include "gradel/stability.h"
 #include "huge_pages.h"
+#include "plane.h"
 #include "step_context.h"
 #include "thread_team.h"
 
@@ -37,7 +38,7 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   if (sim_.dtFraction == 0) sim_.dtFraction = defaultDtFraction(sim_.dtPeriod);
   validate(sim_);
   validate(domain_, model_->dim);
-  if (model_->dim == 2) sim_.gravity.z() = 0;  // a 2D body moves in its plane: the one place gravity is projected
+  sim_.gravity = projectToPlane(sim_.gravity, model_->dim);  // a 2D body moves in its plane (plane.h)
   // Damping: one rate unless the regions' rates differ between vertices (model.h).
   const RestModel& rm = *model_;
   uniformDamping_ = rm.vertexDamping(0, sim_.damping);
@@ -121,8 +122,7 @@ World::World(std::shared_ptr<const RestModel> model, WorldSettings settings, std
   if (!contactBodies.empty()) setBodyContacts(std::move(contactBodies), settings.bodyContact);
   if (settings.releaseStartOverlaps) releaseStartOverlaps();
   for (size_t i = 0; i < v0.size(); ++i) {
-    Vec3 v = v0[i];
-    if (model_->dim == 2) v.z() = 0;  // a 2D body moves in its plane
+    const Vec3 v = projectToPlane(v0[i], model_->dim);  // a 2D body moves in its plane
     const BodyRange& r = model_->bodies[i];
     std::fill(state_.velocities.begin() + r.vertexBegin, state_.velocities.begin() + r.vertexEnd, v);
   }
@@ -135,10 +135,11 @@ World& World::operator=(World&&) noexcept = default;
 size_t World::addManipulator(ManipulatorSettings s, const Vec3& position) {
   validate(s);
   if (s.shape == ManipulatorShape::Cylinder) s.axis.normalize();
+  projectToPlane(s.path, model_->dim);  // 2D: the pose in the plane from here on (plane.h)
   Manipulator m;
   m.settings = std::move(s);
   const bool scripted = !m.settings.path.keys.empty();
-  m.position = scripted ? m.settings.path.position(state_.time) : position;
+  m.position = scripted ? m.settings.path.position(state_.time) : projectToPlane(position, model_->dim);
   m.velocity = scripted ? m.settings.path.velocity(state_.time) : Vec3::Zero();
   m.previousPosition = m.position;  // no sweep from elsewhere on its first step
   manipulators_.push_back(std::move(m));
@@ -149,8 +150,8 @@ size_t World::addManipulator(ManipulatorSettings s, const Vec3& position) {
 
 void World::setManipulatorPose(size_t i, const Vec3& position, const Vec3& velocity) {
   Manipulator& m = manipulators_.at(i);
-  m.position = position;  // previousPosition keeps the pose of the last step: the sweep covers the jump
-  m.velocity = velocity;
+  m.position = projectToPlane(position, model_->dim);  // previousPosition keeps the last step's pose: the sweep covers the jump
+  m.velocity = projectToPlane(velocity, model_->dim);
 }
 
 // The step as its list of stages (step_context.h).
@@ -171,8 +172,8 @@ void World::beginStep() {
     manipulatorGrowth_.clear();
   }
   if (!externalForce_.empty()) {  // external_force.h
-    const ExternalImpulse e = applyExternalImpulses(externalForce_, model_->mass, pinSet_.vertices, dt_, model_->dim,
-                                                    state_.velocities);
+    const ExternalImpulse e =
+        applyExternalImpulses(externalForce_, model_->mass, pinSet_.vertices, dt_, state_.velocities);
     externalImpulse_ += e.impulse;
     externalWork_ += std::max(Real(0), e.work);
     if (largeStep_) largeStep_->resetEnergyBudget();  // the forces did work
@@ -207,6 +208,7 @@ void World::setPins(std::vector<PinSettings> pins) {
   std::vector<std::array<uint32_t, 2>> bodies;
   for (const BodyRange& b : model_->bodies) bodies.push_back({b.vertexBegin, b.vertexEnd});
   pinSet_ = selectPins(pins, model_->restPositions, bodies);
+  for (PinSettings& p : pins) projectToPlane(p.path, model_->dim);  // 2D: offsets in the plane (plane.h)
   pins_ = std::move(pins);
   updateBodyContactInvMass();
   projective_.reset(), largeStep_.reset();  // the implicit systems eliminate the pinned vertices: refactor
@@ -225,7 +227,7 @@ void World::addExternalForces(const std::vector<uint32_t>& vertices, const std::
     if (!forces[k].allFinite()) throw InputError("forces: entry " + std::to_string(k) + " is not finite");
   }
   if (externalForce_.empty()) externalForce_.assign(n, Vec3::Zero());
-  for (size_t k = 0; k < vertices.size(); ++k) externalForce_[vertices[k]] += forces[k];
+  for (size_t k = 0; k < vertices.size(); ++k) externalForce_[vertices[k]] += projectToPlane(forces[k], model_->dim);
 }
 
 std::vector<Vec3> World::pinTargets(Real t) const {
@@ -242,8 +244,7 @@ void World::applyPins(Real t) {
   for (size_t j = 0; j < x.size(); ++j) {
     const uint32_t i = pinSet_.vertices[j];
     state_.positions[i] = x[j];
-    state_.velocities[i] = pins_[pinSet_.pinOf[j]].path.velocity(t);
-    if (model_->dim == 2) state_.positions[i].z() = 0, state_.velocities[i].z() = 0;
+    state_.velocities[i] = pins_[pinSet_.pinOf[j]].path.velocity(t);  // in a 2D body's plane: setPins
   }
 }
 

@@ -10,6 +10,7 @@
 
 #include "gradel/integrator.h"
 #include "gradel/world.h"
+#include "plane.h"
 
 namespace gradel {
 
@@ -47,6 +48,8 @@ void World::replaceModel(std::shared_ptr<const RestModel> model, State state, st
   w.integratorChoice_ = integratorChoice_;
   if (!estimate) w.frequency_ = frequency_;
   w.state_ = std::move(state);
+  for (Vec3& x : w.state_.positions) x = projectToPlane(x, w.model_->dim);  // a 2D state enters in its plane
+  for (Vec3& v : w.state_.velocities) v = projectToPlane(v, w.model_->dim);
   // What may throw first (a pin that holds no vertex any more): this world is still untouched.
   if (!pins_.empty()) w.setPins(pins_);
   if (bodyContacts_ && !contactBodies.empty()) w.setBodyContacts(std::move(contactBodies), bodyContacts_->settings());

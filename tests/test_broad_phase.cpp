@@ -24,7 +24,7 @@ void resolveAll(const std::vector<Manipulator>& ms, const DomainSettings& d, int
   for (int pass = 0; pass < 4; ++pass) {
     Real depth = 0;
     for (const Manipulator& m : ms)
-      depth = std::max(depth, resolveManipulator(m, previous, x, v, dim, pass == 0, &start).depth);
+      depth = std::max(depth, resolveManipulator(m, previous, x, v, pass == 0, &start).depth);
     depth = std::max(depth, resolveDomain(d, previous, x, v, dim, pass == 0, &start).depth);
     if (depth == 0 || surfaces < 2) break;
   }

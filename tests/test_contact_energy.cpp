@@ -79,7 +79,7 @@ TEST(ContactEnergy, RestingContactDoesNotBounce) {
   const StepStart start{Vec3(0.2, 0, 0), dt, true};  // sliding, no normal speed; symplectic Euler
   Vec3 v(0.2, -0.03, 0);                             // a = -30 m/s^2 gained this step
   Vec3 x = xPrev + dt * v;
-  resolveManipulator(m, xPrev, x, v, 3, true, &start);
+  resolveManipulator(m, xPrev, x, v, true, &start);
   EXPECT_GE(m.signedDistance(x, nullptr), 0.0);
   Vec3 n;
   m.signedDistance(x, &n);
@@ -101,18 +101,18 @@ TEST(ContactEnergy, StrikeStillBouncesElastically) {
   const Vec3 xPrev(0, 1.001, 0);
   const StepStart start{Vec3(0, -2.0, 0), dt, true};
   Vec3 v(0, -2.0, 0), x = xPrev + dt * v;
-  resolveManipulator(m, xPrev, x, v, 3, true, &start);
+  resolveManipulator(m, xPrev, x, v, true, &start);
   EXPECT_NEAR(v.y(), 2.0, 1e-12);
   // Pressed in by a force on the way (u0 = -2, u1 = -2.5, a = -500): it leaves at its approach
   // speed 2 m/s (never more), less the elastic energy the projection stored: |a| depth =
   // 500 * 0.0015 J/kg; that is its velocity at the time of the positions, v + a dt / 2.
   x = xPrev + dt * Vec3(0, -2.5, 0), v = Vec3(0, -2.5, 0);
-  resolveManipulator(m, xPrev, x, v, 3, true, &start);
+  resolveManipulator(m, xPrev, x, v, true, &start);
   EXPECT_NEAR(v.y() + 0.5 * dt * -500.0, std::sqrt(4.0 - 2 * 500 * 0.0015), 1e-6);
   // Started inside (no crossing): put out, no bounce.
   const Vec3 inside(0, 0.99, 0);
   x = inside + dt * Vec3(0, -2.0, 0), v = Vec3(0, -2.0, 0);
-  resolveManipulator(m, inside, x, v, 3, true, &start);
+  resolveManipulator(m, inside, x, v, true, &start);
   EXPECT_NEAR(v.y(), 0.0, 1e-12);
 }
 

@@ -116,8 +116,10 @@ struct StepStart {
 /// the bounce reflects the end velocity v, which adds energy under sustained contact: only for
 /// a single isolated impact, as in unit tests). With bounce == false the contact is inelastic
 /// (restitution 0): used when a vertex pinched between two surfaces is resolved again, so that
-/// repeated reflections cannot pump energy into it. Pure function of its arguments.
-ContactResult resolveManipulator(const Manipulator& m, const Vec3& xPrev, Vec3& x, Vec3& v, int dim, bool bounce = true,
+/// repeated reflections cannot pump energy into it. Pure function of its arguments. In 2D the
+/// vertex and the manipulator's pose are in the plane z = 0 already (World's API: src/plane.h), and
+/// so is the result.
+ContactResult resolveManipulator(const Manipulator& m, const Vec3& xPrev, Vec3& x, Vec3& v, bool bounce = true,
                                  const StepStart* start = nullptr);
 
 /// Resolves one vertex against the domain walls, in place (bounce and start as above). xPrev as

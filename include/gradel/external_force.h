@@ -22,10 +22,9 @@ struct ExternalImpulse {
 };
 
 /// Adds dt F_i / m_i to velocities[i] for every vertex i with a non-zero force that is not in
-/// `pinned` (ascending ids); in vertex order, so the sums are the same at any thread count. In 2D
-/// the force's z is ignored.
+/// `pinned` (ascending ids); in vertex order, so the sums are the same at any thread count. A 2D
+/// world's forces are in its plane already (World::addExternalForces projects them).
 ExternalImpulse applyExternalImpulses(const std::vector<Vec3>& forces, const std::vector<Real>& masses,
-                                      const std::vector<uint32_t>& pinned, Real dt, int dim,
-                                      std::vector<Vec3>& velocities);
+                                      const std::vector<uint32_t>& pinned, Real dt, std::vector<Vec3>& velocities);
 
 }  // namespace gradel

@@ -52,7 +52,7 @@ std::string describeStartOverlap(const StartOverlap& o, const World& world, cons
 
 /// The largest scale s in [1e-6, 1] of a manipulator's size (radius, half length) about its
 /// centre with no vertex of x[0, n) strictly inside (1 when none is inside at full size).
-Real freeManipulatorScale(const Manipulator& m, const Vec3* x, size_t n, int dim);
+Real freeManipulatorScale(const Manipulator& m, const Vec3* x, size_t n);
 
 /// Whether p lies strictly inside the voxels of `body` (its elements' blocks, rest pose moved by
 /// `shift`), with a margin of 1e-6 voxel: touching faces do not overlap.

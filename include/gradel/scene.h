@@ -88,7 +88,9 @@ struct BuiltScene {
   const BodyRange& range(size_t i) const { return world->model().bodies.at(i); }
 };
 
-/// Per body: rasterises the shape (or reads its source), builds the layout and rest model, and
+/// A 2D scene is first put into its plane z = 0 (positions, velocities, gravity, paths; the
+/// domain's and pin boxes' z range [-1, 1]), on a copy, once (src/plane.h normalizeFor2D). Then per
+/// body: rasterises the shape (or reads its source), builds the layout and rest model, and
 /// embeds a source mesh; then the world of all bodies in one call (World(model, WorldSettings,
 /// contact surfaces): each body with its velocity, pins on their bodies, start overlaps released).
 /// Before each volume and each layout, the sizes are checked against `limits` (size_limits.h),

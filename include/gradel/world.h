@@ -104,7 +104,10 @@ class World {
   /// `contactBodies` (buildContactBodies; empty: none), the start overlaps' release and the
   /// bodies' initial velocities, in that order. InputError for settings out of range, a pin that
   /// holds no vertex or body contact in 2D; std::invalid_argument for a bodyVelocities entry
-  /// count other than the model's bodies.
+  /// count other than the model's bodies. A 2D world keeps its bodies in the plane z = 0: every
+  /// input is put into it where it enters (gravity, initial velocities here; manipulator paths and
+  /// poses, pin paths, external forces and a replaced state by the methods below), so no step
+  /// stage projects anything (src/plane.h). Writing state() directly is the caller's business.
   World(std::shared_ptr<const RestModel> model, WorldSettings settings, std::vector<ContactBody> contactBodies = {});
   /// A bare world (tests, tools): no pins, no body contacts, at rest, start overlaps pushed out
   /// by the contacts at once unless its owner calls releaseStartOverlaps().
@@ -157,9 +160,10 @@ class World {
   const std::vector<Manipulator>& manipulators() const { return manipulators_; }
   /// Adds a manipulator at its path's pose now, or at `position` [m] without a path (then posed
   /// from outside with setManipulatorPose). Normalises a cylinder's axis; InputError for a
-  /// non-positive radius or a zero axis. Returns its index.
+  /// non-positive radius or a zero axis. Returns its index. 2D: the path and pose in the plane.
   size_t addManipulator(ManipulatorSettings settings, const Vec3& position = Vec3::Zero());
   /// Sets a manipulator's pose from outside (viewer, script); used for manipulators without a path.
+  /// 2D: position and velocity put into the plane (z = 0).
   void setManipulatorPose(size_t i, const Vec3& position, const Vec3& velocity);
 
   /// Contact forces (contacts.h): what the body exerts on each manipulator and on the walls.
@@ -188,7 +192,7 @@ class World {
   /// External forces [N] on vertices (external_force.h): added to those set before, they act in
   /// every step until clearExternalForces(), as the impulse F dt at the start of each step in
   /// every integrator. InputError for a vertex id out of range, a non-finite force or sizes that
-  /// differ.
+  /// differ. 2D: the forces' z is dropped here.
   void addExternalForces(const std::vector<uint32_t>& vertices, const std::vector<Vec3>& forces);
   void clearExternalForces() { externalForce_.clear(); }
   /// Per vertex, the external force acting now (empty: none).
@@ -212,6 +216,7 @@ class World {
   /// with the same settings (empty: none). External forces and the frame-size integrators'
   /// warm starts (vertex ids) are dropped; derived rest data, scratch and threads are made anew
   /// (src/world_replace.cpp). std::invalid_argument when the state's sizes are not the model's.
+  /// 2D: the state's positions and velocities put into the plane.
   void replaceModel(std::shared_ptr<const RestModel> model, State state, std::vector<ContactBody> contactBodies);
   /// Carving's ledger (carve_scene.h): adds what an event took from body `body` (RestModel::bodies
   /// index) to its total since t = 0, kept across replaceModel. The linear momentum of body b now
@@ -223,7 +228,7 @@ class World {
 
   /// Boundary conditions (pins.h): replaces the pins (WorldSettings::pins at creation) and moves
   /// the pinned vertices to their prescribed positions now (a pin added while running: Python's
-  /// add_pin). Throws InputError when a pin holds no vertex.
+  /// add_pin). Throws InputError when a pin holds no vertex. 2D: the paths' offsets in the plane.
   void setPins(std::vector<PinSettings> pins);
   const std::vector<PinSettings>& pins() const { return pins_; }
   const PinSet& pinned() const { return pinSet_; }

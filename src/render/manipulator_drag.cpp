@@ -41,8 +41,7 @@ ManipulatorDrag grabManipulator(const Camera& camera, World& world, size_t i, do
   camera.ray(x, y, width, height, &o, &d);
   const Vec3 n = planeNormal(camera);
   const Real t = std::abs(d.dot(n)) < 1e-9 ? 0 : (m.position - o).dot(n) / d.dot(n);
-  Vec3 offset = o + t * d - m.position;
-  if (camera.flat) offset.z() = 0;
+  const Vec3 offset = o + t * d - m.position;  // 2D: World::setManipulatorPose keeps the pose in the plane
   return ManipulatorDrag{i, m.position, m.position, m.position, offset};
 }
 
@@ -53,7 +52,6 @@ void dragInPlane(const Camera& camera, ManipulatorDrag& drag, double x, double y
   if (std::abs(d.dot(n)) < 1e-9) return;
   const Real t = (drag.planePoint - o).dot(n) / d.dot(n);
   drag.to = o + t * d - drag.grabOffset;
-  if (camera.flat) drag.to.z() = 0;
 }
 
 void dragInDepth(const Camera& camera, ManipulatorDrag& drag, Real metres) {
