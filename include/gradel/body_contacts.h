@@ -192,11 +192,12 @@ class BodyContacts {
   // *clearance: a lower bound of its distance to b's surface (< 0: inside, or unknown); hint[0]
   // and hint[1]: its nearest face and its nearest facing face when last found (searches start there).
   int detectVertex(const ContactBody& A, const ContactBody& B, const Grid& g, uint32_t i, Real r, bool smallStep,
-                   const Vec3* x, Contact* out, Real* clearance, uint32_t* hint) const;
+                   const Vec3* x, Contact* out, Real* clearance, uint32_t* hint, uint32_t* tests) const;
   struct Nearest {
     Real d2;       ///< [m^2] squared distance to it (reach^2 when none).
     uint32_t tri;  ///< Its id, or kNone.
     ClosestPoint cp;
+    uint32_t tests = 0;  ///< Nearest-point tests it made (BodyContactStats::faceTests).
   };
   template <class Accept>
   Nearest nearestTriangle(const Grid& g, const ContactBody& faces, const Vec3& p, Real reach, const Vec3* x,
@@ -211,6 +212,8 @@ class BodyContacts {
   Real skin_ = 0;   ///< [m] a corrected vertex ends this far outside.
   Real loose_ = 0;  ///< [m] how far a surface may move from the rebuild before the tracks are rebuilt.
   Real rCap_ = 0;   ///< [m] the largest search radius the tracks hold (set at the rebuild).
+  /// [m] the most a pair's search radius may grow to within a stage (set at its round 0: searchRadius).
+  Real reachCap_ = std::numeric_limits<Real>::infinity();
   // scratch
   std::vector<Box> bounds_;       ///< Per body: its surface's box at the last rebuild.
   std::vector<Real> moved_;       ///< Per body: at least the largest distance a surface vertex moved in the step [m].
@@ -277,6 +280,7 @@ class BodyContacts {
   uint32_t minParallel_ = kMinParallel;
   std::vector<Contact> slot_;        ///< Per entry of looked_: its contact, if any.
   std::vector<uint8_t> slotState_;   ///< Per vertex: detectVertex's answer (0: skipped).
+  std::vector<uint32_t> slotTests_;  ///< Per vertex: detectVertex's nearest-point tests.
   std::vector<uint32_t> looked_;     ///< The pass's candidates to look up (indices into their pair's track).
   std::vector<uint32_t> lookedJob_;  ///< Per entry of looked_: its pair (index into jobs_).
   std::vector<PairJob> jobs_;        ///< The pass's pairs, in order.
