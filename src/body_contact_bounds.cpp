@@ -16,7 +16,7 @@ namespace gradel {
 // The search radius of a pair: about a voxel plus how far both surfaces moved in the step (a
 // vertex that started the step outside cannot end it deeper than that).
 Real BodyContacts::searchRadius(size_t a, size_t b) const {
-  return std::min(std::max(bodies_[a].thickness, bodies_[b].thickness) + moved_[a] + moved_[b], reachCap_);
+  return std::max(bodies_[a].thickness, bodies_[b].thickness) + moved_[a] + moved_[b];
 }
 
 // The bounds of a body's motion from its BodyMotion: how far its surface moved in the step and
@@ -74,16 +74,6 @@ void BodyContacts::measureRound(const BodyContactState& s, int round) {
     }
     movedStart_ = moved_, sinceRebuildStart_ = sinceRebuild_, sinceAxisStart_ = sinceAxis_;
     corrected_.assign(B, 0);
-    // The stage's reach: what the step's own motion allows, plus kReachGrowth voxels for the
-    // corrections (see kReachGrowth).
-    reachCap_ = std::numeric_limits<Real>::infinity();
-    Real r = 0, thickest = 0;
-    for (size_t a = 0; a < B; ++a) {
-      thickest = std::max(thickest, bodies_[a].thickness);
-      for (size_t b = 0; b < B; ++b)
-        if (a != b) r = std::max(r, searchRadius(a, b));
-    }
-    reachCap_ = r + kReachGrowth * thickest;
   } else {  // only the vertices of the contacts moved since
     moved_ = movedStart_, sinceRebuild_ = sinceRebuildStart_, sinceAxis_ = sinceAxisStart_;
     auto grow = [](Real& to, Real d) {

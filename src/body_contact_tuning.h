@@ -21,10 +21,6 @@ constexpr Real kLoose = 0.5, kRadiusSlack = 0.25;
 // A track's grid: cells of twice this (same unit); the queries start from their last answer, so
 // their boxes are small and fine cells hold few faces.
 constexpr Real kTrackCell = 0.5;
-// [thickness] within a stage, a pair's search radius grows past round 0's (the step's own motion)
-// by at most this: the rounds' corrections would grow it without bound where a crushed surface is
-// tangled (docs/speed.md, "Violent hits").
-constexpr Real kReachGrowth = 1;
 // measure(): surface vertices per chunk (a unit of the team's work).
 constexpr uint32_t kMeasureChunk = 4096;
 // detectPairs(): faces per chunk of the boxes now (a unit of the team's work).

@@ -213,15 +213,15 @@ TEST(Impacts, DISABLED_GlancingHitWithFriction) {
   }
 }
 
-// A sphere tool crossing at 12 m/s glances a 16^3 ball and pushes it into a 14^3 one (issue 26's
-// cost of violent hits; MultiBodyScene's scene with the tool 2x faster). From about step 84 the
-// struck ball's surface is crushed and the stage's rounds push vertices along far faces; each
-// round's search radius grew with those corrections (0.036 -> 0.99 m over one step's rounds),
-// which let the next round find (and push) deeper "contacts" still: depths of 0.27 m, 6-7 M
-// nearest-point tests a step (~0.9 s) from step 89 on, an element inverted by the end. The radius
-// now grows by at most a voxel past round 0's within a stage (kReachGrowth): over the first 100
-// steps at most 0.7 M tests a step and depths under 6 cm (measured 2026-11-28).
-TEST(Impacts, ViolentToolHitKeepsTheContactSearchBounded) {
+// Not met yet (issue 26; disabled): a sphere tool crossing at 12 m/s glances a 16^3 ball and
+// pushes it into a 14^3 one (MultiBodyScene's scene with the tool 2x faster). From about step 84
+// the struck ball's surface is crushed and the stage's rounds push vertices along far faces; each
+// round's search radius grows with those corrections (0.036 -> 0.99 m over one step's rounds),
+// which lets the next round find (and push) deeper "contacts" still: depths of 0.33 m, 7.3 M
+// nearest-point tests in the worst of the first 100 steps (7 s in Release against 0.4 s with
+// the radius capped at round 0's plus a voxel; that cap made HeadOnFast at dt_fraction 0.25 peak
+// at 1.03x, so it is not in: docs/speed.md, "Violent hits"). The bounds below are what a fix must meet.
+TEST(Impacts, DISABLED_ViolentToolHitKeepsTheContactSearchBounded) {
   Scene s = parseScene(R"({
     "bodies": [ { "shape": "sphere", "size": 16, "position": [-0.2, 0.1, 0], "velocity": [1, 0, 0] },
                 { "shape": "sphere", "size": 14, "voxel_size": 0.012, "position": [0.1, 0.1, 0],
@@ -252,7 +252,7 @@ TEST(Impacts, ViolentToolHitKeepsTheContactSearchBounded) {
   // A finding is no deeper than the step's own motion allows plus a voxel (the larger one: 12 mm):
   // both balls and the tool move at most ~3 voxels a step here.
   EXPECT_LE(deepest, 0.1);
-  EXPECT_LE(mostTests, size_t(1500000));  // the narrow phase's work in a step (was 6-7 M)
+  EXPECT_LE(mostTests, size_t(1500000));  // the narrow phase's work in a step (now 7.3 M)
 }
 
 // A stiff ball (9^3, E = 1.9e5 Pa) at 1.45 m/s into a soft one (6^3, E = 1.4e4 Pa) at rest,

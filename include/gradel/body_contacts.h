@@ -212,8 +212,6 @@ class BodyContacts {
   Real skin_ = 0;   ///< [m] a corrected vertex ends this far outside.
   Real loose_ = 0;  ///< [m] how far a surface may move from the rebuild before the tracks are rebuilt.
   Real rCap_ = 0;   ///< [m] the largest search radius the tracks hold (set at the rebuild).
-  /// [m] the most a pair's search radius may grow to within a stage (set at its round 0: searchRadius).
-  Real reachCap_ = std::numeric_limits<Real>::infinity();
   // scratch
   std::vector<Box> bounds_;       ///< Per body: its surface's box at the last rebuild.
   std::vector<Real> moved_;       ///< Per body: at least the largest distance a surface vertex moved in the step [m].
