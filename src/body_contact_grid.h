@@ -74,6 +74,7 @@ BodyContacts::Nearest BodyContacts::nearestTriangle(const Grid& g, const Contact
   auto test = [&](uint32_t t) {
     const auto& tri = faces.triangles[t];
     const ClosestPoint cp = closestPointOnTriangle(p, x[tri[0]], x[tri[1]], x[tri[2]]);
+    ++n.tests;
     const Vec3 c = cp.w[0] * x[tri[0]] + cp.w[1] * x[tri[1]] + cp.w[2] * x[tri[2]];
     const Real d2 = (p - c).squaredNorm();
     if ((d2 < n.d2 || (d2 == n.d2 && n.tri != ContactBody::kNone && t < n.tri)) && accept(t, c))

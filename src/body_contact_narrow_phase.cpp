@@ -33,14 +33,14 @@ void BodyContacts::detectPairs(const BodyContactState& s, BodyContactStats& stat
         preparePair(a, b, s);
     }
   const uint32_t count = uint32_t(looked_.size());
-  slot_.resize(count), slotState_.resize(count);
+  slot_.resize(count), slotState_.resize(count), slotTests_.resize(count);
   const Vec3* x = s.positions;
   auto one = [&](uint32_t j) {
     const PairJob& job = jobs_[lookedJob_[j]];
     Track& T = tracks_[job.a * B + job.b];
     const uint32_t k = looked_[j], i = T.vertices[k];
     slotState_[j] = uint8_t(detectVertex(bodies_[job.a], bodies_[job.b], T.grid, i, job.r, job.smallStep, x, &slot_[j],
-                                         &T.clearance[k], &T.nearest[2 * size_t(i)]));
+                                         &T.clearance[k], &T.nearest[2 * size_t(i)], &slotTests_[j]));
     if (!keepTracks_) T.nearest[2 * size_t(i)] = T.nearest[2 * size_t(i) + 1] = ContactBody::kNone;  // (the reference)
     T.checkedAt[k] = x[bodies_[job.a].vertices[i]], T.faceDrift[k] = job.faceMoved;
     T.faceCorrected[k] = job.faceCorrected, T.checkedStage[k] = stage_, T.checkedRound[k] = uint8_t(round_index_);
@@ -70,6 +70,7 @@ void BodyContacts::detectPairs(const BodyContactState& s, BodyContactStats& stat
     for (uint32_t j = 0; j < count; ++j) one(j);
   }
   stats.candidates += count;
+  for (uint32_t j = 0; j < count; ++j) stats.faceTests += slotTests_[j];
   for (const PairJob& job : jobs_) {
     const size_t before = round_.size();
     if (job.a == job.b) {
@@ -91,11 +92,13 @@ void BodyContacts::detectPairs(const BodyContactState& s, BodyContactStats& stat
 // Surface vertex i (index into A.vertices) against the faces of B in grid g (the pseudo-normal
 // test, see the header). Reads the grid and positions only: any member may run any vertex.
 int BodyContacts::detectVertex(const ContactBody& A, const ContactBody& B, const Grid& g, uint32_t i, Real r,
-                               bool smallStep, const Vec3* x, Contact* out, Real* clearance, uint32_t* hint) const {
+                               bool smallStep, const Vec3* x, Contact* out, Real* clearance, uint32_t* hint,
+                               uint32_t* tests) const {
   const uint32_t v = A.vertices[i];
   const Vec3& p = x[v];
   const Nearest near = nearestTriangle(g, B, p, r, x, *hint);
   *hint = near.tri;
+  *tests = near.tests;
   if (near.tri == ContactBody::kNone) {
     *clearance = r;  // no face of b within r (the track holds every face that can be)
     return 1;
@@ -133,6 +136,7 @@ int BodyContacts::detectVertex(const ContactBody& A, const ContactBody& B, const
       const Vec3 fn = faceNormal(B.triangles[t], x);
       return fn.dot(p - cu) < 0 && !own.along(fn);
     });
+    *tests += f.tests;
     const uint32_t facing = f.tri;
     const ClosestPoint facingCp = f.cp;
     if (facing != ContactBody::kNone) hint[1] = facing;

@@ -31,7 +31,9 @@ void BodyContacts::dropUnreachable(const BodyContactState& s, BodyContactStats& 
     const Contact& c = round_[k];
     const uint32_t b = bodyOf_[c.face[0]];
     const Real reach = (x[c.vertex] - x0[c.vertex]).norm() + moved_[b] + kTakeBackDepth * bodies_[b].thickness + skin_;
-    if (!(c.depth > reach) || !(std::abs(windingNumber(x[c.vertex], bodies_[b].triangles, x)) < 0.5)) {
+    bool keep = !(c.depth > reach);
+    if (!keep) ++stats.windingNumbers, keep = !(std::abs(windingNumber(x[c.vertex], bodies_[b].triangles, x)) < 0.5);
+    if (keep) {
       round_[kept++] = c;
     } else {
       ++stats.unreachable;

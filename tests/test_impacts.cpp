@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <rapidcheck/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -210,6 +211,48 @@ TEST(Impacts, DISABLED_GlancingHitWithFriction) {
     c.sizeA = c.sizeB = 12, c.closing = 10, c.offset = 0.5, c.friction = 0.5, c.restitution = 1, c.dtFraction = f;
     expectSafe(c, 0.02, f == 0.1 ? "glancing, default dt" : "glancing, 2.5x dt");
   }
+}
+
+// Not met yet (issue 26; disabled): a sphere tool crossing at 12 m/s glances a 16^3 ball and
+// pushes it into a 14^3 one (MultiBodyScene's scene with the tool 2x faster). From about step 84
+// the struck ball's surface is crushed and the stage's rounds push vertices along far faces; each
+// round's search radius grows with those corrections (0.036 -> 0.99 m over one step's rounds),
+// which lets the next round find (and push) deeper "contacts" still: depths of 0.33 m, 7.3 M
+// nearest-point tests in the worst of the first 100 steps (7 s in Release against 0.4 s with
+// the radius capped at round 0's plus a voxel; that cap made HeadOnFast at dt_fraction 0.25 peak
+// at 1.03x, so it is not in: docs/speed.md, "Violent hits"). The bounds below are what a fix must meet.
+TEST(Impacts, DISABLED_ViolentToolHitKeepsTheContactSearchBounded) {
+  Scene s = parseScene(R"({
+    "bodies": [ { "shape": "sphere", "size": 16, "position": [-0.2, 0.1, 0], "velocity": [1, 0, 0] },
+                { "shape": "sphere", "size": 14, "voxel_size": 0.012, "position": [0.1, 0.1, 0],
+                  "velocity": [-1, 0, 0] } ],
+    "domain": { "min": [-1, 0, -1], "max": [1, 1, 1] },
+    "manipulators": [ { "type": "sphere", "radius": 0.03,
+                        "path": [ { "t": 0, "position": [-0.3, 0.18, 0.08] }, { "t": 0.05, "position": [0.3, 0.18, 0.08] } ] } ]
+  })",
+                       "violent.json");
+  s.simulation.threads = 1;
+  BuiltScene b = buildScene(s);
+  World& world = *b.world;
+  size_t mostTests = 0;
+  Real deepest = 0;
+  int touching = 0;
+  for (int k = 0; k < 100; ++k) {
+    world.step();
+    const BodyContactStats& st = world.bodyContactStats();
+    mostTests = std::max(mostTests, st.faceTests);
+    deepest = std::max(deepest, st.maxDepth);
+    touching += st.contacts > 0;
+    const Metrics m = world.metrics();
+    ASSERT_TRUE(std::isfinite(m.kineticEnergy + m.elasticEnergy)) << "step " << k;
+  }
+  std::printf("  most nearest-point tests in a step %zu, deepest finding %.4f m, %d steps in contact\n", mostTests,
+              deepest, touching);
+  EXPECT_GE(touching, 10);  // the balls met
+  // A finding is no deeper than the step's own motion allows plus a voxel (the larger one: 12 mm):
+  // both balls and the tool move at most ~3 voxels a step here.
+  EXPECT_LE(deepest, 0.1);
+  EXPECT_LE(mostTests, size_t(1500000));  // the narrow phase's work in a step (now 7.3 M)
 }
 
 // A stiff ball (9^3, E = 1.9e5 Pa) at 1.45 m/s into a soft one (6^3, E = 1.4e4 Pa) at rest,

@@ -25,6 +25,11 @@ struct BodyContactStats {
   /// other body's surface said were outside (a folded surface misleads the pseudo-normal test):
   /// dropped, not pushed (dropUnreachable).
   size_t unreachable = 0;
+  /// The narrow phase's work: nearest-point tests of a vertex against a face (all lookups, all
+  /// rounds, the last resort's detections included).
+  size_t faceTests = 0;
+  /// Winding numbers of a closed surface evaluated (dropUnreachable), each O(that surface's faces).
+  size_t windingNumbers = 0;
   double seconds = 0;     ///< Wall time of the call (measurements; no result depends on it).
 };
 

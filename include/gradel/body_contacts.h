@@ -192,11 +192,12 @@ class BodyContacts {
   // *clearance: a lower bound of its distance to b's surface (< 0: inside, or unknown); hint[0]
   // and hint[1]: its nearest face and its nearest facing face when last found (searches start there).
   int detectVertex(const ContactBody& A, const ContactBody& B, const Grid& g, uint32_t i, Real r, bool smallStep,
-                   const Vec3* x, Contact* out, Real* clearance, uint32_t* hint) const;
+                   const Vec3* x, Contact* out, Real* clearance, uint32_t* hint, uint32_t* tests) const;
   struct Nearest {
     Real d2;       ///< [m^2] squared distance to it (reach^2 when none).
     uint32_t tri;  ///< Its id, or kNone.
     ClosestPoint cp;
+    uint32_t tests = 0;  ///< Nearest-point tests it made (BodyContactStats::faceTests).
   };
   template <class Accept>
   Nearest nearestTriangle(const Grid& g, const ContactBody& faces, const Vec3& p, Real reach, const Vec3* x,
@@ -277,6 +278,7 @@ class BodyContacts {
   uint32_t minParallel_ = kMinParallel;
   std::vector<Contact> slot_;        ///< Per entry of looked_: its contact, if any.
   std::vector<uint8_t> slotState_;   ///< Per vertex: detectVertex's answer (0: skipped).
+  std::vector<uint32_t> slotTests_;  ///< Per vertex: detectVertex's nearest-point tests.
   std::vector<uint32_t> looked_;     ///< The pass's candidates to look up (indices into their pair's track).
   std::vector<uint32_t> lookedJob_;  ///< Per entry of looked_: its pair (index into jobs_).
   std::vector<PairJob> jobs_;        ///< The pass's pairs, in order.
