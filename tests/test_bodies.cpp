@@ -11,6 +11,7 @@
 
 #include "gradel/bodies.h"
 #include "gradel/output.h"
+#include "struck_balls_scene.h"
 #include "test_support.h"
 
 using namespace gradel;
@@ -303,15 +304,7 @@ TEST(MultiBodyScene, SizeLimitsCountEveryBody) {
 // the last third). At 12 m/s the struck ball's surface tangles and the body-contact stage
 // costs ~150 ms a step (43 s for this test, 24 min under ASan in CI): issue 26.
 TEST(MultiBodyScene, StateHashIsTheSameAtOneAndTwoThreads) {
-  Scene s = parseScene(R"({
-    "bodies": [ { "shape": "sphere", "size": 16, "position": [-0.2, 0.1, 0], "velocity": [1, 0, 0] },
-                { "shape": "sphere", "size": 14, "voxel_size": 0.012, "position": [0.1, 0.1, 0],
-                  "velocity": [-1, 0, 0] } ],
-    "domain": { "min": [-1, 0, -1], "max": [1, 1, 1] },
-    "manipulators": [ { "type": "sphere", "radius": 0.03,
-                        "path": [ { "t": 0, "position": [-0.3, 0.18, 0.08] }, { "t": 0.1, "position": [0.3, 0.18, 0.08] } ] } ]
-  })",
-                       kFile);
+  Scene s = parseScene(struckBallsScene(0.1), kFile);
   uint64_t hash[2];
   for (int t : {1, 2}) {
     s.simulation.threads = t;

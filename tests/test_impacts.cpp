@@ -18,6 +18,7 @@
 #include "gradel/bodies.h"
 #include "gradel/body_contacts.h"
 #include "gradel/scene.h"
+#include "struck_balls_scene.h"
 #include "test_support.h"
 
 namespace gradel {
@@ -222,15 +223,7 @@ TEST(Impacts, DISABLED_GlancingHitWithFriction) {
 // the radius capped at round 0's plus a voxel; that cap made HeadOnFast at dt_fraction 0.25 peak
 // at 1.03x, so it is not in: docs/speed.md, "Violent hits"). The bounds below are what a fix must meet.
 TEST(Impacts, DISABLED_ViolentToolHitKeepsTheContactSearchBounded) {
-  Scene s = parseScene(R"({
-    "bodies": [ { "shape": "sphere", "size": 16, "position": [-0.2, 0.1, 0], "velocity": [1, 0, 0] },
-                { "shape": "sphere", "size": 14, "voxel_size": 0.012, "position": [0.1, 0.1, 0],
-                  "velocity": [-1, 0, 0] } ],
-    "domain": { "min": [-1, 0, -1], "max": [1, 1, 1] },
-    "manipulators": [ { "type": "sphere", "radius": 0.03,
-                        "path": [ { "t": 0, "position": [-0.3, 0.18, 0.08] }, { "t": 0.05, "position": [0.3, 0.18, 0.08] } ] } ]
-  })",
-                       "violent.json");
+  Scene s = parseScene(test::struckBallsScene(0.05), "violent.json");
   s.simulation.threads = 1;
   BuiltScene b = buildScene(s);
   World& world = *b.world;

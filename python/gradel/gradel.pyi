@@ -134,6 +134,12 @@ class Simulation:
     def carve_sphere(self, center: Sequence[float], radius: float) -> int:
         """Removes every body's voxels whose deformed centres lie within `radius` [m] of
         `center` [m]; the bodies are laid out again. Returns the voxels removed."""
+    def carve_cylinder(
+        self, center: Sequence[float], axis: Sequence[float], radius: float, half_length: float
+    ) -> int:
+        """Removes every body's voxels whose deformed centres lie in the solid cylinder of
+        `radius` and `half_length` [m] (flat caps) about `center` [m] along `axis`; the bodies are
+        laid out again. Returns the voxels removed."""
     def remove_voxels(self, body: int, mask: npt.ArrayLike) -> int:
         """Removes the voxels of body `body` where `mask` (its grid's shape) is true. Returns
         the voxels removed."""
