@@ -90,7 +90,12 @@ ElementStageRest::ElementStageRest(const RestModel& m)
     k.invCount[l] = 1.0 / Real(n);
     k.stiffness[l] = m.stiffness[e];
     if (m.hasVolumeTerm()) {
-      if (volume.empty()) volume.assign(groups.size(), ElementVolumeGroup{});
+      if (volume.empty()) {  // a padding lane keeps shape I: its F = A = I fits the identity
+        ElementVolumeGroup none{};
+        for (int k : {0, 4, 8})
+          for (int lane = 0; lane < 4; ++lane) none.shape[k][lane] = 1;
+        volume.assign(groups.size(), none);
+      }
       ElementVolumeGroup& vg = volume[e / 4];
       const Real g = Real(m.dim == 2 ? 2 : 3) / restMomentTrace(&m.restOffsets[b], int(n));
       vg.strainScale[l] = g * h;
