@@ -4,6 +4,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "gradel/material.h"
 #include "gradel/rotation_fit.h"
 
 namespace gradel {
@@ -133,8 +134,7 @@ Mat3 fitAffineRotation(int dim, const Mat3& F, const Quat& warm) {
 }
 
 bool volumeStrainMatrix(int dim, const Vec3* R0, int n, Mat3& V) {
-  Mat3 S = Mat3::Zero();
-  for (int i = 0; i < n; ++i) S.noalias() += R0[i] * R0[i].transpose();
+  const Mat3 S = restSecondMoment(R0, size_t(n));
   const bool isotropic = S(0, 1) == 0 && S(1, 0) == 0 && S(0, 0) == S(1, 1) &&
                          (dim == 2 || (S(0, 2) == 0 && S(2, 0) == 0 && S(1, 2) == 0 && S(2, 1) == 0 && S(1, 1) == S(2, 2)));
   if (isotropic) return false;
@@ -145,7 +145,6 @@ bool volumeStrainMatrix(int dim, const Vec3* R0, int n, Mat3& V) {
 Real elementVolumeForces(int dim, const Vec3* x, const uint32_t* verts, const Vec3* R0, int n, const Quat& q,
                          Real kappa, Vec3* f) {
   const Moments mo = moments(x, verts, R0, n);
-  const Mat3 M = q.toRotationMatrix();
   const Real D = dim == 2 ? 2 : 3;
   Mat3 V, H;
   Real ev;
@@ -155,6 +154,7 @@ Real elementVolumeForces(int dim, const Vec3* x, const uint32_t* verts, const Ve
     ev = MF.cwiseProduct(F).sum() - D;  // tr(M_F^T F) - D
     H = -kappa * ev * (MF * V);
   } else {
+    const Mat3 M = q.toRotationMatrix();
     const Real g = D / restMomentTrace(R0, n);
     ev = g * (M.cwiseProduct(mo.A).sum() - 1 / g * D);  // D (tr(M^T A) - tr S) / tr S
     H = -kappa * ev * g * M;

@@ -155,9 +155,8 @@ inline void anisotropicVolumeTerm(const ElementVolumeGroup& vg, int dim, const R
     for (int l = 0; l < kRotationLanes; ++l) {
       Mat3 F;
       for (int k = 0; k < 9; ++k) F(k / 3, k % 3) = fit.A[k][l];
-      const Real th = fitRotation2(F), cs = std::cos(th), sn = std::sin(th);
-      const Real M[9] = {cs, -sn, 0, sn, cs, 0, 0, 0, 1};
-      for (int k = 0; k < 9; ++k) fit.M[k][l] = M[k];
+      const Mat3 M = fitAffineRotation(2, F, Quat::Identity());
+      for (int k = 0; k < 9; ++k) fit.M[k][l] = M(k / 3, k % 3);
     }
   } else {
     for (int k = 0; k < 4; ++k) store4(fit.q[k], load4(batch.q[k]));
