@@ -57,6 +57,7 @@ BodyContacts::BodyContacts(std::vector<ContactBody> bodies, const BodyContactSet
   chunkMotion_.resize(chunkStart_.back());  // (every chunk writes its own)
   blockBox_.resize(blockStart_.back());
   isTouched_.assign(vertexEnd, 0);
+  startAskedStage_.assign(vertexEnd, 0), startAskedBody_.assign(vertexEnd, 0), startInside_.assign(vertexEnd, 0);
   roundShift_.assign(vertexEnd, 0);
   roundShiftMax_.assign(B, 0);
   ref_.assign(vertexEnd, RefPoint{0, 0, 0, 0});
@@ -69,7 +70,7 @@ BodyContacts::BodyContacts(std::vector<ContactBody> bodies, const BodyContactSet
 BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
   const auto t0 = std::chrono::steady_clock::now();
   BodyContactStats stats;
-  contacts_.clear();
+  contacts_.clear(), keep_.clear();
   if (empty()) return stats;
   for (uint32_t u : touched_) isTouched_[u] = 0, roundShift_[u] = 0;
   touched_.clear(), touchedStart_.clear(), touchedLast_.clear();

@@ -116,8 +116,6 @@ void fitRotation3Batch(RotationBatch& b, int maxIterations, Real tolerance) {
   d4 qw = load4(b.q[0]), qx = load4(b.q[1]), qy = load4(b.q[2]), qz = load4(b.q[3]);
   d4 A[9];
   for (int k = 0; k < 9; ++k) A[k] = load4(b.A[k]);
-  d4 scaleA = splat(0);
-  for (int k = 0; k < 9; ++k) scaleA += abs(A[k]);
   const d4 tol = splat(tolerance), tol2 = splat(tolerance * tolerance);
   m4 active = (m4)splat(0) == (m4)splat(0);  // all ones
   for (int it = 0; it < maxIterations; ++it) {
@@ -143,10 +141,17 @@ void fitRotation3Batch(RotationBatch& b, int maxIterations, Real tolerance) {
     const m4 newton = (h00 > 1e-6 * scale) & (m2 > 1e-12 * scale * scale) & (det > 1e-18 * scale * scale * scale);
     const d4 c11 = h00 * h22 - h02 * h02, c12 = h01 * h02 - h00 * h12, c22 = m2;
     const d4 invDet = 1 / select(newton, det, splat(1));
-    const d4 invMueller = 1 / (scale + 1e-9 * scaleA);
-    d4 w0 = select(newton, (c00 * g0 + c01 * g1 + c02 * g2) * invDet, g0 * invMueller);
-    d4 w1 = select(newton, (c01 * g0 + c11 * g1 + c12 * g2) * invDet, g1 * invMueller);
-    d4 w2 = select(newton, (c02 * g0 + c12 * g1 + c22 * g2) * invDet, g2 * invMueller);
+    d4 w0 = (c00 * g0 + c01 * g1 + c02 * g2) * invDet;
+    d4 w1 = (c01 * g0 + c11 * g1 + c12 * g2) * invDet;
+    d4 w2 = (c02 * g0 + c12 * g1 + c22 * g2) * invDet;
+    if (!none(~newton)) {  // Mueller's step in some lane (rare with a warm start): off the usual path
+      d4 scaleA = splat(0);
+      for (int k = 0; k < 9; ++k) scaleA += abs(A[k]);
+      const d4 invMueller = 1 / (scale + 1e-9 * scaleA);
+      w0 = select(newton, w0, g0 * invMueller);
+      w1 = select(newton, w1, g1 * invMueller);
+      w2 = select(newton, w2, g2 * invMueller);
+    }
     d4 angle2 = w0 * w0 + w1 * w1 + w2 * w2;
     active &= angle2 >= tol2;  // converged (or NaN): this lane stops unchanged
     if (none(active)) break;
@@ -155,25 +160,36 @@ void fitRotation3Batch(RotationBatch& b, int maxIterations, Real tolerance) {
     w0 *= s, w1 *= s, w2 *= s;
     angle2 = select(big, splat(1), angle2);
     // q <- q * exp(w / 2): cos(h) and sin(h) / (2 h), h = angle / 2 <= 1/2, from their series
-    // to h^14 (the next terms are below 1e-18).
+    // to h^14 (the next terms are below 1e-18); when every active lane turns by less than 0.01 rad
+    // (the usual case with a warm start: a short dependency chain), to h^6 (h^8 / 8! < 1e-23).
     const d4 u = 0.25 * angle2;  // h^2
-    const d4 cw =
-        1 + u * (-1.0 / 2 +
-                 u * (1.0 / 24 +
-                      u * (-1.0 / 720 + u * (1.0 / 40320 + u * (-1.0 / 3628800 +
-                                                                u * (1.0 / 479001600 + u * (-1.0 / 87178291200.0)))))));
-    const d4 sw =
-        0.5 *
-        (1 + u * (-1.0 / 6 +
-                  u * (1.0 / 120 + u * (-1.0 / 5040 + u * (1.0 / 362880 + u * (-1.0 / 39916800 +
-                                                                               u * (1.0 / 6227020800.0 +
-                                                                                    u * (-1.0 / 1307674368000.0))))))));
+    d4 cw, sw;
+    if (none(active & (angle2 >= 1e-4))) {
+      cw = 1 + u * (-1.0 / 2 + u * (1.0 / 24 + u * (-1.0 / 720)));
+      sw = 0.5 * (1 + u * (-1.0 / 6 + u * (1.0 / 120 + u * (-1.0 / 5040))));
+    } else {
+      cw = 1 + u * (-1.0 / 2 +
+                    u * (1.0 / 24 +
+                         u * (-1.0 / 720 + u * (1.0 / 40320 + u * (-1.0 / 3628800 +
+                                                                   u * (1.0 / 479001600 + u * (-1.0 / 87178291200.0)))))));
+      sw = 0.5 * (1 + u * (-1.0 / 6 +
+                           u * (1.0 / 120 +
+                                u * (-1.0 / 5040 +
+                                     u * (1.0 / 362880 +
+                                          u * (-1.0 / 39916800 +
+                                               u * (1.0 / 6227020800.0 + u * (-1.0 / 1307674368000.0))))))));
+    }
     const d4 dx = sw * w0, dy = sw * w1, dz = sw * w2;
     const d4 nw = qw * cw - qx * dx - qy * dy - qz * dz;
     const d4 nx = qw * dx + qx * cw + qy * dz - qz * dy;
     const d4 ny = qw * dy - qx * dz + qy * cw + qz * dx;
     const d4 nz = qw * dz + qx * dy - qy * dx + qz * cw;
-    const d4 norm = 1 / sqrt(nw * nw + nx * nx + ny * ny + nz * nz);
+    // Renormalise. q and exp(w / 2) are unit to rounding, so |n|^2 = 1 + d with d ~ 1e-16 and
+    // 1 / |n| = 1 - d / 2 to rounding (the next term, 3 d^2 / 8, is below 1e-32); the root and
+    // division only for a lane that came in far from unit (|d| > 1e-8: a caller's warm start).
+    const d4 n2 = nw * nw + nx * nx + ny * ny + nz * nz;
+    d4 norm = 1.5 - 0.5 * n2;
+    if (!none(active & (abs(n2 - 1) > 1e-8))) norm = 1 / sqrt(n2);
     qw = select(active, nw * norm, qw), qx = select(active, nx * norm, qx);
     qy = select(active, ny * norm, qy), qz = select(active, nz * norm, qz);
     // Newton converges quadratically: after a step this small the next would be below tolerance.

@@ -177,6 +177,8 @@ class BodyContacts {
   void returnToStart(const BodyContactState& s);
   void projectPositions(const BodyContactState& s);
   void applyImpulses(const BodyContactState& s);
+  void addContacts(const BodyContactState& s);
+  Real allowedDepth(const Contact& c, const BodyContactState& s) const;
   void buildGrid(Grid& g, const ContactBody& faces, const Box& region, const Vec3* x,
                  const std::vector<uint32_t>* subset, Real reach, Real grow);
   // Per member of the team: the faces a query listed and the dedupe stamps.
@@ -263,6 +265,12 @@ class BodyContacts {
   };
   std::vector<Patches> patches_;
   std::vector<Contact> contacts_, round_;
+  /// Per contacts_ entry: the depth [m] its vertex may keep this step (addContacts).
+  std::vector<Real> keep_;
+  /// Per world vertex: the stage (stage_) in which it was last asked whether it lay inside the
+  /// other body of a contact at the step's start, and the answer (allowedDepth).
+  mutable std::vector<uint32_t> startAskedStage_, startAskedBody_;
+  mutable std::vector<uint8_t> startInside_;
   std::vector<Vec3> entry_;  ///< Per contact: its relative velocity when the velocity response began.
   // The warm start (header): the last stage's body-body contacts and where their vertex and face
   // corners ended it (4 per contact); used only where the step started there (previousPositions).
