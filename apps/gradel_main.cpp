@@ -336,6 +336,9 @@ int runScene(const RunOptions& o) {
 
   gradel::DivergenceGuard guard(gradel::energyBudget(world, duration));
   const gradel::DivergenceFacts facts = gradel::divergenceFacts(world, duration);
+  // Frames go to the file system on the writer's thread while the next steps run; declared
+  // after `dir`, so that an unwinding run waits for the file in flight before `dir` is removed.
+  gradel::FrameFileWriter frameWriter;
   auto writeFrame = [&](size_t index) {
     std::vector<gradel::Real> elementStress, elementStrain;
     // One pass over the elements per frame.
@@ -359,8 +362,9 @@ int runScene(const RunOptions& o) {
     const std::vector<gradel::Real> vertexStrain = world.vertexStress(elementStrain);
     for (size_t i = 0; i < built.numBodies(); ++i) {
       const std::string name = gradel::frameFileName(index, several ? built.bodies[i].name : "");
-      gradel::writeVtu(dir.file(name), world.model(), world.state(), built.range(i), vertexStress, elementStress,
-                       gradel::VtkEncoding::Base64, vertexStrain, elementStrain);
+      gradel::encodeVtu(frameWriter.buffer(), world.model(), world.state(), built.range(i), vertexStress,
+                        elementStress, gradel::VtkEncoding::Raw, vertexStrain, elementStrain);
+      frameWriter.submit(dir.file(name));
       pvd.push_back({world.time(), name, int(i), several ? built.bodies[i].name : ""});
     }
   };
@@ -406,6 +410,7 @@ int runScene(const RunOptions& o) {
   }
   const auto wallStart = std::chrono::steady_clock::now();
   gradel::runFrames(world, schedule, writeFrame, checks);
+  frameWriter.finish();  // the wall time includes the last frame's write
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
   csv.close();
   gradel::writePvd(dir.file("run.pvd"), pvd);

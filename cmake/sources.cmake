@@ -136,6 +136,7 @@ set(GRADEL_TEST_SOURCES
   tests/test_element_stage.cpp
   tests/test_embedding.cpp
   tests/test_factor_solve.cpp
+  tests/test_thread_governor.cpp
   tests/test_frame_loop.cpp
   tests/test_golden.cpp
   tests/test_impacts.cpp

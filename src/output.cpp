@@ -11,10 +11,15 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <condition_variable>
 #include <cstring>
+#include <exception>
+#include <initializer_list>
+#include <mutex>
 #include <numeric>
 #include <stdexcept>
 #include <system_error>
+#include <thread>
 #include <type_traits>
 
 namespace gradel {
@@ -61,52 +66,93 @@ void appendBase64(std::string& out, const unsigned char* data, size_t n) {
 template <class T>
 const char* vtkTypeName() {
   if constexpr (std::is_same_v<T, double>) return "Float64";
-  if constexpr (std::is_same_v<T, int64_t>) return "Int64";
+  if constexpr (std::is_same_v<T, int32_t>) return "Int32";
   if constexpr (std::is_same_v<T, uint8_t>) return "UInt8";
 }
 
-// One <DataArray>. Binary form (VTK XML "binary", uncompressed): base64 of one stream holding
-// a UInt32 byte count followed by the raw values in native byte order, which is how
-// vtkXMLDataParser::ReadUncompressedData reads it back.
+// Stores value i of an array of T at `dst` (any alignment: the appended block packs arrays
+// after 4-byte headers).
 template <class T>
-void appendDataArray(std::string& out, const char* name, int components, const std::vector<T>& values,
-                     VtkEncoding encoding) {
-  out += "        <DataArray type=\"";
-  out += vtkTypeName<T>();
-  out += "\"";
-  if (name) out += std::string(" Name=\"") + name + "\"";
-  if (components > 1) out += " NumberOfComponents=\"" + std::to_string(components) + "\"";
-  out += encoding == VtkEncoding::Ascii ? " format=\"ascii\">\n" : " format=\"binary\">\n";
-  if (encoding == VtkEncoding::Ascii) {
-    for (size_t i = 0; i < values.size(); ++i) {
-      appendNumber(out, values[i]);
-      out += (i + 1) % size_t(std::max(components, 1)) == 0 || i + 1 == values.size() ? '\n' : ' ';
-    }
-  } else {
-    const size_t bytes = values.size() * sizeof(T);
-    if (bytes > UINT32_MAX) throw std::runtime_error("writeVtu: array larger than 4 GiB");
-    std::vector<unsigned char> raw(sizeof(uint32_t) + bytes);
-    const uint32_t header = uint32_t(bytes);
-    std::memcpy(raw.data(), &header, sizeof header);
-    if (bytes) std::memcpy(raw.data() + sizeof header, values.data(), bytes);
-    appendBase64(out, raw.data(), raw.size());
-    out += '\n';
-  }
-  out += "        </DataArray>\n";
+void store(unsigned char* dst, size_t i, T value) {
+  std::memcpy(dst + i * sizeof(T), &value, sizeof(T));
 }
+
+// Where one frame's <DataArray>s go. Raw: an empty element with its offset into the appended
+// block, which holds per array a UInt32 byte count and the raw values in native byte order
+// (vtkXMLDataParser's "appended" data, encoding "raw"). Base64 (VTK XML "binary",
+// uncompressed): base64 of the same count-and-values stream inside the element. Ascii: text.
+// `fill(dst)` writes the array's count values of T to dst (through store()).
+struct ArraySink {
+  VtkEncoding encoding;
+  VtuBytes& out;
+  std::vector<unsigned char> scratch;  // Base64 / Ascii: the values before they are encoded
+
+  template <class T, class Fill>
+  void add(const char* name, int components, size_t count, Fill&& fill) {
+    const size_t bytes = count * sizeof(T);
+    if (bytes > UINT32_MAX) throw std::runtime_error("writeVtu: array larger than 4 GiB");
+    const uint32_t header = uint32_t(bytes);
+    std::string& x = out.xml;
+    x += "        <DataArray type=\"";
+    x += vtkTypeName<T>();
+    x += "\" Name=\"";
+    x += name;
+    x += "\"";
+    if (components > 1) x += " NumberOfComponents=\"" + std::to_string(components) + "\"";
+    if (encoding == VtkEncoding::Raw) {
+      x += " format=\"appended\" offset=\"" + std::to_string(out.appended.size()) + "\"/>\n";
+      const size_t at = out.appended.size();
+      out.appended.resize(at + sizeof header + bytes);
+      unsigned char* dst = reinterpret_cast<unsigned char*>(out.appended.data()) + at;
+      std::memcpy(dst, &header, sizeof header);
+      fill(dst + sizeof header);
+      return;
+    }
+    scratch.resize(sizeof header + bytes);
+    std::memcpy(scratch.data(), &header, sizeof header);
+    fill(scratch.data() + sizeof header);
+    if (encoding == VtkEncoding::Base64) {
+      x += " format=\"binary\">\n";
+      appendBase64(x, scratch.data(), scratch.size());
+      x += '\n';
+    } else {
+      x += " format=\"ascii\">\n";
+      for (size_t i = 0; i < count; ++i) {
+        T v;
+        std::memcpy(&v, scratch.data() + sizeof header + i * sizeof(T), sizeof v);
+        appendNumber(x, v);
+        x += (i + 1) % size_t(std::max(components, 1)) == 0 || i + 1 == count ? '\n' : ' ';
+      }
+    }
+    x += "        </DataArray>\n";
+  }
+
+  // `count` values of T copied from `values` (a slice of a vector).
+  template <class T>
+  void add(const char* name, const T* values, size_t count) {
+    add<T>(name, 1, count, [&](unsigned char* dst) {
+      if (count) std::memcpy(dst, values, count * sizeof(T));
+    });
+  }
+};
 
 [[noreturn]] void throwWriteError(const fs::path& file, int err) {
   throw IoError("cannot write " + file.string() + ": " + std::strerror(err ? err : EIO));
 }
 
-void writeWholeFile(const fs::path& file, const std::string& text) {
+// Writes `parts` one after the other into `file` (created or truncated).
+void writeWholeFile(const fs::path& file, std::initializer_list<const std::string*> parts) {
   std::FILE* f = std::fopen(file.c_str(), "wb");
   if (!f) throwWriteError(file, errno);
   errno = 0;
-  const bool wrote = std::fwrite(text.data(), 1, text.size(), f) == text.size() && std::fflush(f) == 0;
+  bool wrote = true;
+  for (const std::string* p : parts) wrote = wrote && std::fwrite(p->data(), 1, p->size(), f) == p->size();
+  wrote = wrote && std::fflush(f) == 0;
   const int err = errno;
   if (std::fclose(f) != 0 || !wrote) throwWriteError(file, wrote ? errno : err);
 }
+
+void writeWholeFile(const fs::path& file, const std::string& text) { writeWholeFile(file, {&text}); }
 
 std::string xmlEscape(const std::string& s) {
   std::string out;
@@ -144,6 +190,23 @@ void writeVtu(const fs::path& file, const RestModel& model, const State& state, 
 void writeVtu(const fs::path& file, const RestModel& model, const State& state, const BodyRange& body,
               const std::vector<Real>& vertexStress, const std::vector<Real>& elementStress, VtkEncoding encoding,
               const std::vector<Real>& vertexStrain, const std::vector<Real>& elementStrain) {
+  VtuBytes bytes;
+  encodeVtu(bytes, model, state, body, vertexStress, elementStress, encoding, vertexStrain, elementStrain);
+  writeVtu(file, bytes);
+}
+
+void writeVtu(const fs::path& file, const VtuBytes& bytes) {
+  static const std::string kAppendedOpen = "  <AppendedData encoding=\"raw\">\n   _";
+  static const std::string kAppendedClose = "\n  </AppendedData>\n</VTKFile>\n", kClose = "</VTKFile>\n";
+  if (bytes.appended.empty())
+    writeWholeFile(file, {&bytes.xml, &kClose});
+  else
+    writeWholeFile(file, {&bytes.xml, &kAppendedOpen, &bytes.appended, &kAppendedClose});
+}
+
+void encodeVtu(VtuBytes& out, const RestModel& model, const State& state, const BodyRange& body,
+               const std::vector<Real>& vertexStress, const std::vector<Real>& elementStress, VtkEncoding encoding,
+               const std::vector<Real>& vertexStrain, const std::vector<Real>& elementStrain) {
   const size_t NV = model.numVertices(), NE = model.numElements();
   if (state.positions.size() != NV || state.velocities.size() != NV)
     throw std::invalid_argument("writeVtu: state does not match the model's vertex count");
@@ -162,78 +225,146 @@ void writeVtu(const fs::path& file, const RestModel& model, const State& state, 
     throw std::invalid_argument("writeVtu: the body's range is not in the model");
   const size_t v0 = body.vertexBegin, e0 = body.elementBegin;
   const size_t nv = body.numVertices(), ne = body.numElements();
+  const uint32_t p0 = model.elemStart[e0], pairs = model.elemStart[body.elementEnd] - p0;
+  if (nv > size_t(INT32_MAX) || pairs > uint32_t(INT32_MAX))
+    throw std::invalid_argument("writeVtu: more than 2^31 points or cell corners in one file");
 
-  std::vector<double> points(3 * nv), velocity(3 * nv);
-  for (size_t v = 0; v < nv; ++v)
-    for (int c = 0; c < 3; ++c) {
-      points[3 * v + c] = state.positions[v0 + v][c];
-      velocity[3 * v + c] = state.velocities[v0 + v][c];
+  out.xml.clear(), out.appended.clear();  // capacity kept: a caller's buffer is reused frame after frame
+  ArraySink sink{encoding, out, {}};
+  std::string& x = out.xml;
+  x += "<?xml version=\"1.0\"?>\n";
+  x += std::string("<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"") + kByteOrder +
+       "\" header_type=\"UInt32\">\n";
+  x += "  <UnstructuredGrid>\n";
+  x += "    <Piece NumberOfPoints=\"" + std::to_string(nv) + "\" NumberOfCells=\"" + std::to_string(ne) + "\">\n";
+  x += vertexStress.empty() ? "      <PointData Vectors=\"velocity\">\n"
+                            : "      <PointData Scalars=\"stress\" Vectors=\"velocity\">\n";
+  // Positions and velocities: 3 doubles per vertex, stored packed (Vec3 is Eigen's unpadded
+  // Vector3d), copied in one piece.
+  static_assert(sizeof(Vec3) == 3 * sizeof(double));
+  auto vectors = [&](const char* name, const std::vector<Vec3>& v) {
+    sink.add<double>(name, 3, 3 * nv, [&](unsigned char* dst) {
+      if (nv) std::memcpy(dst, v[v0].data(), nv * sizeof(Vec3));
+    });
+  };
+  vectors("velocity", state.velocities);
+  if (!vertexStress.empty()) sink.add<double>("stress", vertexStress.data() + v0, nv);
+  if (!vertexStrain.empty()) sink.add<double>("strain", vertexStrain.data() + v0, nv);
+  x += "      </PointData>\n";
+  x += "      <CellData Scalars=\"level\">\n";
+  sink.add<uint8_t>("level", model.level.data() + e0, ne);
+  sink.add<int32_t>("element_id", 1, ne, [&](unsigned char* dst) {
+    for (size_t e = 0; e < ne; ++e) store(dst, e, int32_t(e));
+  });
+  if (model.materials.size() > 1 && model.elementMaterial.size() == NE) {
+    // A body of several materials: each element's region label (material.regions).
+    sink.add<int32_t>("region", 1, ne, [&](unsigned char* dst) {
+      for (size_t e = 0; e < ne; ++e) store(dst, e, int32_t(model.materialLabel[model.elementMaterial[e0 + e]]));
+    });
+  }
+  if (!elementStress.empty()) sink.add<double>("element_stress", elementStress.data() + e0, ne);
+  if (!elementStrain.empty()) sink.add<double>("element_strain", elementStrain.data() + e0, ne);
+  x += "      </CellData>\n";
+  x += "      <Points>\n";
+  vectors("position", state.positions);
+  x += "      </Points>\n";
+  x += "      <Cells>\n";
+  sink.add<int32_t>("connectivity", 1, pairs, [&](unsigned char* dst) {
+    if (model.dim != 2) {
+      for (uint32_t p = 0; p < pairs; ++p) store(dst, p, int32_t(model.elemVerts[p0 + p] - v0));
+      return;
     }
-
-  std::vector<int64_t> connectivity;
-  connectivity.reserve(model.elemStart[body.elementEnd] - model.elemStart[e0]);
-  std::vector<int64_t> offsets(ne);
-  std::vector<uint8_t> types(ne, model.dim == 2 ? kVtkPolygon : kVtkConvexPointSet);
-  std::vector<int64_t> elementId(ne);
-  std::vector<std::pair<double, uint32_t>> ring;  // (angle, pair) of one 2D element
-  for (size_t e = 0; e < ne; ++e) {
-    const uint32_t b = model.elemStart[e0 + e], end = model.elemStart[e0 + e + 1];
-    if (model.dim == 2) {
-      // restOffsets are relative to the rest centroid, so their angles order the outline.
+    // 2D: each element's vertices in angular order about its rest centroid (restOffsets are
+    // relative to it), which traces the element's outline.
+    std::vector<std::pair<double, uint32_t>> ring;
+    for (size_t e = 0; e < ne; ++e) {
+      const uint32_t b = model.elemStart[e0 + e], end = model.elemStart[e0 + e + 1];
       ring.clear();
       for (uint32_t p = b; p < end; ++p)
         ring.emplace_back(std::atan2(model.restOffsets[p].y(), model.restOffsets[p].x()), p);
-      std::stable_sort(ring.begin(), ring.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
-      for (const auto& r : ring) connectivity.push_back(int64_t(model.elemVerts[r.second] - v0));
-    } else {
-      for (uint32_t p = b; p < end; ++p) connectivity.push_back(int64_t(model.elemVerts[p] - v0));
+      std::stable_sort(ring.begin(), ring.end(), [](const auto& a, const auto& c) { return a.first < c.first; });
+      for (size_t k = 0; k < ring.size(); ++k) store(dst, b - p0 + k, int32_t(model.elemVerts[ring[k].second] - v0));
     }
-    offsets[e] = int64_t(connectivity.size());
-    elementId[e] = int64_t(e);
-  }
-  auto slice = [](const std::vector<Real>& all, size_t from, size_t n) {
-    return all.empty() ? std::vector<double>() : std::vector<double>(all.begin() + from, all.begin() + from + n);
-  };
-  const std::vector<double> pointStress = slice(vertexStress, v0, nv), cellStress = slice(elementStress, e0, ne);
-  const std::vector<double> pointStrain = slice(vertexStrain, v0, nv), cellStrain = slice(elementStrain, e0, ne);
-  const std::vector<uint8_t> level(model.level.begin() + e0, model.level.begin() + e0 + ne);
+  });
+  sink.add<int32_t>("offsets", 1, ne, [&](unsigned char* dst) {
+    for (size_t e = 0; e < ne; ++e) store(dst, e, int32_t(model.elemStart[e0 + e + 1] - p0));
+  });
+  sink.add<uint8_t>("types", 1, ne, [&](unsigned char* dst) {
+    std::memset(dst, model.dim == 2 ? kVtkPolygon : kVtkConvexPointSet, ne);
+  });
+  x += "      </Cells>\n";
+  x += "    </Piece>\n";
+  x += "  </UnstructuredGrid>\n";
+}
 
-  std::string out;
-  out.reserve(96 * nv + 12 * connectivity.size() + 64 * ne + 1024);  // base64: 4 characters per 3 bytes
-  out += "<?xml version=\"1.0\"?>\n";
-  out += std::string("<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"") + kByteOrder + "\">\n";
-  out += "  <UnstructuredGrid>\n";
-  out += "    <Piece NumberOfPoints=\"" + std::to_string(nv) + "\" NumberOfCells=\"" + std::to_string(ne) + "\">\n";
-  out += vertexStress.empty() ? "      <PointData Vectors=\"velocity\">\n"
-                              : "      <PointData Scalars=\"stress\" Vectors=\"velocity\">\n";
-  appendDataArray(out, "velocity", 3, velocity, encoding);
-  if (!vertexStress.empty()) appendDataArray(out, "stress", 1, pointStress, encoding);
-  if (!vertexStrain.empty()) appendDataArray(out, "strain", 1, pointStrain, encoding);
-  out += "      </PointData>\n";
-  out += "      <CellData Scalars=\"level\">\n";
-  appendDataArray(out, "level", 1, level, encoding);
-  appendDataArray(out, "element_id", 1, elementId, encoding);
-  if (model.materials.size() > 1 && model.elementMaterial.size() == NE) {
-    // A body of several materials: each element's region label (material.regions).
-    std::vector<int64_t> region(ne);
-    for (size_t e = 0; e < ne; ++e) region[e] = model.materialLabel[model.elementMaterial[e0 + e]];
-    appendDataArray(out, "region", 1, region, encoding);
+// ---- frames written in the background -------------------------------------------------
+
+struct FrameFileWriter::Impl {
+  std::mutex mutex;
+  std::condition_variable changed;
+  VtuBytes buffers[2];
+  int fill = 0;                     // buffers[fill] is the caller's
+  const VtuBytes* job = nullptr;    // the buffer being written, or none
+  fs::path file;                    // where `job` goes
+  bool stop = false;
+  std::exception_ptr error;         // the first failed write
+  std::thread thread;
+
+  void loop() {
+    std::unique_lock lock(mutex);
+    for (;;) {
+      changed.wait(lock, [&] { return job || stop; });
+      if (!job) return;
+      const VtuBytes* bytes = job;
+      const fs::path target = file;
+      lock.unlock();
+      std::exception_ptr failed;
+      try {
+        writeVtu(target, *bytes);
+      } catch (...) {
+        failed = std::current_exception();
+      }
+      lock.lock();
+      if (failed && !error) error = failed;
+      job = nullptr;
+      changed.notify_all();
+    }
   }
-  if (!elementStress.empty()) appendDataArray(out, "element_stress", 1, cellStress, encoding);
-  if (!elementStrain.empty()) appendDataArray(out, "element_strain", 1, cellStrain, encoding);
-  out += "      </CellData>\n";
-  out += "      <Points>\n";
-  appendDataArray(out, "position", 3, points, encoding);
-  out += "      </Points>\n";
-  out += "      <Cells>\n";
-  appendDataArray(out, "connectivity", 1, connectivity, encoding);
-  appendDataArray(out, "offsets", 1, offsets, encoding);
-  appendDataArray(out, "types", 1, types, encoding);
-  out += "      </Cells>\n";
-  out += "    </Piece>\n";
-  out += "  </UnstructuredGrid>\n";
-  out += "</VTKFile>\n";
-  writeWholeFile(file, out);
+  void waitIdle(std::unique_lock<std::mutex>& lock) {
+    changed.wait(lock, [&] { return job == nullptr; });
+  }
+};
+
+FrameFileWriter::FrameFileWriter() : impl_(std::make_unique<Impl>()) {
+  impl_->thread = std::thread([this] { impl_->loop(); });
+}
+
+FrameFileWriter::~FrameFileWriter() {
+  {
+    std::lock_guard lock(impl_->mutex);
+    impl_->stop = true;
+  }
+  impl_->changed.notify_all();
+  impl_->thread.join();
+}
+
+VtuBytes& FrameFileWriter::buffer() { return impl_->buffers[impl_->fill]; }
+
+void FrameFileWriter::submit(const fs::path& file) {
+  std::unique_lock lock(impl_->mutex);
+  impl_->waitIdle(lock);
+  if (impl_->error) std::rethrow_exception(impl_->error);
+  impl_->job = &impl_->buffers[impl_->fill];
+  impl_->file = file;
+  impl_->fill ^= 1;
+  lock.unlock();
+  impl_->changed.notify_all();
+}
+
+void FrameFileWriter::finish() {
+  std::unique_lock lock(impl_->mutex);
+  impl_->waitIdle(lock);
+  if (impl_->error) std::rethrow_exception(impl_->error);
 }
 
 void writePvd(const fs::path& file, const std::vector<PvdFrame>& frames) {

@@ -7,6 +7,7 @@
 #define GRADEL_HAVE_FUTEX 1
 #endif
 
+#include <algorithm>
 #include <chrono>
 #include <climits>
 #include <cstdlib>
@@ -143,7 +144,13 @@ void ThreadGovernor::report(double seconds) {
       break;
     case Phase::ProbeOther:
       if (!windowDone) return;
-      if (time_ / steps_ < kMargin * current_) useOne_ = !useOne_;
+      other_ = time_ / steps_;
+      phase_ = Phase::MeasureAgain;
+      break;
+    case Phase::MeasureAgain:
+      if (!windowDone) return;
+      current_ = std::min(current_, time_ / steps_);
+      if (other_ < kMargin * current_) useOne_ = !useOne_;
       phase_ = Phase::Run;
       break;
     case Phase::Run:

@@ -14,6 +14,7 @@
 // items, computed the same way by any member.
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
@@ -49,6 +50,8 @@ class ThreadTeam {
   ThreadTeam& operator=(const ThreadTeam&) = delete;
 
   int members() const { return members_; }
+  /// Whether the calling thread is the one that made the team (the only one that may run()).
+  bool ownedByCaller() const { return std::this_thread::get_id() == owner_; }
 
   /// Runs job(t) on every member t in [0, members()) and returns when all have finished. Called
   /// from the thread that made the team, never from inside a job.
@@ -68,6 +71,7 @@ class ThreadTeam {
   void workerLoop(int t);
 
   int members_;
+  std::thread::id owner_ = std::this_thread::get_id();
   std::vector<std::thread> workers_;
   // The job being run; `jobGeneration` counts dispatches (and is the word workers sleep on).
   Call call_ = nullptr;
@@ -80,13 +84,35 @@ class ThreadTeam {
   alignas(64) std::atomic<uint32_t> doneGeneration_{0};
 };
 
+/// Runs item(i) for every i in [0, n): on the members of `team` in chunks of `chunk` items
+/// claimed in turn, or all on this thread when `team` is null, has one member or is another
+/// thread's. `item` writes only what belongs to i, so the result never depends on which.
+template <class Item>
+void forEachInChunks(ThreadTeam* team, size_t n, size_t chunk, Item&& item) {
+  if (!team || team->members() == 1 || n <= chunk || !team->ownedByCaller()) {
+    for (size_t i = 0; i < n; ++i) item(i);
+    return;
+  }
+  const size_t chunks = (n + chunk - 1) / chunk;
+  std::atomic<size_t> next{0};
+  team->run([&](int) {
+    for (size_t c; (c = next.fetch_add(1, std::memory_order_relaxed)) < chunks;)
+      for (size_t i = c * chunk, end = std::min(n, i + chunk); i < end; ++i) item(i);
+  });
+}
+
 /// Decides, step after step, whether a team of more than one member is worth it on this machine
 /// now, by timing both (results never depend on it). Waiting well (above) is not enough on a
 /// machine with other busy programs: with one busy process on 2 cores, 2 members ran 5-25 %
 /// slower than 1 (bench/results/*-threads.csv). So the governor times a window of steps with the
-/// mode in use, then a window with the other mode (all members or one), keeps the faster (by more
-/// than 5 %), runs it for kRunSeconds, and measures again. A window is at least kWindowSeconds
-/// and kWindowSteps steps. The probe of the slower mode costs ~2 % of the time.
+/// mode in use, then a window with the other mode (all members or one), then the mode in use
+/// again, and switches only when the other beats the better of the two (by more than 5 %); it
+/// runs the choice for kRunSeconds and measures again. A window is at least kWindowSeconds and
+/// kWindowSteps steps. The probe of the slower mode costs ~2 % of the time. The second window of
+/// the mode in use is what keeps one slow window from deciding: the first window of a run is often
+/// slow with all members (the new worker still shares its creator's core until the scheduler
+/// moves it), which made one run in four of box-realtime step on one thread for a second
+/// (0.93 s -> 1.43 s, docs/speed.md "Threads").
 class ThreadGovernor {
  public:
   /// Members for the next step: 1 or `full`.
@@ -102,10 +128,10 @@ class ThreadGovernor {
   static constexpr int kWindowSteps = 8;
 
  private:
-  enum class Phase { MeasureCurrent, ProbeOther, Run };
+  enum class Phase { MeasureCurrent, ProbeOther, MeasureAgain, Run };
   Phase phase_ = Phase::MeasureCurrent;
   bool useOne_ = false;
-  double time_ = 0, current_ = 0;
+  double time_ = 0, current_ = 0, other_ = 0;
   int steps_ = 0;
 };
 

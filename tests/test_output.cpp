@@ -169,11 +169,96 @@ TEST_F(OutputTest, WriteVtuBinaryDecodesToModelAndState) {
   EXPECT_EQ(decodeBinary<double>(xml, "strain"), vstrain);  // the dimensionless measure, its own name
   EXPECT_EQ(decodeBinary<double>(xml, "element_strain"), estrain);
   EXPECT_EQ(decodeBinary<uint8_t>(xml, "level"), (std::vector<uint8_t>{0, 1}));
-  EXPECT_EQ(decodeBinary<int64_t>(xml, "element_id"), (std::vector<int64_t>{0, 1}));
-  EXPECT_EQ(decodeBinary<int64_t>(xml, "offsets"), (std::vector<int64_t>{4, 9}));
+  EXPECT_EQ(decodeBinary<int32_t>(xml, "element_id"), (std::vector<int32_t>{0, 1}));
+  EXPECT_EQ(decodeBinary<int32_t>(xml, "offsets"), (std::vector<int32_t>{4, 9}));
   EXPECT_EQ(decodeBinary<uint8_t>(xml, "types"), (std::vector<uint8_t>{kVtkPolygon, kVtkPolygon}));
   // 2D cells are polygons in angular order about the element's centroid: the outline.
-  EXPECT_EQ(decodeBinary<int64_t>(xml, "connectivity"), (std::vector<int64_t>{0, 1, 4, 3, /**/ 1, 2, 5, 4, 6}));
+  EXPECT_EQ(decodeBinary<int32_t>(xml, "connectivity"), (std::vector<int32_t>{0, 1, 4, 3, /**/ 1, 2, 5, 4, 6}));
+  EXPECT_NE(xml.find(R"(<DataArray type="Int32" Name="connectivity" format="binary">)"), std::string::npos);
+}
+
+// An appended (raw) DataArray: its offset in the element, the UInt32 byte count and the values
+// after the '_' that opens the appended block.
+template <class T>
+std::vector<T> decodeAppended(const std::string& file, const std::string& name) {
+  const size_t at = file.find("Name=\"" + name + "\"");
+  if (at == std::string::npos) return {};
+  const size_t tagEnd = file.find('>', at);
+  const size_t off = file.find("offset=\"", at);
+  EXPECT_LT(off, tagEnd) << name;
+  const size_t offset = std::stoul(file.substr(off + 8));
+  const size_t block = file.find("<AppendedData encoding=\"raw\">");
+  EXPECT_NE(block, std::string::npos);
+  const size_t base = file.find('_', block) + 1;
+  uint32_t bytes = 0;
+  std::memcpy(&bytes, file.data() + base + offset, 4);
+  std::vector<T> v(bytes / sizeof(T));
+  EXPECT_EQ(bytes, v.size() * sizeof(T)) << name;
+  std::memcpy(v.data(), file.data() + base + offset + 4, bytes);
+  return v;
+}
+
+// The default encoding (`gradel run`'s frames): the same arrays as the base64 file, bit for bit,
+// as raw appended data; a buffer refilled for another frame holds exactly that frame.
+TEST_F(OutputTest, WriteVtuRawAppendedHoldsTheSameArrays) {
+  RestModel m = twoElements2d();
+  const State s = stateOf(m);
+  const std::vector<Real> vstress = {0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6}, estress = {1.5, 2.5};
+  writeVtu(root_ / "b.vtu", m, s, vstress, estress, VtkEncoding::Base64);
+  writeVtu(root_ / "r.vtu", m, s, vstress, estress);  // Raw is the default
+  const std::string b64 = readFile(root_ / "b.vtu"), raw = readFile(root_ / "r.vtu");
+  EXPECT_NE(raw.find(R"(<DataArray type="Float64" Name="position" NumberOfComponents="3" format="appended" offset=")"),
+            std::string::npos);
+  EXPECT_EQ(raw.find("format=\"binary\""), std::string::npos);
+  EXPECT_EQ(raw.substr(raw.size() - 30), "\n  </AppendedData>\n</VTKFile>\n");
+  EXPECT_LT(raw.size(), b64.size());
+  EXPECT_EQ(decodeAppended<double>(raw, "position"), decodeBinary<double>(b64, "position"));
+  EXPECT_EQ(decodeAppended<double>(raw, "velocity"), decodeBinary<double>(b64, "velocity"));
+  EXPECT_EQ(decodeAppended<double>(raw, "stress"), vstress);
+  EXPECT_EQ(decodeAppended<double>(raw, "element_stress"), estress);
+  EXPECT_EQ(decodeAppended<uint8_t>(raw, "level"), (std::vector<uint8_t>{0, 1}));
+  EXPECT_EQ(decodeAppended<int32_t>(raw, "element_id"), (std::vector<int32_t>{0, 1}));
+  EXPECT_EQ(decodeAppended<int32_t>(raw, "offsets"), (std::vector<int32_t>{4, 9}));
+  EXPECT_EQ(decodeAppended<int32_t>(raw, "connectivity"), (std::vector<int32_t>{0, 1, 4, 3, /**/ 1, 2, 5, 4, 6}));
+  EXPECT_EQ(decodeAppended<uint8_t>(raw, "types"), (std::vector<uint8_t>{kVtkPolygon, kVtkPolygon}));
+
+  // A buffer reused for a smaller frame (no stress) holds that frame only.
+  VtuBytes bytes;
+  encodeVtu(bytes, m, s, wholeModelBody(m), vstress, estress);
+  encodeVtu(bytes, m, s, wholeModelBody(m), {}, {});
+  writeVtu(root_ / "again.vtu", bytes);
+  writeVtu(root_ / "fresh.vtu", m, s, std::vector<Real>{});
+  EXPECT_EQ(readFile(root_ / "again.vtu"), readFile(root_ / "fresh.vtu"));
+}
+
+// Frames written on the writer's thread are the files writeVtu writes, in order; a write that
+// fails is reported by finish() with the path, not lost.
+TEST_F(OutputTest, FrameFileWriterWritesWholeFilesAndReportsFailures) {
+  const RestModel m = twoElements2d();
+  State s = stateOf(m);
+  {
+    FrameFileWriter w;
+    for (int f = 0; f < 4; ++f) {
+      s.positions[0].x() = 0.25 * f;
+      encodeVtu(w.buffer(), m, s, wholeModelBody(m), {}, {});
+      w.submit(root_ / ("w" + std::to_string(f) + ".vtu"));
+    }
+    w.finish();
+  }
+  for (int f = 0; f < 4; ++f) {
+    s.positions[0].x() = 0.25 * f;
+    writeVtu(root_ / "ref.vtu", m, s, std::vector<Real>{});
+    EXPECT_EQ(readFile(root_ / ("w" + std::to_string(f) + ".vtu")), readFile(root_ / "ref.vtu")) << f;
+  }
+  FrameFileWriter w;
+  encodeVtu(w.buffer(), m, s, wholeModelBody(m), {}, {});
+  w.submit(root_ / "no-such-dir" / "x.vtu");
+  try {
+    w.finish();
+    ADD_FAILURE() << "a failed write was not reported";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("no-such-dir/x.vtu"), std::string::npos) << e.what();
+  }
 }
 
 TEST_F(OutputTest, WriteVtuAsciiMatchesBinary) {

@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -15,29 +16,42 @@ namespace gradel {
 
 // ---- VTK frames -------------------------------------------------------------
 
-/// How DataArrays are stored: base64 of the raw little-endian bytes (compact, exact; the
-/// default) or ASCII text (for reading by eye and in tests).
-enum class VtkEncoding { Base64, Ascii };
+/// How DataArrays are stored:
+///   Raw (the default): VTK XML "appended" data, the raw little-endian bytes after the XML part
+///     (exact, the smallest file and the fastest to write: no encoding pass); what VTK's own
+///     writer, ParaView, meshio and pyvista read.
+///   Base64: VTK XML "binary", base64 of the raw bytes inside each element (exact; the file is
+///     well-formed XML throughout, 4/3 the size).
+///   Ascii: shortest round-trip text (for reading by eye and in tests).
+enum class VtkEncoding { Raw, Base64, Ascii };
+
+/// One frame's .vtu file as bytes: the XML part, then (Raw) the appended data block. A caller
+/// that writes frame after frame keeps one VtuBytes and lets encodeVtu refill it, so the buffers'
+/// memory is reused rather than allocated (and faulted in) again every frame.
+struct VtuBytes {
+  std::string xml;       ///< Everything up to the appended data (without the closing tag).
+  std::string appended;  ///< Raw: each array's UInt32 byte count and values, packed; else empty.
+};
 
 /// VTK cell types used by writeVtu.
 inline constexpr uint8_t kVtkPolygon = 7;          ///< 2D elements.
 inline constexpr uint8_t kVtkConvexPointSet = 41;  ///< 3D elements.
 
 /// Writes one frame as a VTK XML UnstructuredGrid (.vtu).
-///   points       state.positions [m] (z = 0 in 2D)
+///   points       state.positions [m] (z = 0 in 2D), Float64
 ///   cells        one per element. 3D: VTK_CONVEX_POINT_SET over the element's vertex list
 ///                (ParaView draws its convex hull; incomplete elements look convex). 2D:
 ///                VTK_POLYGON with the vertices in angular order about the element's rest
 ///                centroid, which traces the region's outline (every vertex of a 2D element
-///                lies on its outline, layout.h).
+///                lies on its outline, layout.h). Connectivity and offsets Int32.
 ///   point data   "velocity" [m/s] (3 components), "stress" [Pa] (von Mises, World::vertexStress)
-///                and "strain" [-] (World::vertexStrain), each when given
-///   cell data    "level", "element_id", "region" (several materials), and "element_stress" [Pa]
-///                and "element_strain" [-] when given
+///                and "strain" [-] (World::vertexStrain), each when given; Float64
+///   cell data    "level" (UInt8), "element_id" and "region" (several materials; Int32), and
+///                "element_stress" [Pa] and "element_strain" [-] when given (Float64)
 /// Throws std::invalid_argument on size mismatches, IoError (path and reason) on I/O errors.
 void writeVtu(const std::filesystem::path& file, const RestModel& model, const State& state,
               const std::vector<Real>& vertexStress, const std::vector<Real>& elementStress = {},
-              VtkEncoding encoding = VtkEncoding::Base64, const std::vector<Real>& vertexStrain = {},
+              VtkEncoding encoding = VtkEncoding::Raw, const std::vector<Real>& vertexStrain = {},
               const std::vector<Real>& elementStrain = {});
 
 /// The same for one body of a model of several (RestModel::bodies, bodies.h): its vertices and
@@ -46,8 +60,17 @@ void writeVtu(const std::filesystem::path& file, const RestModel& model, const S
 /// writeVtu above is this with one body covering the whole model.
 void writeVtu(const std::filesystem::path& file, const RestModel& model, const State& state, const BodyRange& body,
               const std::vector<Real>& vertexStress, const std::vector<Real>& elementStress = {},
-              VtkEncoding encoding = VtkEncoding::Base64, const std::vector<Real>& vertexStrain = {},
+              VtkEncoding encoding = VtkEncoding::Raw, const std::vector<Real>& vertexStrain = {},
               const std::vector<Real>& elementStrain = {});
+
+/// writeVtu in two halves: the file's bytes into `out` (refilled, its capacity kept), and the
+/// bytes into a file (IoError naming the path on failure). FrameFileWriter writes them on its
+/// own thread.
+void encodeVtu(VtuBytes& out, const RestModel& model, const State& state, const BodyRange& body,
+               const std::vector<Real>& vertexStress, const std::vector<Real>& elementStress = {},
+               VtkEncoding encoding = VtkEncoding::Raw, const std::vector<Real>& vertexStrain = {},
+               const std::vector<Real>& elementStrain = {});
+void writeVtu(const std::filesystem::path& file, const VtuBytes& bytes);
 
 /// "frame_00012.vtu": zero-padded so that file listings sort in time order. With a body name
 /// (several bodies): "<body>_00012.vtu".
@@ -63,6 +86,32 @@ struct PvdFrame {
 /// Writes a ParaView collection (.pvd) that lists the frames with their times (and parts: one
 /// entry per body and time).
 void writePvd(const std::filesystem::path& file, const std::vector<PvdFrame>& frames);
+
+/// Writes frame files on a thread of its own, so that a run steps on while the file system takes
+/// in a frame (copying a box-realtime frame into the page cache was ~3 ms of a 10 ms frame write
+/// in line, docs/speed.md "Frames"). Two buffers: the caller fills buffer() while the previous
+/// frame is written; submit() waits for that write to end before handing over the next, so at
+/// most one file is in flight and memory stays at two frames. Files are written whole and in
+/// order; a failed write's IoError is rethrown by the next submit() or by finish().
+class FrameFileWriter {
+ public:
+  FrameFileWriter();
+  /// Waits for the file being written (a failure then is dropped: the caller is unwinding).
+  ~FrameFileWriter();
+  FrameFileWriter(const FrameFileWriter&) = delete;
+  FrameFileWriter& operator=(const FrameFileWriter&) = delete;
+
+  /// The buffer to fill for the next file (encodeVtu); never the one being written.
+  VtuBytes& buffer();
+  /// Writes buffer() to `file` in the background (after the previous file is done).
+  void submit(const std::filesystem::path& file);
+  /// Waits until every submitted file is written; rethrows the first failure.
+  void finish();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 // ---- metrics ----------------------------------------------------------------
 
