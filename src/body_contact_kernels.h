@@ -24,5 +24,9 @@ namespace {
   return y[c.vertex] - (c.w[0] * y[c.face[0]] + c.w[1] * y[c.face[1]] + c.w[2] * y[c.face[2]]);
 }
 
+// How far [m] the contact's vertex lay behind its plane (the normal as found, at its face point)
+// at positions y, e.g. the step's start; negative in front of it.
+[[maybe_unused]] Real depthBehind(const BodyContacts::Contact& c, const Vec3* y) { return -c.n.dot(relative(c, y)); }
+
 }  // namespace
 }  // namespace gradel

@@ -27,11 +27,11 @@ Real BodyContacts::allowedDepth(const Contact& c, const BodyContactState& s) con
   if (!x0 || !s.leapfrog) return 0;
   const uint32_t u = c.vertex, b = bodyOf_[c.face[0]];
   const Real h = bodies_[b].thickness;
-  const Real atStart = -c.n.dot(relative(c, x0));
+  const Real atStart = depthBehind(c, x0);
   if (!(atStart > kTakeBackDepth * h)) return 0;
   if (startAskedStage_[u] != stage_ || startAskedBody_[u] != b) {  // once per vertex, body and stage
     startAskedStage_[u] = stage_, startAskedBody_[u] = b;
-    startInside_[u] = std::abs(windingNumber(x0[u], bodies_[b].triangles, x0)) >= 0.5;
+    startInside_[u] = std::abs(windingNumber(x0[u], bodies_[b].triangles, x0)) >= 0.5, ++startWindings_;
   }
   return startInside_[u] ? Real(0) : atStart - kDepenetration * h;
 }

@@ -63,7 +63,7 @@ void BodyContacts::takeBack(const BodyContactState& s, BodyContactStats& stats) 
   // step's start.
   auto deep = [&](bool beyond) {
     for (const Contact& c : round_) {
-      const Real atStart = beyond ? std::max(Real(0), -c.n.dot(relative(c, x0))) : Real(0);
+      const Real atStart = beyond ? std::max(Real(0), depthBehind(c, x0)) : Real(0);
       if (c.depth > kTakeBackDepth * bodies_[bodyOf_[c.face[0]]].thickness + atStart) return true;
     }
     return false;

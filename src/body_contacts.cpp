@@ -75,6 +75,7 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
   for (uint32_t u : touched_) isTouched_[u] = 0, roundShift_[u] = 0;
   touched_.clear(), touchedStart_.clear(), touchedLast_.clear();
   ++stage_;
+  startWindings_ = 0;
   bool fellBack = false;
   const size_t B = bodies_.size();
   int firstDetect = 0;  // the first detection round: 1 after a warm start (round 0 applied the last stage's contacts)
@@ -107,6 +108,7 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
   keepWarm(s.positions);
   applyImpulses(s);  // response: the velocities
   stats.contacts = contacts_.size();
+  stats.windingNumbers += startWindings_;
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return stats;
 }

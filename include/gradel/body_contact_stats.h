@@ -28,7 +28,8 @@ struct BodyContactStats {
   /// The narrow phase's work: nearest-point tests of a vertex against a face (all lookups, all
   /// rounds, the last resort's detections included).
   size_t faceTests = 0;
-  /// Winding numbers of a closed surface evaluated (dropUnreachable), each O(that surface's faces).
+  /// Winding numbers of a closed surface evaluated (dropUnreachable, and allowedDepth's once per
+  /// vertex and body at the step's start), each O(that surface's faces).
   size_t windingNumbers = 0;
   double seconds = 0;     ///< Wall time of the call (measurements; no result depends on it).
 };

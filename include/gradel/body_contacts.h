@@ -271,6 +271,7 @@ class BodyContacts {
   /// other body of a contact at the step's start, and the answer (allowedDepth).
   mutable std::vector<uint32_t> startAskedStage_, startAskedBody_;
   mutable std::vector<uint8_t> startInside_;
+  mutable size_t startWindings_ = 0;  ///< Winding numbers allowedDepth evaluated this stage (stats).
   std::vector<Vec3> entry_;  ///< Per contact: its relative velocity when the velocity response began.
   // The warm start (header): the last stage's body-body contacts and where their vertex and face
   // corners ended it (4 per contact); used only where the step started there (previousPositions).
