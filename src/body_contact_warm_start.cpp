@@ -1,6 +1,7 @@
-// The body-contact stage's warm start: the last stage's contacts, found inside their plane again,
-// are round 0's (applyWarm); keepWarm keeps this stage's for the next. docs/speed.md,
-// "Body contacts: the stage".
+// The body contacts' one cache (body_contacts.h Cache): the explicit stage's warm start (the
+// last stage's contacts, found inside their plane again, are round 0's: applyWarm; keepWarm keeps
+// this stage's for the next) and the frame-size steps' multipliers. docs/speed.md, "Body
+// contacts: the stage".
 #include <algorithm>
 
 #include "body_contact_kernels.h"
@@ -17,12 +18,12 @@ namespace gradel {
 // steps, every contact kept): the plane as found beats the face's plane now (545 lookups a step
 // against 745) and one contact per vertex (724): a vertex carried against two faces stays out of both.
 bool BodyContacts::applyWarm(const BodyContactState& s, BodyContactStats& stats) {
-  if (!warmStart_ || warm_.empty()) return false;
+  if (!warmStart_ || cache_.contacts.empty()) return false;
   const Vec3* x = s.positions;
   const Vec3* x0 = s.previousPositions;
-  for (size_t k = 0; k < warm_.size(); ++k) {
-    const Contact& c = warm_[k];
-    const Vec3* at = &warmAt_[4 * k];
+  for (size_t k = 0; k < cache_.contacts.size(); ++k) {
+    const Contact& c = cache_.contacts[k];
+    const Vec3* at = &cache_.at[4 * k];
     if (x0[c.vertex] != at[0] || x0[c.face[0]] != at[1] || x0[c.face[1]] != at[2] || x0[c.face[2]] != at[3])
       continue;  // moved since (walls, or a state set from outside)
     const uint32_t a = bodyOf_[c.vertex], b = bodyOf_[c.face[0]];
@@ -33,7 +34,7 @@ bool BodyContacts::applyWarm(const BodyContactState& s, BodyContactStats& stats)
     round_.push_back(c);
     round_.back().depth = -gap;
   }
-  warm_.clear(), warmAt_.clear();
+  cache_.contacts.clear(), cache_.at.clear();
   stats.warm = round_.size();
   return !round_.empty();
 }
@@ -47,7 +48,7 @@ bool BodyContacts::applyWarm(const BodyContactState& s, BodyContactStats& stats)
 // the last one found per pair is not behind its plane in the next step (its bounce moves it away), which leaves no warm
 // start (891 lookups a step at 400 steps, against 971 without one).
 void BodyContacts::keepWarm(const Vec3* x) {
-  warm_.clear(), warmAt_.clear();
+  cache_.contacts.clear(), cache_.at.clear();
   if (!warmStart_) return;
   warmKeys_.clear();
   for (uint32_t k = 0; k < contacts_.size(); ++k) {
@@ -62,9 +63,24 @@ void BodyContacts::keepWarm(const Vec3* x) {
   std::sort(warmKeys_.begin(), warmKeys_.end(), [](const auto& l, const auto& r) { return l.second < r.second; });
   for (const auto& key : warmKeys_) {
     const Contact& c = contacts_[key.second];
-    warm_.push_back(c);
-    warmAt_.insert(warmAt_.end(), {x[c.vertex], x[c.face[0]], x[c.face[1]], x[c.face[2]]});
+    cache_.contacts.push_back(c);
+    cache_.at.insert(cache_.at.end(), {x[c.vertex], x[c.face[0]], x[c.face[1]], x[c.face[2]]});
   }
+}
+
+// The frame-size steps' side of the cache (World::bodyPairConstraints reads it, stepImplicit keeps it).
+Real BodyContacts::Cache::multiplier(uint32_t vertex, uint32_t faceBody) const {
+  const uint64_t k = key(vertex, faceBody);
+  auto it = std::lower_bound(multipliers.begin(), multipliers.end(), std::make_pair(k, Real(0)),
+                             [](const auto& a, const auto& b) { return a.first < b.first; });
+  return it != multipliers.end() && it->first == k ? it->second : 0;
+}
+
+void BodyContacts::Cache::keepMultipliers(const std::vector<uint64_t>& keys, const std::vector<Real>& lambdas) {
+  multipliers.clear();
+  for (size_t j = 0; j < keys.size(); ++j)
+    if (lambdas[j] > 0) multipliers.push_back({keys[j], lambdas[j]});
+  std::sort(multipliers.begin(), multipliers.end());  // proximity lists by vertex within a pair of bodies
 }
 
 }  // namespace gradel

@@ -96,22 +96,23 @@ std::vector<PairConstraint> World::bodyPairConstraints(const std::vector<Vec3>& 
   std::vector<PairConstraint> pairs;
   keys.clear();
   for (const BodyContacts::Proximity& c : near) {
-    const uint64_t key = uint64_t(c.vertex) << 32 | c.faceBody;
-    auto it = std::lower_bound(bodyContactLambda_.begin(), bodyContactLambda_.end(), std::make_pair(key, Real(0)),
-                               [](const auto& a, const auto& b) { return a.first < b.first; });
-    const Real lambda = it != bodyContactLambda_.end() && it->first == key ? it->second : 0;
+    const Real lambda = bodyContacts_->cache().multiplier(c.vertex, c.faceBody);
     const Real gap = kPairGap * bodyContacts_->bodies()[c.faceBody].thickness;
     pairs.push_back({c.vertex, c.face, c.w, c.n, gap, lambda});
-    keys.push_back(key);
+    keys.push_back(BodyContacts::Cache::key(c.vertex, c.faceBody));
   }
   return pairs;
 }
 
 void World::keepBodyPairLambdas(const std::vector<PairConstraint>& pairs, const std::vector<uint64_t>& keys) {
-  bodyContactLambda_.clear();
-  for (size_t j = 0; j < pairs.size(); ++j)
-    if (pairs[j].lambda > 0) bodyContactLambda_.push_back({keys[j], pairs[j].lambda});
-  std::sort(bodyContactLambda_.begin(), bodyContactLambda_.end());  // proximity lists by vertex within a pair of bodies
+  if (!bodyContacts_) return;
+  std::vector<Real> lambdas(pairs.size());
+  for (size_t j = 0; j < pairs.size(); ++j) lambdas[j] = pairs[j].lambda;
+  bodyContacts_->cache().keepMultipliers(keys, lambdas);
+}
+
+void World::clearBodyPairLambdas() {
+  if (bodyContacts_) bodyContacts_->cache().multipliers.clear();
 }
 
 // The large step's broad phase for the bodies: the boxes of their boundary vertices over the

@@ -45,7 +45,7 @@ void World::stepImplicit(bool largeStep) {
         stageContacts(0, model_->numVertices());
       }
     } else {
-      bodyContactLambda_.clear();
+      clearBodyPairLambdas();
     }
   }
   finishFrameStep(c.tNext);

@@ -27,7 +27,7 @@ void World::stepLargeStep() {
   largeStep_->setTeam(frameStepTeam());  // element forces and factor solves (the same bits at any count)
   // Contacts between bodies are constraints of the implicit step; obstacles near: its held contacts.
   const bool bodiesNear = bodyContactsMayTouch();
-  if (!bodiesNear) bodyContactLambda_.clear();
+  if (!bodiesNear) clearBodyPairLambdas();
   if (bodiesNear || (c.obstacles && largeStepNearObstacles())) {
     stepImplicit(true);
     largeStep_->resetEnergyBudget();  // the contacts did work

@@ -87,7 +87,7 @@ class BodyContacts {
   void setKeepTracks(bool keep) { keepTracks_ = keep; }
   /// Whether each stage starts from the contacts the last one ended with (the default; header,
   /// "warm start"). Off: every contact is found by the detection rounds (the reference, tests).
-  void setWarmStart(bool warm) { warmStart_ = warm, warm_.clear(), warmAt_.clear(); }
+  void setWarmStart(bool warm) { warmStart_ = warm, cache_.contacts.clear(), cache_.at.clear(); }
   /// Whether the stage uses the motion a caller measured (BodyContactState::motion; the default)
   /// or measures it in its own pass (measure()), the reference the caller's must match (tests).
   void setUseGivenMotion(bool use) { useGivenMotion_ = use; }
@@ -115,6 +115,30 @@ class BodyContacts {
   };
   /// The contacts the last resolve() found (all rounds, in order).
   const std::vector<Contact>& contacts() const { return contacts_; }
+
+  /// What one step's body contacts leave for the next, in one place (Jolt and Bullet keep one
+  /// contact cache): the explicit stage's warm start and the frame-size steps' multipliers.
+  /// The two are keyed differently on purpose: a contact of the explicit stage is its (vertex,
+  /// face), since a vertex carried against two faces of a body must stay out of both (one per
+  /// vertex: 724 lookups a step against 545, docs/speed.md "Body contacts: the stage"); a
+  /// multiplier is its (vertex, face's body), since the frame-size solve's constraint is the
+  /// vertex's nearest face of that body, which changes from step to step while the push goes on.
+  struct Cache {
+    /// The last explicit stage's body-body contacts, one per (vertex, face), in that stage's order,
+    /// and where each one's vertex and face corners ended it (4 per contact: keepWarm).
+    std::vector<Contact> contacts;
+    std::vector<Vec3> at;
+    /// The last frame-size step's pair multipliers [N] by (vertex << 32 | face's body), sorted.
+    std::vector<std::pair<uint64_t, Real>> multipliers;
+
+    /// The multiplier the last frame-size step left on `vertex` against body `faceBody` (0: none).
+    Real multiplier(uint32_t vertex, uint32_t faceBody) const;
+    /// Keeps the positive multipliers of this step's pairs (keys[j]: pair j's (vertex, body) key).
+    void keepMultipliers(const std::vector<uint64_t>& keys, const std::vector<Real>& lambdas);
+    static uint64_t key(uint32_t vertex, uint32_t faceBody) { return uint64_t(vertex) << 32 | faceBody; }
+  };
+  Cache& cache() { return cache_; }
+  const Cache& cache() const { return cache_; }
 
   // ---- For the frame-size integrators (implicit, large_step): the contacts as constraints of
   // their solve (projective.h, PairConstraint), this stage after the step as the safety net.
@@ -273,11 +297,10 @@ class BodyContacts {
   mutable std::vector<uint8_t> startInside_;
   mutable size_t startWindings_ = 0;  ///< Winding numbers allowedDepth evaluated this stage (stats).
   std::vector<Vec3> entry_;  ///< Per contact: its relative velocity when the velocity response began.
-  // The warm start (header): the last stage's body-body contacts and where their vertex and face
-  // corners ended it (4 per contact); used only where the step started there (previousPositions).
+  // The warm start (header): cache_.contacts, used only where the step started where they ended
+  // (previousPositions).
   bool warmStart_ = true;
-  std::vector<Contact> warm_;
-  std::vector<Vec3> warmAt_;
+  Cache cache_;
   std::vector<std::pair<std::array<uint32_t, 4>, uint32_t>> warmKeys_;  ///< Scratch of keepWarm: (vertex, face), index.
   bool applyWarm(const BodyContactState& s, BodyContactStats& stats);
   void keepWarm(const Vec3* x);

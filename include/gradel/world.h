@@ -286,6 +286,7 @@ class World {
   Real bodyContactMargin() const;
   std::vector<PairConstraint> bodyPairConstraints(const std::vector<Vec3>& x, Real margin, std::vector<uint64_t>& keys);
   void keepBodyPairLambdas(const std::vector<PairConstraint>& pairs, const std::vector<uint64_t>& keys);
+  void clearBodyPairLambdas();
   bool bodyContactsMayTouch() const;
   void stepImplicit(bool largeStep);
   HeldContacts heldObstacleContacts(const std::vector<Vec3>& freeEnd, bool largeStep);
@@ -343,8 +344,6 @@ class World {
   std::vector<uint32_t> bodyMotionBlockBody_;
   std::vector<BodyMotion> bodyMotionBlock_, bodyMotion_;
   bool bodyMotionMeasured_ = false;  ///< The last step's vertex pass filled bodyMotionBlock_.
-  /// Frame-size integrators: the last step's body-contact multipliers [N] by (vertex << 32 | face's body), sorted.
-  std::vector<std::pair<uint64_t, Real>> bodyContactLambda_;
   int teamMembers_ = 0;
   ContactForces stepForces_;      ///< The last step's contact forces.
   ContactForces averageImpulse_;  ///< [N s], [N m s] summed since restartForceAverage().
