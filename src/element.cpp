@@ -89,7 +89,7 @@ Mat3 restMomentInverse(int dim, const Mat3& S) {
       inv(0, 1) = -S(0, 1) / det, inv(1, 0) = -S(1, 0) / det;
       return inv;
     }
-  } else if (std::abs(S.determinant()) > 1e-30 * std::pow(S.trace() / 3 + 1e-300, 3)) {
+  } else if (const Real t = S.trace() / 3 + 1e-300; std::abs(S.determinant()) > 1e-30 * (t * t * t)) {
     return S.inverse();
   }
   Eigen::SelfAdjointEigenSolver<Mat3> es(S);
@@ -165,11 +165,14 @@ Real elementVolumeForces(int dim, const Vec3* x, const uint32_t* verts, const Ve
 }
 
 Real elementDeterminant(int dim, const Vec3* x, const uint32_t* verts, const Vec3* R0, int n) {
-  const Mat3 A = elementCovariance(x, verts, R0, n);
   Mat3 Q = Mat3::Zero();
   for (int i = 0; i < n; ++i) Q.noalias() += R0[i] * R0[i].transpose();
-  if (dim == 2) return A.topLeftCorner<2, 2>().determinant() / Q.topLeftCorner<2, 2>().determinant();
-  return A.determinant() / Q.determinant();
+  return deformationDeterminant(dim, elementCovariance(x, verts, R0, n), Q);
+}
+
+Real deformationDeterminant(int dim, const Mat3& A, const Mat3& S) {
+  if (dim == 2) return A.topLeftCorner<2, 2>().determinant() / S.topLeftCorner<2, 2>().determinant();
+  return A.determinant() / S.determinant();
 }
 
 }  // namespace gradel

@@ -18,7 +18,11 @@ Mat3 elementStrain(int dim, const Vec3* x, const uint32_t* verts, const Vec3* R0
   } else {
     fitRotation3(A, q, 20, 1e-12);
   }
-  Mat3 F = A * restMomentInverse(dim, restSecondMoment(R0, size_t(n)));
+  return elementStrainOfFit(dim, A, q, restMomentInverse(dim, restSecondMoment(R0, size_t(n))));
+}
+
+Mat3 elementStrainOfFit(int dim, const Mat3& A, const Quat& q, const Mat3& Sinv) {
+  Mat3 F = A * Sinv;
   if (dim == 2) F.row(2).setZero(), F.col(2).setZero(), F(2, 2) = 1;
   const Mat3 G = q.toRotationMatrix().transpose() * F;
   return Real(0.5) * (G + G.transpose()) - Mat3::Identity();

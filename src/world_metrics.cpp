@@ -6,6 +6,7 @@
 
 #include "gradel/element.h"
 #include "gradel/element_strain.h"
+#include "gradel/material.h"
 #include "step_context.h"
 #include "thread_team.h"
 
@@ -110,8 +111,13 @@ Metrics World::metricsOf(const BodyRange& body, std::vector<Real>* elementStress
                                              int(n), q, m.volumeStiffness[e], f);
     fig.energy = er.energy;
     fig.strain = std::sqrt(er.sumSqDisp / n) / m.size[e];
-    fig.stress = elementVonMises(m, state_.positions.data(), e, q);  // q: the fit just made
-    fig.det = elementDeterminant(m.dim, state_.positions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n));
+    // The strain and the determinant from one covariance and one rest moment (elementVonMises and
+    // elementDeterminant form each once more, and fit again to the same A: the same values).
+    const Mat3 A = elementCovariance(state_.positions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n));
+    const Mat3 S = restSecondMoment(&m.restOffsets[b], n);
+    fig.stress = vonMisesStress(elementStrainOfFit(m.dim, A, q, restMomentInverse(m.dim, S)),
+                                elementYoungsModulus(m, e), elementPoissonRatio(m, e));
+    fig.det = deformationDeterminant(m.dim, A, S);
   });
   std::vector<Vec3> forces(body.numVertices(), Vec3::Zero());
   r.minElementDet = std::numeric_limits<Real>::infinity();

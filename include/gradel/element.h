@@ -85,5 +85,7 @@ Mat3 cofactor(const Mat3& F);
 
 /// Deformation gradient determinant estimate det(A) / det(sum R0 R0^T); < 0 means inverted.
 Real elementDeterminant(int dim, const Vec3* x, const uint32_t* verts, const Vec3* R0, int n);
+/// The same from A (elementCovariance) and S = sum R0 R0^T (restSecondMoment) already formed.
+Real deformationDeterminant(int dim, const Mat3& A, const Mat3& S);
 
 }  // namespace gradel

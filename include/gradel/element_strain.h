@@ -25,6 +25,9 @@ namespace gradel {
 /// The element's small strain eps (symmetric) about its best-fit rotation; `q` is the rotation's
 /// warm start (in) and the fit (out), as elementForces. dim is 2 or 3.
 Mat3 elementStrain(int dim, const Vec3* x, const uint32_t* verts, const Vec3* R0, int n, Quat& q);
+/// The same from what a caller already has: A (elementCovariance), q fitted to it, and
+/// Sinv = restMomentInverse(dim, restSecondMoment(R0, n)).
+Mat3 elementStrainOfFit(int dim, const Mat3& A, const Quat& q, const Mat3& Sinv);
 
 /// Von Mises stress [Pa] of a small strain in a linear isotropic material (E [Pa], nu in [0, 0.5)).
 Real vonMisesStress(const Mat3& strain, Real youngsModulus, Real poissonRatio);
