@@ -35,6 +35,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "gradel/carve_scene.h"
 #include "gradel/divergence.h"
 #include "gradel/render/body_table.h"
 #include "gradel/render/display_budget.h"
@@ -145,6 +146,9 @@ struct Figures {
   size_t elements = 0, vertices = 0, pairs = 0;
   std::vector<BodyRow> bodies;
   std::vector<std::pair<Vec3, Vec3>> bounds;  // per body: lowest and highest vertex
+  // Carving (issue 30): voxels removed and events since the world was installed, the last event's wall time.
+  size_t carvedVoxels = 0, carveEvents = 0;
+  double carveLastSeconds = 0;
 };
 
 // A world being built on a background thread, and what the panel asked for.
@@ -241,6 +245,8 @@ class Viewer {
       const long n = stepsFor(kFrameSeconds * speed_, w.dt());
       for (long k = 0; k < n && finiteState(w.state()); ++k) w.step();
       steps_ += n;
+      if (finiteState(w.state()))
+        noteCarving(carveAfterBatch(carveMode_ && drag_ ? std::optional<size_t>(drag_->index) : std::nullopt));
     }
     if (stepOnce_ && !rebuild_) {
       w.step();
@@ -252,6 +258,7 @@ class Viewer {
   // The figures and the draw list from the world (both locks held).
   void refresh(double now, int width, int height) {
     World& w = *built_.world;
+    if (carvedView_) body_ = std::move(*carvedView_), carvedView_.reset();  // before anything draws the carved model
     figures_.time = w.time(), figures_.dt = w.dt();
     figures_.integrator = integratorKindName(w.settings().integrator);
     figures_.choice = w.integratorChoice();
@@ -445,6 +452,47 @@ class Viewer {
     return sf;
   }
 
+  // ---- carving (issue 30, carve_scene.h) ----
+  // After each batch, with the world held: the tools whose scene sets "carve", and in carve mode
+  // the tool being dragged ("hold to drill"), remove the voxels they swept since the last batch
+  // (carveWithManipulators, as `gradel run` after each chunk). A carved body is laid out again
+  // and the world made anew over it; its view is built here too (both with the world held, so
+  // that no frame draws the new model with the old view) and swapped in by the next refresh.
+  struct CarveResult {
+    size_t voxels = 0, events = 0;
+    double seconds = 0;
+    bool dtChanged = false;
+  };
+  CarveResult carveAfterBatch(std::optional<size_t> carver) {
+    World& w = *built_.world;
+    if (w.model().dim != 3) return {};  // circles do not carve
+    std::vector<Manipulator>& tools = w.manipulators();
+    for (size_t i = 0; i < tools.size(); ++i)
+      tools[i].settings.carve = tools[i].settings.shape != ManipulatorShape::Circle &&
+                                ((i < sceneCarve_.size() && sceneCarve_[i]) || carver == i);
+    const auto t0 = Clock::now();
+    const Real dt = w.dt();
+    CarveResult r;
+    // Every batch, carving or not: the tools' centres move on (carvePrevious_), so that a drill
+    // begins where the tool is, not where it was when carving last stopped.
+    for (const CarveEvent& e : carveWithManipulators(built_, carvePrevious_)) r.voxels += e.removedVoxels, ++r.events;
+    if (r.events == 0) return r;
+    carvedView_ = makeBodyView(built_, nullptr, kDisplayTriangleBudget);
+    r.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    r.dtChanged = built_.world->dt() != dt;
+    return r;
+  }
+  // The result into the panel's figures (state lock held); dt = auto follows a carved body
+  // (World::replaceModel), and the pacer with it.
+  void noteCarving(const CarveResult& r) {
+    if (r.events == 0) return;
+    figures_.carvedVoxels += r.voxels, figures_.carveEvents += r.events, figures_.carveLastSeconds = r.seconds;
+    if (r.dtChanged) {
+      pacer_ = StepPacer(built_.world->dt(), speed_);
+      pacer_.restart(wallNow());
+    }
+  }
+
   // ---- stepping (its own thread) ----
   // Each batch: what to do, from the state (brief); the steps, holding only the world; the
   // result, into the state (brief). Never both locks at once.
@@ -458,6 +506,7 @@ class Viewer {
       long n = 0, generation = 0;
       double wait = 2e-3;
       std::optional<ManipulatorDrag> drag;
+      std::optional<size_t> carver;  // carve mode: the tool being dragged drills
       {
         std::unique_lock<std::mutex> state = lockState();
         const double now = wallNow();
@@ -470,6 +519,7 @@ class Viewer {
           behind_ = pacer_.behind(now);
         }
         drag = drag_, generation = generation_;
+        if (carveMode_ && drag_) carver = drag_->index;
       }
       if (n == 0) {
         std::this_thread::sleep_for(std::chrono::duration<double>(std::clamp(wait, 50e-6, 2e-3)));
@@ -484,6 +534,7 @@ class Viewer {
       StepBatchOptions options;
       if (drag) options.beforeStep = [&](double fraction) { feedDrag(w, *drag, fraction, batchSim); };
       const bool ok = stepBatch(w, n, options).finite;
+      const CarveResult carved = ok ? carveAfterBatch(carver) : CarveResult{};
       const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
       const double cpu = threadCpuSeconds() - cpu0;
       const size_t vertices = w.model().numVertices();
@@ -500,6 +551,7 @@ class Viewer {
       }
       if (drag && drag_ && drag_->index == drag->index) drag_->from = drag->to;  // reached
       pacer_.stepped(n, seconds);
+      noteCarving(carved);
       steps_ += n;
       stepCpuSeconds_ += cpu, stepWallSeconds_ += seconds, vertexSteps_ += double(n) * double(vertices);
       const double end = builtScene_.output.duration, before = simTime_;
@@ -577,6 +629,9 @@ class Viewer {
     // noise (docs/viewer.md).
     built_.world->setThreads(std::max(1, int(std::thread::hardware_concurrency()) - 1));
     body_ = std::move(view);
+    sceneCarve_.clear(), carvePrevious_.clear(), carvedView_.reset();
+    for (const Manipulator& m : built_.world->manipulators()) sceneCarve_.push_back(m.settings.carve);
+    figures_.carvedVoxels = figures_.carveEvents = 0, figures_.carveLastSeconds = 0;
     autoStressScale_ = autoStressScale(built_.world->model());
     figures_.stressAt = -1e9;  // the new world's figures at the next frame
     stressAt_ = -1e9;
@@ -730,6 +785,18 @@ class Viewer {
       ImGui::Combo(label, &atEnd_, atEnd, 3);
     }
     if (ImGui::Checkbox("camera follows the bodies", &follow_)) followState_.reset();
+    ImGui::BeginDisabled(scene_.dim != 3);
+    ImGui::Checkbox("carve: a dragged tool drills", &carveMode_);
+    ImGui::EndDisabled();
+    if (ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled))
+      ImGui::SetTooltip("Hold the mouse on a sphere or cylinder and move it into a body: it removes every voxel\n"
+                        "whose centre it sweeps (within one voxel), and the body is laid out again (3D only).");
+    {
+      char carved[96];
+      std::snprintf(carved, sizeof carved, "carved %zu voxels in %zu events, last %.0f ms", f.carvedVoxels,
+                    f.carveEvents, 1e3 * f.carveLastSeconds);
+      reservedLine(f.carveEvents > 0, ImGui::GetStyleColorVec4(ImGuiCol_Text), carved);
+    }
 
     // ---- the paper's interactions, one click each ----
     section("Scenes");
@@ -752,6 +819,7 @@ class Viewer {
     sceneButton("Grasp body", "grasp-body.json");
     ImGui::SameLine();
     sceneButton("Phantom", "phantom.json");
+    sceneButton("Drill (carving)", "drill.json");
 
     // ---- view ----
     section("View");
@@ -968,6 +1036,13 @@ class Viewer {
   Scene scene_, original_, builtScene_;  // as edited / as loaded / as running
   BuiltScene built_;
   BodyView body_;
+  // Carving: the panel's carve mode; per manipulator whether its scene sets "carve" (install);
+  // with the world held: the tools' centres after the last batch and a carved model's view
+  // waiting for the next refresh.
+  bool carveMode_ = false;
+  std::vector<uint8_t> sceneCarve_;
+  std::vector<Vec3> carvePrevious_;
+  std::optional<BodyView> carvedView_;
   std::unique_ptr<Rebuild> rebuild_, waiting_;
   double lastRebuildSeconds_ = 0;
   StepPacer pacer_{1.0};
@@ -1209,7 +1284,12 @@ int run(const Options& o) {
         if (viewer.figures().time >= o.screenshotTime) {
           writePng(o.screenshot, readPixels(fbw, fbh));
           std::cout
-              << nlohmann::json{{"screenshot", o.screenshot}, {"size", {fbw, fbh}}, {"t", viewer.figures().time}}.dump()
+              << nlohmann::json{{"screenshot", o.screenshot},
+                                {"size", {fbw, fbh}},
+                                {"t", viewer.figures().time},
+                                {"carved_voxels", viewer.figures().carvedVoxels},
+                                {"vertices", viewer.figures().vertices}}
+                     .dump()
               << "\n";
           break;
         }

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <optional>
 #include <set>
 
@@ -364,6 +366,39 @@ TEST(ViewerWindow, ScreenshotShowsBodyAndPanel) {
   EXPECT_GT(body, 1000) << "the body is visible";
   EXPECT_GT(panel, 100) << "the ImGui panel is drawn";
   fs::remove(shot);
+}
+
+// The viewer carves (issue 30): scenes/drill.json's burr ("carve": true) drills into the block
+// in the viewer as in `gradel run` (296 voxels by t = 0.6 s there, per chunk of steps; the
+// viewer carves after each batch), the body is laid out again (its vertex count changes) and
+// the carved body is drawn.
+TEST(ViewerWindow, DrillSceneCarvesTheBlock) {
+  ASSERT_NE(std::getenv("DISPLAY"), nullptr) << "run under xvfb-run";
+  const fs::path base = fs::temp_directory_path() / ("gradel-view-drill-" + std::to_string(::getpid()));
+  const std::string cmd = std::string(GRADEL_VIEW_PATH) + " " + GRADEL_SOURCE_DIR +
+                          "/scenes/drill.json --size 480x360 --screenshot " + base.string() +
+                          ".png --screenshot-time 0.6 > " + base.string() + ".json";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  std::ifstream in(base.string() + ".json");
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string j = text.str();
+  auto number = [&](const std::string& key) {
+    const size_t at = j.find("\"" + key + "\":");
+    EXPECT_NE(at, std::string::npos) << key << " in " << j;
+    return at == std::string::npos ? -1.0 : std::stod(j.substr(at + key.size() + 3));
+  };
+  const double carved = number("carved_voxels"), vertices = number("vertices");
+  EXPECT_GT(carved, 200) << j;  // the burr's path into the block: ~300 voxels
+  EXPECT_LT(carved, 450) << j;
+  EXPECT_GT(vertices, 703) << j;  // the uncarved block has 703: small elements line the hole
+  const Image img = readPng(base.string() + ".png");
+  int body = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x)
+      if (img.pixel(x, y)[0] > img.pixel(x, y)[2] + 40) ++body;
+  EXPECT_GT(body, 1000) << "the carved body is drawn";
+  fs::remove(base.string() + ".png"), fs::remove(base.string() + ".json");
 }
 
 // The picture of docs/layout.md (materials per region): a 2D block of tissue (label 1) with a
