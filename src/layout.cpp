@@ -16,6 +16,7 @@
 #include <bit>
 #include <cassert>
 #include <cstdint>
+#include <stdexcept>
 
 namespace gradel {
 
@@ -336,7 +337,26 @@ int Layout::numLevels() const {
   return top + 1;
 }
 
+void Layout::indexVertices() {
+  const size_t ny1 = size_t(dims[1]) + 1, rows = ny1 * (size_t(dims[2]) + 1);
+  rowStart.assign(rows + 1, 0);
+  for (const Int3& v : vertices) {
+    if (v.y() < 0 || v.z() < 0 || v.y() > dims[1] || v.z() > dims[2])
+      throw std::logic_error("Layout::indexVertices: a vertex outside the lattice");
+    ++rowStart[size_t(v.z()) * ny1 + size_t(v.y()) + 1];
+  }
+  for (size_t r = 0; r < rows; ++r) rowStart[r + 1] += rowStart[r];
+}
+
 uint32_t Layout::vertexAt(const Int3& p) const {
+  const size_t ny1 = size_t(dims[1]) + 1, rows = ny1 * (size_t(dims[2]) + 1);
+  if (rowStart.size() == rows + 1 && rowStart.back() == vertices.size()) {
+    if (p.y() < 0 || p.z() < 0 || p.y() > dims[1] || p.z() > dims[2]) return kNoVertex;
+    const size_t row = size_t(p.z()) * ny1 + size_t(p.y());
+    const auto b = vertices.begin() + rowStart[row], e = vertices.begin() + rowStart[row + 1];
+    const auto it = std::lower_bound(b, e, p.x(), [](const Int3& a, int x) { return a.x() < x; });
+    return it != e && it->x() == p.x() ? uint32_t(it - vertices.begin()) : kNoVertex;
+  }
   auto before = [](const Int3& a, const Int3& b) {
     if (a.z() != b.z()) return a.z() < b.z();
     if (a.y() != b.y()) return a.y() < b.y();
@@ -435,6 +455,7 @@ Layout buildLayout(const VoxelVolume& volume, LayoutKind kind) {
       }
     });
   L.vertices = set.finish();
+  L.indexVertices();
 
   // ---- closure (fig. 5): every model vertex on the region's boundary joins the element.
   // Only boundary faces are walked: a model vertex cannot lie in the interior of a region

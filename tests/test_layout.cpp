@@ -715,3 +715,35 @@ TEST(Layout, CountsWithoutBuildingMatchTheBuiltLayout) {
 
 }  // namespace
 }  // namespace gradel
+
+namespace gradel {
+namespace {
+
+// vertexAt through the row index (buildLayout makes it) answers exactly what the search of all
+// vertices answers (a layout made by hand, without the index): every lattice point of random
+// volumes and spheres, 2D and 3D, every layout, and points off the lattice.
+TEST(Layout, VertexAtRowIndexMatchesTheFullSearch) {
+  std::vector<VoxelVolume> volumes = {sphere(9, 3), sphere(12, 2), randomVolume(3, 7, 5, 6, 0.6, 3),
+                                      randomVolume(2, 9, 6, 1, 0.5, 4)};
+  for (const VoxelVolume& vol : volumes)
+    for (LayoutKind kind : {LayoutKind::Gradational, LayoutKind::Uniform, LayoutKind::Voxel}) {
+      const Layout indexed = buildLayout(vol, kind);
+      ASSERT_EQ(indexed.rowStart.back(), indexed.numVertices());
+      Layout plain = indexed;
+      plain.rowStart.clear();
+      size_t found = 0;
+      for (int z = -1; z <= indexed.dims[2] + 1; ++z)
+        for (int y = -1; y <= indexed.dims[1] + 1; ++y)
+          for (int x = -1; x <= indexed.dims[0] + 1; ++x) {
+            const uint32_t a = indexed.vertexAt(Int3(x, y, z)), b = plain.vertexAt(Int3(x, y, z));
+            ASSERT_EQ(a, b) << x << " " << y << " " << z;
+            if (a == Layout::kNoVertex) continue;
+            ASSERT_EQ(indexed.vertices[a], Int3(x, y, z));
+            ++found;
+          }
+      EXPECT_EQ(found, indexed.numVertices());  // every vertex found at its own point
+    }
+}
+
+}  // namespace
+}  // namespace gradel

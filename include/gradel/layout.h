@@ -70,9 +70,17 @@ struct Layout {
   bool isFull(size_t e) const { return cellMask[e] == (dim == 3 ? 0xFF : 0x0F); }
   /// Lattice volume of element e's region [voxels^dim].
   int64_t regionVoxels(size_t e) const;
-  /// The vertex at lattice point p, or kNoVertex: the one lattice-to-vertex lookup (a binary
-  /// search of `vertices`, which are sorted by (z, y, x); no table kept).
+  /// Per lattice row (y, z), row z (dims[1] + 1) + y: where its vertices begin in `vertices`
+  /// ((dims[1] + 1)(dims[2] + 1) + 1 entries, the last = numVertices(); indexVertices()).
+  std::vector<uint32_t> rowStart;
+  /// The vertex at lattice point p, or kNoVertex: the one lattice-to-vertex lookup. A binary
+  /// search of p's row (rowStart) when the index is there (buildLayout makes it), else of all
+  /// `vertices` (a layout made by hand), which are sorted by (z, y, x).
   uint32_t vertexAt(const Int3& p) const;
+  /// Makes rowStart from `vertices` (sorted by (z, y, x), every one in [0, dims]). With it, a
+  /// carving event's re-layout and rest model on a 64^3 box looked up 2-3x faster (vertexAt was
+  /// 23 % of the event: ~14 steps of a search over 17,000 vertices, now ~5 over a row's dozens).
+  void indexVertices();
   static constexpr uint32_t kNoVertex = UINT32_MAX;
 };
 
