@@ -461,7 +461,7 @@ class Viewer {
   struct CarveResult {
     size_t voxels = 0, events = 0;
     double seconds = 0;
-    bool dtChanged = false;
+    double dt = 0;  // [s] the world's dt after the events, when they changed it (else 0)
   };
   CarveResult carveAfterBatch(long steps, std::optional<size_t> carver) {
     World& w = *built_.world;
@@ -485,7 +485,7 @@ class Viewer {
     if (r.events == 0) return r;
     carvedView_ = makeBodyView(built_, nullptr, kDisplayTriangleBudget);
     r.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-    r.dtChanged = built_.world->dt() != dt;
+    if (built_.world->dt() != dt) r.dt = built_.world->dt();
     return r;
   }
   // The result into the panel's figures (state lock held); dt = auto follows a carved body
@@ -493,8 +493,8 @@ class Viewer {
   void noteCarving(const CarveResult& r) {
     if (r.events == 0) return;
     figures_.carvedVoxels += r.voxels, figures_.carveEvents += r.events, figures_.carveLastSeconds = r.seconds;
-    if (r.dtChanged) {
-      pacer_ = StepPacer(built_.world->dt(), speed_);
+    if (r.dt > 0) {  // (taken with the world held: here only the state lock is)
+      pacer_ = StepPacer(r.dt, speed_);
       pacer_.restart(wallNow());
     }
   }
