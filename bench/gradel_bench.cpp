@@ -31,6 +31,13 @@
 // repetition: its own CSV (set = carve), medians in ms of the tool's voxel set, the event (full
 // re-layout, rest model, state carried over), the re-layout and rest model alone, and the whole
 // scene event (event + the world made again, World::replaceModel).
+// --drill: steady drilling (issue 30's second target): a gradational n^3 box of soft tissue (5 mm
+// voxels, E = 3e4 Pa, on the floor under gravity, damping 5/s) and a burr of radius 3 voxels with
+// "carve" that enters the top face and wanders down through it for 1 s (a circle of radius n/4
+// voxels, one turn, down n/2 voxels), carving after every frame of 1/60 s as the viewer and
+// `gradel run` can: its own CSV (set = drill): frames, frames with an event, voxels removed,
+// wall seconds of the whole second (steps + events), real-time factor, median and largest event
+// [ms], the vertices and dt at the end.
 // --find-realtime with --sets real: for each modulus, the largest gradational real-scene sphere n
 // that runs in real time with the integrator given (n doubled from 16, then bisected).
 #include <signal.h>
@@ -103,6 +110,47 @@ void measureCarve(int n, int threads, int reps) {
   }
   std::printf("carve,%d,%d,%zu,%zu,%zu,%.3f,%.3f,%.3f,%.3f\n", n, threads, removed, verticesBefore,
               b.world->model().numVertices(), medianOf(tSet), medianOf(tEvent), medianOf(tLayout), medianOf(tScene));
+  std::fflush(stdout);
+}
+
+// --drill: one row per size and thread count (see the top of this file).
+void measureDrill(int n, int threads) {
+  const Real h = 0.005, side = n * h;
+  Scene scene;
+  scene.bodies[0].shape = presetShape("box", n, 3, h);
+  scene.bodies[0].position = Vec3(-side / 2, 0, -side / 2);
+  scene.bodies[0].material.youngsModulus = 3e4;
+  scene.simulation.damping = 5;
+  scene.simulation.threads = threads;
+  scene.domain.enabled = true;
+  scene.domain.min = Vec3(-1, 0, -1), scene.domain.max = Vec3(1, 1, 1);
+  scene.domain.friction = 0.8, scene.domain.restitution = 0;
+  ManipulatorSettings burr;
+  burr.radius = 3 * h, burr.carve = true, burr.restitution = 0, burr.friction = 0.3;
+  constexpr int kKeys = 24;
+  for (int k = 0; k <= kKeys; ++k) {  // one turn of a circle of radius n/4 voxels, from above the top face down n/2
+    const Real t = Real(k) / kKeys, a = 2 * M_PI * t;
+    burr.path.keys.push_back({t, Vec3(0.25 * side * std::cos(a), side + burr.radius - 0.5 * side * t,
+                                      0.25 * side * std::sin(a)), std::nullopt});
+  }
+  scene.manipulators = {burr};
+  BuiltScene b = buildScene(scene);
+  std::vector<Vec3> previous;
+  std::vector<double> eventMs;
+  size_t frames = 0, removed = 0;
+  const auto t0 = Clock::now();
+  for (int f = 1; f <= 60; ++f, ++frames) {
+    b.world->advanceTo(f / 60.0);
+    const auto e0 = Clock::now();
+    size_t voxels = 0;
+    for (const CarveEvent& e : carveWithManipulators(b, previous)) voxels += e.removedVoxels;
+    if (voxels) eventMs.push_back(msSince(e0)), removed += voxels;
+  }
+  const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
+  std::printf("drill,%d,%d,%zu,%zu,%zu,%.4f,%.3g,%.3f,%.3f,%zu,%.4g\n", n, threads, frames, eventMs.size(), removed,
+              wall, b.world->time() / wall, eventMs.empty() ? 0.0 : medianOf(eventMs),
+              eventMs.empty() ? 0.0 : *std::max_element(eventMs.begin(), eventMs.end()),
+              b.world->model().numVertices(), b.world->dt());
   std::fflush(stdout);
 }
 
@@ -336,7 +384,7 @@ int main(int argc, char** argv) {
   int reps = 5, contactSteps = 40;
   std::string contactTrace;
   double minTime = 0.2, maxPairs = 4.0e7;
-  bool findRt = false, load = false, carve = false;
+  bool findRt = false, load = false, carve = false, drill = false;
   app.add_option("--sets", sets,
                  "Comma-separated: real (SI scenes with gravity, walls, contact, pins, metrics), paper, contact "
                  "(two spheres in soft-soft contact)");
@@ -365,7 +413,22 @@ int main(int argc, char** argv) {
                "with --sets real: the real scene at each modulus, with --integrator)");
   app.add_flag("--carve", carve,
                "Only the cost of one carving event per --sizes and --threads (its own CSV, set = carve)");
+  app.add_flag("--drill", drill,
+               "Only steady drilling: a burr carving every frame through an n^3 box for 1 s per --sizes and "
+               "--threads (its own CSV, set = drill)");
   CLI11_PARSE(app, argc, argv);
+  if (drill) {
+    try {
+      std::printf("set,n,threads,frames,frames_with_event,removed_voxels,wall_s,real_time_factor,ms_event_median,"
+                  "ms_event_max,vertices_after,dt_after_s\n");
+      for (int n : splitList<int>(sizes, [](const std::string& x) { return std::stoi(x); }))
+        for (int t : splitList<int>(threads, [](const std::string& x) { return std::stoi(x); })) measureDrill(n, t);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "gradel-bench: %s\n", e.what());
+      return 2;
+    }
+    return 0;
+  }
   if (carve) {
     try {
       std::printf("set,n,threads,removed_voxels,vertices_before,vertices_after,ms_tool_voxels,ms_event,"
