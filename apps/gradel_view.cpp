@@ -479,7 +479,7 @@ class Viewer {
     const auto t0 = Clock::now();
     const Real dt = w.dt();
     CarveResult r;
-    // Every batch, carving or not: the tools' centres move on (carvePrevious_), so that a drill
+    // At every check, carving or not: the tools' centres move on (carvePrevious_), so that a drill
     // begins where the tool is, not where it was when carving last stopped.
     for (const CarveEvent& e : carveWithManipulators(built_, carvePrevious_)) r.voxels += e.removedVoxels, ++r.events;
     if (r.events == 0) return r;

@@ -137,9 +137,10 @@ void measureDrill(int n, int threads) {
   BuiltScene b = buildScene(scene);
   std::vector<Vec3> previous;
   std::vector<double> eventMs;
-  size_t frames = 0, removed = 0;
+  constexpr int kFrames = 60;  // 1 s at 1/60 s
+  size_t removed = 0;
   const auto t0 = Clock::now();
-  for (int f = 1; f <= 60; ++f, ++frames) {
+  for (int f = 1; f <= kFrames; ++f) {
     b.world->advanceTo(f / 60.0);
     const auto e0 = Clock::now();
     size_t voxels = 0;
@@ -147,7 +148,7 @@ void measureDrill(int n, int threads) {
     if (voxels) eventMs.push_back(msSince(e0)), removed += voxels;
   }
   const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
-  std::printf("drill,%d,%d,%zu,%zu,%zu,%.4f,%.3g,%.3f,%.3f,%zu,%.4g\n", n, threads, frames, eventMs.size(), removed,
+  std::printf("drill,%d,%d,%d,%zu,%zu,%.4f,%.3g,%.3f,%.3f,%zu,%.4g\n", n, threads, kFrames, eventMs.size(), removed,
               wall, b.world->time() / wall, eventMs.empty() ? 0.0 : medianOf(eventMs),
               eventMs.empty() ? 0.0 : *std::max_element(eventMs.begin(), eventMs.end()),
               b.world->model().numVertices(), b.world->dt());
@@ -417,31 +418,26 @@ int main(int argc, char** argv) {
                "Only steady drilling: a burr carving every frame through an n^3 box for 1 s per --sizes and "
                "--threads (its own CSV, set = drill)");
   CLI11_PARSE(app, argc, argv);
-  if (drill) {
+  // --drill and --carve: their own CSV, one row per --sizes and --threads.
+  auto eachSizeAndThreads = [&](const char* header, auto&& row) {
     try {
-      std::printf("set,n,threads,frames,frames_with_event,removed_voxels,wall_s,real_time_factor,ms_event_median,"
-                  "ms_event_max,vertices_after,dt_after_s\n");
+      std::printf("%s\n", header);
       for (int n : splitList<int>(sizes, [](const std::string& x) { return std::stoi(x); }))
-        for (int t : splitList<int>(threads, [](const std::string& x) { return std::stoi(x); })) measureDrill(n, t);
+        for (int t : splitList<int>(threads, [](const std::string& x) { return std::stoi(x); })) row(n, t);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "gradel-bench: %s\n", e.what());
       return 2;
     }
     return 0;
-  }
-  if (carve) {
-    try {
-      std::printf("set,n,threads,removed_voxels,vertices_before,vertices_after,ms_tool_voxels,ms_event,"
-                  "ms_relayout_and_model,ms_scene_event\n");
-      for (int n : splitList<int>(sizes, [](const std::string& x) { return std::stoi(x); }))
-        for (int t : splitList<int>(threads, [](const std::string& x) { return std::stoi(x); }))
-          measureCarve(n, t, reps);
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "gradel-bench: %s\n", e.what());
-      return 2;
-    }
-    return 0;
-  }
+  };
+  if (drill)
+    return eachSizeAndThreads("set,n,threads,frames,frames_with_event,removed_voxels,wall_s,real_time_factor,"
+                              "ms_event_median,ms_event_max,vertices_after,dt_after_s",
+                              [](int n, int t) { measureDrill(n, t); });
+  if (carve)
+    return eachSizeAndThreads("set,n,threads,removed_voxels,vertices_before,vertices_after,ms_tool_voxels,ms_event,"
+                              "ms_relayout_and_model,ms_scene_event",
+                              [&](int n, int t) { measureCarve(n, t, reps); });
   try {
     auto str = [](const std::string& s) { return s; };
     const auto setList = splitList<std::string>(sets, str);

@@ -2,7 +2,6 @@
 // (BodyMotion), and which of a track's candidates may have reached the other body's surface since
 // their last check (the rest are outside: not looked up). docs/speed.md, "Body contacts: the stage".
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <limits>
 
@@ -46,14 +45,7 @@ void BodyContacts::measure(const BodyContactState& s) {
               std::min<size_t>(bodies_[b].vertexEnd, i0 + kMeasureChunk), m);
     chunkMotion_[c] = m;
   };
-  if (team_ && team_->members() > 1 && chunks >= 4) {
-    std::atomic<uint32_t> next{0};
-    team_->run([&](int) {
-      for (uint32_t c; (c = next.fetch_add(1, std::memory_order_relaxed)) < chunks;) one(c);
-    });
-  } else {
-    for (uint32_t c = 0; c < chunks; ++c) one(c);
-  }
+  forEachInChunks(chunks >= 4 ? team_ : nullptr, chunks, 1, [&](size_t c) { one(uint32_t(c)); });
   for (size_t b = 0; b < B; ++b) {
     BodyMotion m;
     for (uint32_t c = chunkStart_[b]; c < chunkStart_[b + 1]; ++c) m.add(chunkMotion_[c]);

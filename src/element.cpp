@@ -165,9 +165,7 @@ Real elementVolumeForces(int dim, const Vec3* x, const uint32_t* verts, const Ve
 }
 
 Real elementDeterminant(int dim, const Vec3* x, const uint32_t* verts, const Vec3* R0, int n) {
-  Mat3 Q = Mat3::Zero();
-  for (int i = 0; i < n; ++i) Q.noalias() += R0[i] * R0[i].transpose();
-  return deformationDeterminant(dim, elementCovariance(x, verts, R0, n), Q);
+  return deformationDeterminant(dim, elementCovariance(x, verts, R0, n), restSecondMoment(R0, size_t(n)));
 }
 
 Real deformationDeterminant(int dim, const Mat3& A, const Mat3& S) {

@@ -124,7 +124,7 @@ Metrics World::metricsOf(const BodyRange& body, std::vector<Real>* elementStress
   for (size_t k = 0; k < ne; ++k) {
     const size_t e = e0 + k;
     const ElementFigures& fig = figures[k];
-    if (m.hasVolumeTerm() && m.volumeStiffness[e] > 0) r.elasticEnergy += fig.volumeEnergy;
+    r.elasticEnergy += fig.volumeEnergy;  // 0 without a volumetric term (adding it changes no bit)
     for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) forces[m.elemVerts[p] - v0] += pairForce[p - p0];
     r.elasticEnergy += fig.energy;
     if (elementStrain) (*elementStrain)[e] = fig.strain;
