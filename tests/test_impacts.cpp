@@ -30,6 +30,7 @@ struct Impact {
   std::string shapeA = "sphere", shapeB = "sphere";
   int sizeA = 16, sizeB = 16;  // voxels across
   Real youngA = 1e5, youngB = 1e5;
+  Real poisson = 0;            // both bodies' Poisson's ratio
   Real voxel = 0.005;          // [m]
   Real closing = 4;            // [m/s] closing speed
   Real shareA = 0.5;           // A's part of it (1: B at rest)
@@ -61,6 +62,7 @@ struct ImpactWorld {
   explicit ImpactWorld(const Impact& c) {
     MaterialSettings ma, mb;
     ma.youngsModulus = c.youngA, mb.youngsModulus = c.youngB;
+    ma.poissonRatio = mb.poissonRatio = c.poisson;
     const Real rA = 0.5 * c.sizeA * c.voxel, rB = 0.5 * c.sizeB * c.voxel;
     const Vec3 originB(c.sizeA * c.voxel + c.gap * c.voxel, rA - rB + c.offset * (rA + rB), rA - rB);
     parts.push_back(test::makeBody(c.shapeA, c.sizeA, 3, LayoutKind::Gradational, ma, c.voxel));
@@ -428,6 +430,7 @@ TEST(Impacts, DISABLED_Measure) {
   c.shareA = env("GRADEL_IMPACT_SHARE", 0.5);
   c.sizeA = int(env("GRADEL_IMPACT_SIZE_A", 16)), c.sizeB = int(env("GRADEL_IMPACT_SIZE_B", 16));
   c.youngA = env("GRADEL_IMPACT_E_A", 1e5), c.youngB = env("GRADEL_IMPACT_E_B", 1e5);
+  c.poisson = env("GRADEL_IMPACT_POISSON", 0);
   if (std::getenv("GRADEL_IMPACT_SHAPE_A")) c.shapeA = std::getenv("GRADEL_IMPACT_SHAPE_A");
   if (std::getenv("GRADEL_IMPACT_SHAPE_B")) c.shapeB = std::getenv("GRADEL_IMPACT_SHAPE_B");
   if (env("GRADEL_IMPACT_LARGE_STEP", 0) > 0) c.integrator = IntegratorKind::LargeStep;
