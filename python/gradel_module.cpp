@@ -783,6 +783,8 @@ PYBIND11_MODULE(gradel, m) {
              const py::object& axis, Real restitution, Real friction, std::optional<py::object> path) {
             ManipulatorSettings mp;
             mp.shape = parseManipulatorShape(type);
+            if (mp.shape == ManipulatorShape::Blade)
+              throw InputError("type: a 'blade' is set in the scene's manipulators (its \"axes\" and \"half_extents\")");
             if ((mp.shape == ManipulatorShape::Circle) != (s.scene.dim == 2))
               throw InputError("type: '" + type + "' does not fit a " + std::to_string(s.scene.dim) + "D body");
             if (!(radius > 0)) throw InputError("radius: must be > 0 [m]");
