@@ -193,9 +193,10 @@ TEST(Pieces, BarCutThroughTheMiddleHandChecked) {
   EXPECT_LT((p - p0).norm(), 1e-14);
 }
 
-// A box whose two halves the pieces' own layouts lay out differently from the whole's (coarse
-// elements): the pieces equal the from-scratch layouts of their volumes, mass adds up, momentum
-// to 1e-12, and whatever vertex is new takes one velocity correction.
+// A 24x12x12 box (coarse elements inside) cut at x = 9, deformed and moving at random: the pieces
+// are the from-scratch layouts of their volumes and, here too, the carved body's layout
+// restricted to each (no new vertex, survivors bit for bit); mass adds up exactly, momentum to
+// 1e-12 of the sum of |m v|.
 TEST(Pieces, CoarsePiecesAreTheirVolumesLaidOutFromScratch) {
   const Real h = 0.0078125;
   const VoxelVolume v = bar(24, 12, 12, h);
@@ -209,6 +210,7 @@ TEST(Pieces, CoarsePiecesAreTheirVolumesLaidOutFromScratch) {
   in.volume = &v, in.layout = &layout, in.model = model.get(), in.positions = x.data(), in.velocities = vel.data();
   std::vector<uint8_t> mask = layerMask(v, 9);
   const CarvedBody c = carveBody(in, mask);
+  EXPECT_GE(c.layout.numLevels(), 2);
   CarveInput cin;
   cin.volume = &c.volume, cin.layout = &c.layout, cin.model = c.model.get();
   cin.positions = c.positions.data(), cin.velocities = c.velocities.data();
@@ -222,6 +224,7 @@ TEST(Pieces, CoarsePiecesAreTheirVolumesLaidOutFromScratch) {
     const Layout fresh = buildLayout(piece.volume, LayoutKind::Gradational);
     EXPECT_EQ(fresh.vertices, piece.layout.vertices);
     EXPECT_EQ(fresh.elemVerts, piece.layout.elemVerts);
+    EXPECT_EQ(piece.newVertices, 0u);  // the carved body's layout restricted to the piece
     for (size_t i = 0; i < piece.positions.size(); ++i) {
       p += piece.model->mass[i] * piece.velocities[i];
       if (piece.fromVertex[i] != Layout::kNoVertex) {

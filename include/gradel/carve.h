@@ -22,9 +22,9 @@
 //   * Best-fit rotations (the warm start of eq. 1): an element of the new layout takes the one of
 //     the old element that held the voxel at its first filled cell's lower corner.
 //
-// Pieces: a body cut into several connected pieces stays one body (its pieces share no element,
-// so they move independently; they collide with each other only under self_contact). Removing
-// every voxel is refused (`emptied`: the body is returned unchanged).
+// Pieces: carveBody returns one body whatever its shape; a scene splits a carved body that fell
+// apart into one body per piece (pieces.h, carve_scene.h). Removing every voxel is refused
+// (`emptied`: the body is returned unchanged).
 #pragma once
 
 #include <cstddef>
