@@ -227,3 +227,23 @@ TEST(Blade, CutSceneSplitsTheBarInTwo) {
   for (uint32_t u = r.vertexBegin; u < r.vertexEnd; ++u) lowest = std::min(lowest, w.state().positions[u].y());
   EXPECT_LT(lowest, 0.005);
 }
+
+// The same cut at 1 and 2 threads: the same events, bodies and state, bit for bit.
+TEST(Blade, CutSceneIsTheSameAtOneAndTwoThreads) {
+  uint64_t hashes[2] = {0, 0};
+  size_t bodies[2] = {0, 0};
+  for (int threads : {1, 2}) {
+    Scene scene = loadScene(std::string(GRADEL_SOURCE_DIR) + "/scenes/cut.json");
+    scene.simulation.threads = threads;
+    BuiltScene b = buildScene(scene);
+    std::vector<Vec3> previous;
+    while (b.world->time() < 0.5) {
+      b.world->advanceTo(b.world->time() + 1.0 / 60);
+      carveWithManipulators(b, previous);
+    }
+    hashes[threads - 1] = b.world->stateHash(), bodies[threads - 1] = b.numBodies();
+  }
+  EXPECT_EQ(bodies[0], 2u);
+  EXPECT_EQ(bodies[1], 2u);
+  EXPECT_EQ(hashes[0], hashes[1]);
+}

@@ -4,6 +4,7 @@
 // contact between them, and the same state at 1 and 2 threads.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstring>
 #include <memory>
 #include <random>
@@ -188,6 +189,20 @@ TEST(Pieces, BarCutThroughTheMiddleHandChecked) {
     mass += piece.model->totalMass;
   }
   for (size_t i = 0; i < c.positions.size(); ++i) p0 += c.model->mass[i] * c.velocities[i];
+  // No energy at the split: the pieces' kinetic and elastic energies are the carved body's (the
+  // same vertices, masses, velocities and elements).
+  auto energies = [](const std::shared_ptr<const RestModel>& m, const std::vector<Vec3>& x, const std::vector<Vec3>& v,
+                     const std::vector<Quat>& q) {
+    World w(m, isolated(), DomainSettings{}, {});
+    w.state().positions = x, w.state().velocities = v, w.state().rotations = q;
+    const Metrics k = w.metrics();
+    return std::array<Real, 2>{k.kineticEnergy, k.elasticEnergy};
+  };
+  const std::array<Real, 2> whole = energies(c.model, c.positions, c.velocities, c.rotations);
+  const std::array<Real, 2> a = energies(pieces[0].model, pieces[0].positions, pieces[0].velocities, pieces[0].rotations);
+  const std::array<Real, 2> b = energies(pieces[1].model, pieces[1].positions, pieces[1].velocities, pieces[1].rotations);
+  EXPECT_NEAR(a[0] + b[0], whole[0], 1e-14 * whole[0]);
+  EXPECT_NEAR(a[1] + b[1], whole[1], 1e-14 * std::max(whole[1], Real(1e-30)));
   EXPECT_EQ(mass, 176 * 1000 * h * h * h);
   EXPECT_EQ(mass, model->totalMass - c.removedMass);
   EXPECT_LT((p - p0).norm(), 1e-14);
