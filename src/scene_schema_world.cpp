@@ -191,7 +191,7 @@ ManipulatorSettings readManipulator(Fields& f, int dim) {
   f.require("type", dim == 3 ? "\"sphere\", \"cylinder\" or \"blade\"" : "\"circle\" or \"sphere\"");
   m.shape = f.enumeration("type", m.shape, &parseManipulatorShape);
   if (m.shape == ManipulatorShape::Blade) {
-    if (dim == 2) f.fail("type", "\"blade\" is 3D only (a 2D scene cuts with nothing yet)");
+    if (dim == 2) f.fail("type", "\"blade\" is 3D only (a 2D blade, a segment, is not done)");
     readBlade(f, m);
     f.forbid("restitution", "a blade cuts and never touches the body (no contact)");
     f.forbid("friction", "a blade cuts and never touches the body (no contact)");
