@@ -6,6 +6,8 @@
 
 #include <array>
 #include <cstring>
+#include <map>
+#include <utility>
 #include <memory>
 #include <random>
 #include <string>
@@ -314,6 +316,14 @@ TEST(Pieces, CutBarBecomesTwoBodiesThatCollide) {
     // after they have run into each other.
     ASSERT_NE(w.bodyContacts(), nullptr);
     EXPECT_EQ(w.bodyContacts()->bodies().size(), 2u);
+    // Each piece's contact surface is closed: every edge is shared by exactly two triangles.
+    for (const ContactBody& cb : w.bodyContacts()->bodies()) {
+      std::map<std::pair<uint32_t, uint32_t>, int> edges;
+      for (const auto& t : cb.triangles)
+        for (int k = 0; k < 3; ++k) ++edges[std::minmax(t[k], t[(k + 1) % 3])];
+      EXPECT_FALSE(edges.empty());
+      for (const auto& [e, n] : edges) ASSERT_EQ(n, 2) << e.first << "-" << e.second;
+    }
     EXPECT_EQ(verticesInsideOtherBodies(w), 0u);
     size_t contacts = 0;
     while (w.time() < 0.05) {
