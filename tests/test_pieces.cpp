@@ -257,6 +257,41 @@ TEST(Pieces, CoarsePiecesAreTheirVolumesLaidOutFromScratch) {
   EXPECT_LT((p - p0).norm(), 1e-12 * scale);
 }
 
+// A bar of two regions (label 1 for x < 8, label 2 of density 3000 and E 1 MPa beyond) with the
+// layer x = 7 removed: each piece keeps its own region's material, and its mass is its voxels'
+// at that density exactly (8 x 4 x 4 - the layer = 112 at 1000, 128 at 3000 kg/m^3).
+TEST(Pieces, EachPieceKeepsItsRegionsMaterial) {
+  const Real h = 0.0078125;
+  VoxelVolume v(3, 16, 4, 4, h);
+  for (int k = 0; k < 4; ++k)
+    for (int j = 0; j < 4; ++j)
+      for (int i = 0; i < 16; ++i) v.setLabel(i, j, k, i < 8 ? 1 : 2);
+  MaterialSettings material;
+  RegionMaterial stiff;
+  stiff.label = 2, stiff.density = 3000, stiff.youngsModulus = 1e6;
+  material.regions = {stiff};
+  const Layout layout = buildLayout(v, LayoutKind::Gradational);
+  auto model = std::make_shared<RestModel>(buildRestModel(layout, v, material, Vec3::Zero()));
+  std::vector<Vec3> x = model->restPositions, vel(x.size(), Vec3::Zero());
+  CarveInput in;
+  in.volume = &v, in.layout = &layout, in.model = model.get(), in.positions = x.data(), in.velocities = vel.data();
+  const CarvedBody c = carveBody(in, layerMask(v, 7));
+  CarveInput cin;
+  cin.volume = &c.volume, cin.layout = &c.layout, cin.model = c.model.get();
+  cin.positions = c.positions.data(), cin.velocities = c.velocities.data();
+  const std::vector<BodyPiece> pieces = splitBody(cin);
+  ASSERT_EQ(pieces.size(), 2u);
+  // The larger piece (128 voxels) is the stiff one.
+  EXPECT_EQ(pieces[0].volume.countFilled(), 128u);
+  EXPECT_EQ(pieces[0].model->materialLabel, (std::vector<uint16_t>{2}));
+  EXPECT_EQ(pieces[0].model->materials[0].density, 3000);
+  EXPECT_EQ(pieces[0].model->totalMass, 128 * 3000 * h * h * h);
+  EXPECT_EQ(pieces[1].volume.countFilled(), 112u);
+  EXPECT_EQ(pieces[1].model->materialLabel, (std::vector<uint16_t>{1}));
+  EXPECT_EQ(pieces[1].model->totalMass, 112 * 1000 * h * h * h);
+  EXPECT_EQ(pieces[0].model->totalMass + pieces[1].model->totalMass, model->totalMass - c.removedMass);
+}
+
 namespace {
 
 // A 12x4x4 bar of 2^-7 m voxels without gravity whose halves move towards each other; the layer
