@@ -137,10 +137,30 @@ std::vector<CarveEvent> carveBodies(BuiltScene& scene, const std::vector<std::pa
   for (size_t b = 0; b < B; ++b) pieceBodies[b].push_back(b);
   for (size_t b = 0, next = B; b < B; ++b)
     for (size_t k = 1; k < pieces[b].size(); ++k) pieceBodies[b].push_back(next++);
+  // The carved bodies as they were, put back if the new world cannot be made (a pin that holds
+  // no vertex any more), so that the scene and its world stay each other's. A carved body keeps
+  // its name only: its embedded mesh's vertex ids are gone (drawn by its voxel surface from now on).
+  struct Restore {
+    BuiltScene& scene;
+    size_t bodies;
+    std::vector<BuiltBody> before;
+    bool done = false;
+    ~Restore() {
+      if (done) return;
+      scene.bodies.resize(bodies);
+      for (size_t b = 0; b < bodies; ++b)
+        if (before[b].model) scene.bodies[b] = std::move(before[b]);
+    }
+  } restore{scene, B, std::vector<BuiltBody>(B)};
+  for (size_t b = 0; b < B; ++b) {
+    if (!changed[b]) continue;
+    restore.before[b] = std::move(scene.bodies[b]);
+    scene.bodies[b] = BuiltBody{};
+    scene.bodies[b].name = restore.before[b].name;
+  }
   for (size_t b = 0; b < B; ++b) {
     if (!changed[b]) continue;
     BuiltBody& body = scene.bodies[b];
-    body.embedded.reset(), body.sourceMesh.reset();  // its vertex ids are gone: drawn by the voxel surface
     if (pieces[b].empty()) {
       body.volume = std::move(carved[b].volume), body.layout = std::move(carved[b].layout);
       body.model = std::move(carved[b].model);
@@ -173,6 +193,7 @@ std::vector<CarveEvent> carveBodies(BuiltScene& scene, const std::vector<std::pa
     contactBodies = buildContactBodies(*model, layouts, volumes);
   }
   world.replaceModel(std::move(model), std::move(state), std::move(contactBodies), split ? &pins : nullptr);
+  restore.done = true;
   for (CarveEvent& e : events) {
     world.recordRemoval(e.body, RemovedMaterial{e.removedVoxels, e.removedVolume, e.removedMass, e.removedMomentum});
     e.pieces = pieceBodies[e.body];

@@ -390,3 +390,24 @@ TEST(Pieces, PinsFollowThePieces) {
   EXPECT_EQ(pins[1].body, 0u);
   EXPECT_EQ(pins[2].body, 1u);
 }
+
+// An event the new world cannot take (it would cut away every vertex a pin holds) changes nothing:
+// the scene's bodies stay those of its world, not cut.
+TEST(Pieces, AnEventTheWorldRefusesLeavesTheSceneAsItWas) {
+  Scene scene;
+  scene.bodies[0].shape = barShape(0.01);
+  PinSettings left;
+  left.min = Vec3(-1e-3, -1e-3, -1e-3), left.max = Vec3(1e-3, 0.05, 0.05);  // the face x = 0
+  scene.pins = {left};
+  BuiltScene b = buildScene(scene);
+  const uint64_t hash = b.world->stateHash();
+  std::vector<uint8_t> mask = layerMask(b.bodies[0].volume, 6), face = layerMask(b.bodies[0].volume, 0);
+  for (size_t q = 0; q < mask.size(); ++q) mask[q] |= face[q];
+  EXPECT_THROW(carveSceneBody(b, 0, mask), InputError);
+  ASSERT_EQ(b.numBodies(), 1u);
+  EXPECT_EQ(b.bodies[0].volume.countFilled(), 192u);
+  EXPECT_EQ(b.world->model().numVertices(), b.bodies[0].layout.numVertices());
+  EXPECT_EQ(b.world->model().bodies.size(), 1u);
+  EXPECT_EQ(b.world->stateHash(), hash);
+  b.world->step();  // still a working world
+}
