@@ -331,6 +331,7 @@ int runScene(const RunOptions& o) {
                                    [](const gradel::Manipulator& m) { return m.settings.carve; });
   gradel::MetricsCsv csv(dir.file("metrics.csv"), world.manipulators().size(), several, carving);
   std::vector<gradel::PvdFrame> pvd;
+  size_t framesWritten = 0;
   Real maxPenetration = 0, maxStress = 0, maxStrain = 0;
   gradel::Metrics last;
 
@@ -360,13 +361,16 @@ int runScene(const RunOptions& o) {
     last = m;
     const std::vector<gradel::Real> vertexStress = world.vertexStress(elementStress);
     const std::vector<gradel::Real> vertexStrain = world.vertexStress(elementStrain);
+    // A body cut into pieces becomes several bodies (carve_scene.h): from then on one file each.
+    const bool named = built.numBodies() > 1;
     for (size_t i = 0; i < built.numBodies(); ++i) {
-      const std::string name = gradel::frameFileName(index, several ? built.bodies[i].name : "");
+      const std::string name = gradel::frameFileName(index, named ? built.bodies[i].name : "");
       gradel::encodeVtu(frameWriter.buffer(), world.model(), world.state(), built.range(i), vertexStress,
                         elementStress, gradel::VtkEncoding::Raw, vertexStrain, elementStrain);
       frameWriter.submit(dir.file(name));
-      pvd.push_back({world.time(), name, int(i), several ? built.bodies[i].name : ""});
+      pvd.push_back({world.time(), name, int(i), named ? built.bodies[i].name : ""});
     }
+    ++framesWritten;
   };
 
   // Divergence, Ctrl-C and the progress bar are noticed within a frame (frame_loop.h).
@@ -390,7 +394,7 @@ int runScene(const RunOptions& o) {
   // Carving: after every chunk the tools' sweeps; an event is a chunk that removed voxels (the
   // world made again once), its wall time the tools' voxel sets, the re-layouts and the new World.
   std::vector<gradel::Vec3> carvePrevious;
-  size_t carveEvents = 0, carveBodyEvents = 0, carvedVoxels = 0;
+  size_t carveEvents = 0, carveBodyEvents = 0, carvedVoxels = 0, carveNewBodies = 0;
   double carveSeconds = 0, carveEventSeconds = 0, carveEventMaxSeconds = 0;
   long long carveSteps = 0;  // events shorten dt: the steps counted per chunk at the chunk's dt
   Real chunkStart = world.time();
@@ -405,7 +409,8 @@ int runScene(const RunOptions& o) {
       chunkStart = world.time();
       if (events.empty()) return;
       ++carveEvents, carveEventSeconds += seconds, carveEventMaxSeconds = std::max(carveEventMaxSeconds, seconds);
-      for (const gradel::CarveEvent& e : events) ++carveBodyEvents, carvedVoxels += e.removedVoxels;
+      for (const gradel::CarveEvent& e : events)
+        ++carveBodyEvents, carvedVoxels += e.removedVoxels, carveNewBodies += e.pieces.size() - 1;
     };
   }
   const auto wallStart = std::chrono::steady_clock::now();
@@ -425,7 +430,7 @@ int runScene(const RunOptions& o) {
   j["integrator"] = gradel::integratorKindName(world.settings().integrator);
   if (!world.integratorChoice().empty()) j["integrator_choice"] = world.integratorChoice();  // why auto picked it
   j["simulated_seconds"] = world.time();
-  j["frames"] = pvd.size() / built.numBodies();
+  j["frames"] = framesWritten;
   j["bodies"] = built.numBodies();
   j["wall_seconds"] = wall;
   j["real_time_factor"] = wall > 0 ? world.time() / wall : 0.0;
@@ -436,6 +441,7 @@ int runScene(const RunOptions& o) {
     j["carve_events"] = carveEvents;            // chunks that removed voxels (the world made again once each)
     j["carve_body_events"] = carveBodyEvents;   // bodies that lost voxels, summed over the events
     j["carved_voxels"] = carvedVoxels;
+    j["carve_new_bodies"] = carveNewBodies;  // bodies cut into pieces: one body per piece (carve_scene.h)
     gradel::RemovedMaterial total;
     for (const gradel::RemovedMaterial& r : world.removedMaterial()) total.volume += r.volume, total.mass += r.mass;
     j["carved_volume"] = total.volume;  // [m^3]

@@ -144,6 +144,7 @@ struct Figures {
   double stressAt = -1e9;  // [s] wall time maxStress was taken (the stress costs a pass over the elements)
   std::string integrator, choice, dtRule;
   size_t elements = 0, vertices = 0, pairs = 0;
+  size_t bodyCount = 1;  // changes when carving cuts a body into pieces (carve_scene.h)
   std::vector<BodyRow> bodies;
   std::vector<std::pair<Vec3, Vec3>> bounds;  // per body: lowest and highest vertex
   // Carving (issue 30): voxels removed and events since the world was installed, the last event's wall time.
@@ -264,6 +265,7 @@ class Viewer {
     figures_.choice = w.integratorChoice();
     figures_.dtRule = w.dtRule();
     figures_.elements = w.model().numElements(), figures_.vertices = w.model().numVertices();
+    figures_.bodyCount = built_.numBodies();
     figures_.pairs = w.model().numPairs();
     // The stress: per vertex for the colour (every frame it is shown). Its maximum and the body
     // table's figures (each a pass over the elements: 6-7 ms of CPU at size 128) are taken four
@@ -826,6 +828,8 @@ class Viewer {
     ImGui::SameLine();
     sceneButton("Phantom", "phantom.json");
     sceneButton("Drill (carving)", "drill.json");
+    ImGui::SameLine();
+    sceneButton("Cut (blade)", "cut.json");
 
     // ---- view ----
     section("View");
@@ -1296,6 +1300,7 @@ int run(const Options& o) {
                                 {"size", {fbw, fbh}},
                                 {"t", viewer.figures().time},
                                 {"carved_voxels", viewer.figures().carvedVoxels},
+                                {"bodies", viewer.figures().bodyCount},
                                 {"vertices", viewer.figures().vertices}}
                      .dump()
               << "\n";
@@ -1368,6 +1373,7 @@ int run(const Options& o) {
         j["dt_rule"] = f.dtRule;
         j["elements"] = f.elements;
         j["vertices"] = f.vertices;
+        j["bodies"] = f.bodyCount;
         j["carved_voxels"] = f.carvedVoxels;
         j["carve_events"] = f.carveEvents;
         if (o.rebuildSize > 0) {

@@ -38,6 +38,11 @@
 // `gradel run` can: its own CSV (set = drill): frames, frames with an event, voxels removed,
 // wall seconds of the whole second (steps + events), real-time factor, median and largest event
 // [ms], the vertices and dt at the end.
+// --split: a body cut in two (carve_scene.h, pieces.h): a gradational n^3 box (5 mm voxels, no
+// gravity), a blade in its middle plane x = n/2 taking every row of that layer but the lowest
+// (one event), then the lowest (the event that splits it): its own CSV (set = split), medians in
+// ms of the event before, the splitting event (event, both pieces laid out, the world made again
+// with contact between them) and splitBody alone on the carved body; vertices and bodies after.
 // --find-realtime with --sets real: for each modulus, the largest gradational real-scene sphere n
 // that runs in real time with the integrator given (n doubled from 16, then bisected).
 #include <signal.h>
@@ -53,8 +58,10 @@
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 
 #include "gradel/carve_scene.h"
+#include "gradel/pieces.h"
 #include "gradel/shared/scene_presets.h"
 
 using namespace gradel;
@@ -110,6 +117,45 @@ void measureCarve(int n, int threads, int reps) {
   }
   std::printf("carve,%d,%d,%zu,%zu,%zu,%.3f,%.3f,%.3f,%.3f\n", n, threads, removed, verticesBefore,
               b.world->model().numVertices(), medianOf(tSet), medianOf(tEvent), medianOf(tLayout), medianOf(tScene));
+  std::fflush(stdout);
+}
+
+// --split: one row per size and thread count (see the top of this file).
+void measureSplit(int n, int threads, int reps) {
+  const Real h = 0.005;
+  std::vector<double> tBefore, tSplit, tPieces;
+  size_t vertices = 0, bodies = 0;
+  for (int k = 0; k < reps; ++k) {
+    Scene scene;
+    scene.bodies[0].shape = presetShape("box", n, 3, h);
+    scene.simulation.gravity = Vec3::Zero();
+    scene.simulation.threads = threads;
+    BuiltScene b = buildScene(scene);
+    b.world->step();
+    BladeSweep blade;  // normal -x through the centres of layer n/2, all rows but j = 0
+    blade.axis = Vec3(0, 0, 1), blade.widthAxis = Vec3(0, 1, 0), blade.halfLength = n * h;
+    blade.halfWidth = (n - 1) * h / 2;
+    blade.from = blade.to = Vec3((n / 2 + 0.5) * h, (n + 1) * h / 2, n * h / 2);
+    auto t0 = Clock::now();
+    carveSceneBlade(b, blade);
+    tBefore.push_back(msSince(t0));
+    blade.halfWidth = 0.25 * h, blade.from = blade.to = Vec3((n / 2 + 0.5) * h, 0.5 * h, n * h / 2);
+    const std::vector<uint8_t> mask = voxelsAlongBlade(carveInput(b, 0), blade);
+    const CarvedBody c = carveBody(carveInput(b, 0), mask);
+    CarveInput in;
+    in.volume = &c.volume, in.layout = &c.layout, in.model = c.model.get();
+    in.positions = c.positions.data(), in.velocities = c.velocities.data(), in.rotations = c.rotations.data();
+    t0 = Clock::now();
+    const std::vector<BodyPiece> pieces = splitBody(in);
+    tPieces.push_back(msSince(t0));
+    t0 = Clock::now();
+    carveSceneBlade(b, blade);
+    tSplit.push_back(msSince(t0));
+    vertices = b.world->model().numVertices(), bodies = b.numBodies();
+    if (pieces.size() != 2 || bodies != 2) throw std::runtime_error("--split: the box did not fall into two pieces");
+  }
+  std::printf("split,%d,%d,%zu,%zu,%.3f,%.3f,%.3f\n", n, threads, vertices, bodies, medianOf(tBefore), medianOf(tSplit),
+              medianOf(tPieces));
   std::fflush(stdout);
 }
 
@@ -385,7 +431,7 @@ int main(int argc, char** argv) {
   int reps = 5, contactSteps = 40;
   std::string contactTrace;
   double minTime = 0.2, maxPairs = 4.0e7;
-  bool findRt = false, load = false, carve = false, drill = false;
+  bool findRt = false, load = false, carve = false, drill = false, split = false;
   app.add_option("--sets", sets,
                  "Comma-separated: real (SI scenes with gravity, walls, contact, pins, metrics), paper, contact "
                  "(two spheres in soft-soft contact)");
@@ -417,6 +463,9 @@ int main(int argc, char** argv) {
   app.add_flag("--drill", drill,
                "Only steady drilling: a burr carving every frame through an n^3 box for 1 s per --sizes and "
                "--threads (its own CSV, set = drill)");
+  app.add_flag("--split", split,
+               "Only the cost of the carving event that cuts an n^3 box in two per --sizes and --threads (its own "
+               "CSV, set = split)");
   CLI11_PARSE(app, argc, argv);
   // --drill and --carve: their own CSV, one row per --sizes and --threads.
   auto eachSizeAndThreads = [&](const char* header, auto&& row) {
@@ -434,6 +483,9 @@ int main(int argc, char** argv) {
     return eachSizeAndThreads("set,n,threads,frames,frames_with_event,removed_voxels,wall_s,real_time_factor,"
                               "ms_event_median,ms_event_max,vertices_after,dt_after_s",
                               [](int n, int t) { measureDrill(n, t); });
+  if (split)
+    return eachSizeAndThreads("set,n,threads,vertices_after,bodies_after,ms_event_before,ms_split_event,ms_split_body",
+                              [&](int n, int t) { measureSplit(n, t, reps); });
   if (carve)
     return eachSizeAndThreads("set,n,threads,removed_voxels,vertices_before,vertices_after,ms_tool_voxels,ms_event,"
                               "ms_relayout_and_model,ms_scene_event",

@@ -12,6 +12,9 @@ if(GRADEL_BUILD_TESTS)
   add_test(NAME bench.drill_smoke
            COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/tests/scripts/bench_drill_smoke.sh $<TARGET_FILE:gradel-bench>)
   set_tests_properties(bench.drill_smoke PROPERTIES TIMEOUT 120)
+  add_test(NAME bench.split_smoke
+           COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/tests/scripts/bench_split_smoke.sh $<TARGET_FILE:gradel-bench>)
+  set_tests_properties(bench.split_smoke PROPERTIES TIMEOUT 120)
 endif()
 
 # examples/haptic_loop.cpp: a 1 kHz haptic loop (virtual coupling, contact force fed back) that

@@ -7,6 +7,9 @@
 set(GRADEL_CORE_SOURCES
   src/bodies.cpp
   src/carve.cpp                     # carving: the event (re-layout, state carried over) and a tool's voxels
+  src/carve_cells.cpp               # carving's lattice kernels: mass cells, trilinear transfer, voxel owners
+  src/carve_blade.cpp               # a blade's kerf: the voxels near the rectangle it swept
+  src/pieces.cpp                    # a carved body's connected pieces, each a body of its own
   src/carve_scene.cpp               # carving in a built scene: the body replaced in its World
   src/body_contacts.cpp             # body contacts: the stage, resolve()'s loop of rounds over the phases below
   src/body_contact_bounds.cpp       # broad phase per step and round: motion bounds, which candidates to look up
@@ -117,6 +120,8 @@ set(GRADEL_CLI_RENDER_SOURCES apps/render_cli.cpp)
 set(GRADEL_TEST_SOURCES
   tests/test_bodies.cpp
   tests/test_carve.cpp
+  tests/test_pieces.cpp
+  tests/test_blade.cpp
   tests/test_external_force.cpp
   tests/test_body_contacts.cpp
   tests/test_body_contacts_large.cpp

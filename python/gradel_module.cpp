@@ -693,6 +693,35 @@ PYBIND11_MODULE(gradel, m) {
           "deformed configuration (docs/carving.md): a rod's or a core drill's bore. As carve_sphere otherwise; "
           "returns the number of voxels removed.")
       .def(
+          "cut",
+          [](Simulation& s, const std::vector<double>& center, const std::vector<std::vector<double>>& axes,
+             const std::vector<double>& halfExtents, std::optional<std::vector<double>> to) {
+            auto vec3 = [](const std::vector<double>& v, const char* key) {
+              if (v.size() != 3) throw InputError(std::string("cut: ") + key + ": expected 3 numbers");
+              const Vec3 x(v[0], v[1], v[2]);
+              if (!x.allFinite()) throw InputError(std::string("cut: ") + key + ": not finite");
+              return x;
+            };
+            if (s.scene.dim != 3) throw InputError("cut: a blade cuts 3D bodies only");
+            const Vec3 c = vec3(center, "center");
+            if (axes.size() != 2) throw InputError("cut: axes: expected two directions of 3 numbers");
+            const Vec3 u = vec3(axes[0], "axes[0]"), w = vec3(axes[1], "axes[1]");
+            if (!(u.norm() > 0) || !(w.norm() > 0)) throw InputError("cut: axes: expected non-zero directions");
+            if (std::abs(u.normalized().dot(w.normalized())) > 1e-6)
+              throw InputError("cut: axes: the two directions are not perpendicular (the blade is a rectangle)");
+            if (halfExtents.size() != 2 || !(halfExtents[0] > 0) || !(halfExtents[1] > 0) ||
+                !std::isfinite(halfExtents[0]) || !std::isfinite(halfExtents[1]))
+              throw InputError("cut: half_extents: expected two lengths > 0 [m]");
+            const BladeSweep blade{c, to ? vec3(*to, "to") : c, u, w, halfExtents[0], halfExtents[1]};
+            WorldLock lock(s);
+            return carveLocked(s, [&] { return carveSceneBlade(s.built, blade); });
+          },
+          py::arg("center"), py::arg("axes"), py::arg("half_extents"), py::arg("to") = py::none(),
+          "A blade's cut (docs/carving.md, \"The blade\"): the rectangle about `center` [m] with half extents "
+          "`half_extents` [m] along the two perpendicular `axes`, parked or moved to `to` [m] without turning, "
+          "removes its one-voxel kerf from every body. A body cut in two becomes two bodies (num_bodies, "
+          "body_names: the larger keeps its name, the other is '<name>-2'), which collide. Returns the voxels removed.")
+      .def(
           "remove_voxels",
           [](Simulation& s, size_t body, const py::array& maskArray) {
             const py::array_t<bool, py::array::forcecast> a(maskArray);
@@ -783,6 +812,8 @@ PYBIND11_MODULE(gradel, m) {
              const py::object& axis, Real restitution, Real friction, std::optional<py::object> path) {
             ManipulatorSettings mp;
             mp.shape = parseManipulatorShape(type);
+            if (mp.shape == ManipulatorShape::Blade)
+              throw InputError("type: a 'blade' is set in the scene's manipulators (its \"axes\" and \"half_extents\")");
             if ((mp.shape == ManipulatorShape::Circle) != (s.scene.dim == 2))
               throw InputError("type: '" + type + "' does not fit a " + std::to_string(s.scene.dim) + "D body");
             if (!(radius > 0)) throw InputError("radius: must be > 0 [m]");

@@ -11,10 +11,54 @@
 
 #include "gradel/bodies.h"
 #include "gradel/contact_surface.h"
+#include "gradel/pieces.h"
+#include "gradel/pins.h"
 
 namespace gradel {
 
 namespace {
+
+// A new piece's name: the body's name, "-", the smallest number from 2 no body has taken (a
+// scene's names are file names: at most 100 of A-Z a-z 0-9 _ - ., so the name is cut to fit).
+std::string pieceName(const BuiltScene& scene, const std::string& name) {
+  for (size_t n = 2;; ++n) {
+    const std::string suffix = "-" + std::to_string(n);
+    const std::string candidate = name.substr(0, 100 - suffix.size()) + suffix;
+    bool taken = false;
+    for (const BuiltBody& b : scene.bodies) taken = taken || b.name == candidate;
+    if (!taken) return candidate;
+  }
+}
+
+// The pins after bodies fell apart: a pin of such a body is copied to each of its pieces
+// (pieceBodies[b]: scene indices) whose vertices it selects, in place; one that selects none of
+// them stays on the body (World::setPins then says it holds no vertex, as when carving took all
+// its vertices).
+std::vector<PinSettings> pinsOverPieces(const BuiltScene& scene, const std::vector<PinSettings>& pins,
+                                        const std::vector<std::vector<size_t>>& pieceBodies) {
+  std::vector<PinSettings> out;
+  for (const PinSettings& pin : pins) {
+    if (pin.body >= pieceBodies.size() || pieceBodies[pin.body].size() < 2) {
+      out.push_back(pin);
+      continue;
+    }
+    const size_t before = out.size();
+    for (size_t s : pieceBodies[pin.body]) {
+      PinSettings alone = pin;
+      alone.body = 0;
+      try {
+        selectPins({alone}, scene.bodies[s].model->restPositions);
+      } catch (const InputError&) {
+        continue;  // holds no vertex of this piece
+      }
+      PinSettings copy = pin;
+      copy.body = uint32_t(s);
+      out.push_back(std::move(copy));
+    }
+    if (out.size() == before) out.push_back(pin);
+  }
+  return out;
+}
 
 // The bodies' events (body index, mask), at most one per body; the world replaced once.
 std::vector<CarveEvent> carveBodies(BuiltScene& scene, const std::vector<std::pair<size_t, std::vector<uint8_t>>>& masks) {
@@ -47,46 +91,115 @@ std::vector<CarveEvent> carveBodies(BuiltScene& scene, const std::vector<std::pa
       }
     }
   if (events.empty()) return events;
+  // Pieces (pieces.h): a carved body whose material fell apart becomes one body per piece, the
+  // largest in its place (its name and index), the others appended after every body, in order.
+  std::vector<std::vector<BodyPiece>> pieces(B);
+  for (size_t b = 0; b < B; ++b) {
+    if (!changed[b]) continue;
+    const CarvedBody& c = carved[b];
+    CarveInput in;
+    in.volume = &c.volume, in.layout = &c.layout, in.model = c.model.get();
+    in.positions = c.positions.data(), in.velocities = c.velocities.data(), in.rotations = c.rotations.data();
+    pieces[b] = splitBody(in);
+  }
   // The new state, body by body: the carved bodies' from their event, the others' as they were.
   const State& old = world.state();
   State state;
   state.time = old.time;
+  auto append = [&](const std::vector<Vec3>& x, const std::vector<Vec3>& v, const std::vector<Quat>& q) {
+    state.positions.insert(state.positions.end(), x.begin(), x.end());
+    state.velocities.insert(state.velocities.end(), v.begin(), v.end());
+    state.rotations.insert(state.rotations.end(), q.begin(), q.end());
+  };
   for (size_t b = 0; b < B; ++b) {
-    if (changed[b]) {
-      const CarvedBody& c = carved[b];
-      state.positions.insert(state.positions.end(), c.positions.begin(), c.positions.end());
-      state.velocities.insert(state.velocities.end(), c.velocities.begin(), c.velocities.end());
-      state.rotations.insert(state.rotations.end(), c.rotations.begin(), c.rotations.end());
-      continue;
+    if (changed[b] && !pieces[b].empty()) {
+      append(pieces[b][0].positions, pieces[b][0].velocities, pieces[b][0].rotations);
+    } else if (changed[b]) {
+      append(carved[b].positions, carved[b].velocities, carved[b].rotations);
+    } else {
+      const BodyRange& r = scene.range(b);
+      state.positions.insert(state.positions.end(), old.positions.begin() + r.vertexBegin,
+                             old.positions.begin() + r.vertexEnd);
+      state.velocities.insert(state.velocities.end(), old.velocities.begin() + r.vertexBegin,
+                              old.velocities.begin() + r.vertexEnd);
+      state.rotations.insert(state.rotations.end(), old.rotations.begin() + r.elementBegin,
+                             old.rotations.begin() + r.elementEnd);
     }
-    const BodyRange& r = scene.range(b);
-    state.positions.insert(state.positions.end(), old.positions.begin() + r.vertexBegin,
-                           old.positions.begin() + r.vertexEnd);
-    state.velocities.insert(state.velocities.end(), old.velocities.begin() + r.vertexBegin,
-                            old.velocities.begin() + r.vertexEnd);
-    state.rotations.insert(state.rotations.end(), old.rotations.begin() + r.elementBegin,
-                           old.rotations.begin() + r.elementEnd);
+  }
+  for (size_t b = 0; b < B; ++b)
+    for (size_t k = 1; k < pieces[b].size(); ++k)
+      append(pieces[b][k].positions, pieces[b][k].velocities, pieces[b][k].rotations);
+  // The pins of a body that fell apart hold the pieces their box or mask selects (one pin each).
+  const std::vector<PinSettings> oldPins = world.pins();
+  bool split = false;
+  for (size_t b = 0; b < B; ++b) split = split || !pieces[b].empty();
+  std::vector<std::vector<size_t>> pieceBodies(B);
+  for (size_t b = 0; b < B; ++b) pieceBodies[b].push_back(b);
+  for (size_t b = 0, next = B; b < B; ++b)
+    for (size_t k = 1; k < pieces[b].size(); ++k) pieceBodies[b].push_back(next++);
+  // The carved bodies as they were, put back if the new world cannot be made (a pin that holds
+  // no vertex any more), so that the scene and its world stay each other's. A carved body keeps
+  // its name only: its embedded mesh's vertex ids are gone (drawn by its voxel surface from now on).
+  struct Restore {
+    BuiltScene& scene;
+    size_t bodies;
+    std::vector<BuiltBody> before;
+    bool done = false;
+    ~Restore() {
+      if (done) return;
+      scene.bodies.resize(bodies);
+      for (size_t b = 0; b < bodies; ++b)
+        if (before[b].model) scene.bodies[b] = std::move(before[b]);
+    }
+  } restore{scene, B, std::vector<BuiltBody>(B)};
+  for (size_t b = 0; b < B; ++b) {
+    if (!changed[b]) continue;
+    restore.before[b] = std::move(scene.bodies[b]);
+    scene.bodies[b] = BuiltBody{};
+    scene.bodies[b].name = restore.before[b].name;
   }
   for (size_t b = 0; b < B; ++b) {
     if (!changed[b]) continue;
     BuiltBody& body = scene.bodies[b];
-    body.volume = std::move(carved[b].volume), body.layout = std::move(carved[b].layout);
-    body.model = std::move(carved[b].model);
-    body.embedded.reset(), body.sourceMesh.reset();  // its vertex ids are gone: drawn by the voxel surface
+    if (pieces[b].empty()) {
+      body.volume = std::move(carved[b].volume), body.layout = std::move(carved[b].layout);
+      body.model = std::move(carved[b].model);
+      continue;
+    }
+    for (size_t k = 1; k < pieces[b].size(); ++k) {
+      BuiltBody p;
+      p.name = pieceName(scene, body.name);
+      p.volume = std::move(pieces[b][k].volume), p.layout = std::move(pieces[b][k].layout);
+      p.model = std::move(pieces[b][k].model);
+      scene.bodies.push_back(std::move(p));
+    }
+    BuiltBody& first = scene.bodies[b];  // push_back may have moved it
+    first.volume = std::move(pieces[b][0].volume), first.layout = std::move(pieces[b][0].layout);
+    first.model = std::move(pieces[b][0].model);
   }
+  std::vector<PinSettings> pins;
+  if (split) pins = pinsOverPieces(scene, oldPins, pieceBodies);
   std::vector<std::shared_ptr<const RestModel>> models;
   for (const BuiltBody& body : scene.bodies) models.push_back(body.model);
-  auto model = B == 1 ? models[0] : std::make_shared<const RestModel>(combineRestModels(models));
+  auto model =
+      models.size() == 1 ? models[0] : std::make_shared<const RestModel>(combineRestModels(models));
+  // Contact between the bodies as a scene has it (scene.h): in 3D when there are several bodies
+  // (the pieces of a body collide like any two bodies), or when the world had it (self_contact).
   std::vector<ContactBody> contactBodies;
-  if (world.bodyContacts()) {
+  if (world.bodyContacts() || (model->dim == 3 && models.size() > 1)) {
     std::vector<const Layout*> layouts;
     std::vector<const VoxelVolume*> volumes;
     for (const BuiltBody& body : scene.bodies) layouts.push_back(&body.layout), volumes.push_back(&body.volume);
     contactBodies = buildContactBodies(*model, layouts, volumes);
   }
-  world.replaceModel(std::move(model), std::move(state), std::move(contactBodies));
-  for (const CarveEvent& e : events)
+  world.replaceModel(std::move(model), std::move(state), std::move(contactBodies), split ? &pins : nullptr);
+  restore.done = true;
+  for (CarveEvent& e : events) {
     world.recordRemoval(e.body, RemovedMaterial{e.removedVoxels, e.removedVolume, e.removedMass, e.removedMomentum});
+    e.pieces = pieceBodies[e.body];
+    e.vertices = 0, e.elements = 0;
+    for (size_t s : e.pieces) e.vertices += scene.bodies[s].layout.numVertices(), e.elements += scene.bodies[s].layout.numElements();
+  }
   return events;
 }
 
@@ -137,6 +250,13 @@ std::vector<CarveEvent> carveSceneCylinderSweep(BuiltScene& scene, const Vec3& f
   });
 }
 
+std::vector<CarveEvent> carveSceneBlade(BuiltScene& scene, const BladeSweep& blade) {
+  return carveSceneTool(scene, 0, [&](const CarveInput& in, Real, size_t* n) {
+    if (in.layout->dim != 3) return std::vector<uint8_t>(in.volume->size(), 0);
+    return voxelsAlongBlade(in, blade, n);
+  });
+}
+
 std::vector<CarveEvent> carveWithManipulators(BuiltScene& scene, std::vector<Vec3>& previous) {
   const std::vector<Manipulator>& tools = scene.world->manipulators();
   if (previous.size() != tools.size()) {  // the first call: no sweep yet, the centres now
@@ -154,6 +274,9 @@ std::vector<CarveEvent> carveWithManipulators(BuiltScene& scene, std::vector<Vec
       e = carveSceneSweep(scene, from, now, m.settings.radius, 1.0);
     else if (m.settings.shape == ManipulatorShape::Cylinder)
       e = carveSceneCylinderSweep(scene, from, now, m.settings.axis, m.settings.radius, m.settings.halfLength, 1.0);
+    else if (m.settings.shape == ManipulatorShape::Blade)
+      e = carveSceneBlade(scene, BladeSweep{from, now, m.settings.axis, m.settings.widthAxis, m.settings.halfLength,
+                                            m.settings.halfWidth});
     events.insert(events.end(), e.begin(), e.end());
   }
   return events;

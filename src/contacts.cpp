@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace gradel {
 
@@ -9,7 +10,8 @@ ManipulatorShape parseManipulatorShape(const std::string& name) {
   if (name == "sphere") return ManipulatorShape::Sphere;
   if (name == "cylinder") return ManipulatorShape::Cylinder;
   if (name == "circle") return ManipulatorShape::Circle;
-  throw InputError("unknown manipulator type '" + name + "' (expected sphere, cylinder or circle)");
+  if (name == "blade") return ManipulatorShape::Blade;
+  throw InputError("unknown manipulator type '" + name + "' (expected sphere, cylinder, circle or blade)");
 }
 
 const char* manipulatorShapeName(ManipulatorShape s) {
@@ -17,6 +19,7 @@ const char* manipulatorShapeName(ManipulatorShape s) {
     case ManipulatorShape::Sphere: return "sphere";
     case ManipulatorShape::Cylinder: return "cylinder";
     case ManipulatorShape::Circle: return "circle";
+    case ManipulatorShape::Blade: return "blade";
   }
   return "?";
 }
@@ -81,6 +84,10 @@ namespace {
 
 // Signed distance of the shape centred at the origin, evaluated at d (frame coordinates).
 Real shapeDistance(const ManipulatorSettings& settings, const Vec3& d, Vec3* normal) {
+  if (settings.shape == ManipulatorShape::Blade) {  // it cuts, it never holds a vertex out
+    if (normal) *normal = settings.axis.cross(settings.widthAxis).normalized();
+    return std::numeric_limits<Real>::infinity();
+  }
   if (settings.shape != ManipulatorShape::Cylinder) {
     const Real r = d.norm();
     if (normal) *normal = r > 0 ? Vec3(d / r) : Vec3::UnitY();

@@ -1,6 +1,7 @@
 // The scene file's world sections (scene_schema.h): `simulation`, `domain`, `body_contact`,
 // `pins` and `manipulators` (with their keyframe paths).
 #include <array>
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
@@ -140,10 +141,65 @@ PinSettings readPin(Fields& f, const Scene& scene) {
   return p;
 }
 
+namespace {
+
+// A blade's "axes" (two perpendicular directions, each "x", "y", "z" or [x, y, z]) and
+// "half_extents" (two lengths [m] > 0): its rectangle (contacts.h).
+void readBlade(Fields& f, ManipulatorSettings& m) {
+  const std::string axesText = "two perpendicular directions, each \"x\", \"y\", \"z\" or [x, y, z]";
+  const json& axes = f.require("axes", axesText);
+  if (!axes.is_array() || axes.size() != 2) f.failWrongType("axes", axes, axesText);
+  Vec3 a[2];
+  for (size_t i = 0; i < 2; ++i) {
+    const json& v = axes[i];
+    const std::string path = f.keyPath("axes") + "[" + std::to_string(i) + "]";
+    const std::string expected = "\"x\", \"y\", \"z\" or 3 finite numbers, not all zero";
+    if (v.is_string() && (v == "x" || v == "y" || v == "z")) {
+      a[i] = Vec3::Unit(v == "x" ? 0 : v == "y" ? 1 : 2);
+      continue;
+    }
+    bool ok = v.is_array() && v.size() == 3;
+    for (size_t k = 0; ok && k < 3; ++k) ok = v[k].is_number() && std::isfinite(v[k].get<double>());
+    if (ok) a[i] = Vec3(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
+    if (!ok || !(a[i].norm() > 0)) failAt(f.context(), path, "got " + describeValue(v) + " (expected " + expected + ")");
+  }
+  if (std::abs(a[0].normalized().dot(a[1].normalized())) > 1e-6)
+    f.fail("axes", "the two directions are not perpendicular (the blade is a rectangle)");
+  const std::string extentsText = "two lengths > 0 [m]: the half extents along the two axes";
+  const json& e = f.require("half_extents", extentsText);
+  if (!e.is_array() || e.size() != 2) f.failWrongType("half_extents", e, extentsText);
+  Real h[2];
+  for (size_t i = 0; i < 2; ++i) {
+    if (!e[i].is_number() || !(e[i].get<double>() > 0) || !std::isfinite(e[i].get<double>()))
+      failAt(f.context(), f.keyPath("half_extents") + "[" + std::to_string(i) + "]",
+             "got " + describeValue(e[i]) + " (expected a length > 0 [m])");
+    h[i] = e[i].get<double>();
+  }
+  m.axis = a[0], m.widthAxis = a[1], m.halfLength = h[0], m.halfWidth = h[1];
+  f.forbid("radius", "a blade is a rectangle (\"axes\", \"half_extents\"), it has no radius");
+  f.forbid("half_length", "a blade's sizes are \"half_extents\"");
+  f.forbid("axis", "a blade's directions are \"axes\"");
+  if (const json* c = f.take("carve"))
+    if (!(c->is_boolean() && c->get<bool>())) f.fail("carve", "a blade always cuts (leave \"carve\" out or set it true)");
+  m.carve = true;
+}
+
+}  // namespace
+
 ManipulatorSettings readManipulator(Fields& f, int dim) {
   ManipulatorSettings m;
-  f.require("type", dim == 3 ? "\"sphere\" or \"cylinder\"" : "\"circle\" or \"sphere\"");
+  f.require("type", dim == 3 ? "\"sphere\", \"cylinder\" or \"blade\"" : "\"circle\" or \"sphere\"");
   m.shape = f.enumeration("type", m.shape, &parseManipulatorShape);
+  if (m.shape == ManipulatorShape::Blade) {
+    if (dim == 2) f.fail("type", "\"blade\" is 3D only (a 2D blade, a segment, is not done)");
+    readBlade(f, m);
+    f.forbid("restitution", "a blade cuts and never touches the body (no contact)");
+    f.forbid("friction", "a blade cuts and never touches the body (no contact)");
+    m.path = readPath(f);
+    coreCheck(f, [&] { validate(m); });
+    f.finish();
+    return m;
+  }
   if (m.shape == ManipulatorShape::Cylinder && dim == 2)
     f.fail("type", "\"cylinder\" is 3D only (expected \"circle\" in a 2D scene)");
   if (m.shape == ManipulatorShape::Circle && dim == 3)
@@ -164,6 +220,8 @@ ManipulatorSettings readManipulator(Fields& f, int dim) {
     f.forbid("half_length", "only a cylinder manipulator takes \"half_length\"");
     f.forbid("axis", "only a cylinder manipulator takes \"axis\"");
   }
+  f.forbid("axes", "only a blade takes \"axes\"");
+  f.forbid("half_extents", "only a blade takes \"half_extents\"");
   m.restitution = f.number("restitution", m.restitution, kUnit, "");
   m.friction = f.number("friction", m.friction, kNonNegative, "");
   m.path = readPath(f);

@@ -55,6 +55,17 @@ void validate(const SimulationSettings& s) {
 }
 
 void validate(const ManipulatorSettings& s) {
+  if (s.shape == ManipulatorShape::Blade) {  // a rectangle: its axes and half extents, no radius
+    for (const Vec3* a : {&s.axis, &s.widthAxis})
+      if (!(a->norm() > 0) || !a->allFinite()) throw InputError("", "axes", "must be finite non-zero directions");
+    if (std::abs(s.axis.normalized().dot(s.widthAxis.normalized())) > 1e-6)
+      throw InputError("", "axes", "must be perpendicular (the blade is a rectangle)");
+    positive("half_extents", s.halfLength);
+    positive("half_extents", s.halfWidth);
+    unit("restitution", s.restitution);
+    nonNegative("friction", s.friction);
+    return;
+  }
   positive("radius", s.radius);
   if (s.shape == ManipulatorShape::Cylinder) {
     positive("half_length", s.halfLength);

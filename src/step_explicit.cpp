@@ -39,6 +39,12 @@ World::ContactBounds World::contactBounds() const {
   constexpr Real inf = std::numeric_limits<Real>::infinity();
   for (const Manipulator& m : manipulators_) {
     const ManipulatorSettings& s = m.settings;
+    if (s.shape == ManipulatorShape::Blade) {  // no contact: an empty bound, never near a vertex
+      d4 lo = splat(inf), hi = splat(-inf);
+      lo[3] = -inf, hi[3] = inf;
+      b.lo.push_back(lo), b.hi.push_back(hi);
+      continue;
+    }
     const Real reach = s.shape == ManipulatorShape::Cylinder ? std::hypot(s.radius, s.halfLength) : s.radius;
     const d4 p0 = loadVec3(m.previousPosition), p1 = loadVec3(m.position);
     // 2D: the manipulator's own z does not matter (contacts are in the plane), so neither does

@@ -160,7 +160,7 @@ void World::sweepManipulatorPaths(Real t0) {
   const size_t V = m.numVertices();
   for (const Manipulator& mp : manipulators_) {
     const Path& path = mp.settings.path;
-    if (path.keys.empty()) continue;
+    if (path.keys.empty() || mp.settings.shape == ManipulatorShape::Blade) continue;  // a blade never pushes
     const Real size = mp.settings.shape == ManipulatorShape::Cylinder
                           ? std::min(mp.settings.radius, mp.settings.halfLength)
                           : mp.settings.radius;

@@ -119,6 +119,7 @@ World::World(std::shared_ptr<const RestModel> model, WorldSettings settings, std
   for (size_t i = 0; i < v0.size(); ++i)
     if (!v0[i].allFinite()) throw InputError("bodies[" + std::to_string(i) + "].velocity: not a finite vector");
   if (!settings.pins.empty()) setPins(std::move(settings.pins));
+  bodyContactSettings_ = settings.bodyContact;
   if (!contactBodies.empty()) setBodyContacts(std::move(contactBodies), settings.bodyContact);
   if (settings.releaseStartOverlaps) releaseStartOverlaps();
   for (size_t i = 0; i < v0.size(); ++i) {
@@ -134,7 +135,8 @@ World& World::operator=(World&&) noexcept = default;
 
 size_t World::addManipulator(ManipulatorSettings s, const Vec3& position) {
   validate(s);
-  if (s.shape == ManipulatorShape::Cylinder) s.axis.normalize();
+  if (s.shape == ManipulatorShape::Cylinder || s.shape == ManipulatorShape::Blade) s.axis.normalize();
+  if (s.shape == ManipulatorShape::Blade) s.widthAxis.normalize();
   projectToPlane(s.path, model_->dim);  // 2D: the pose in the plane from here on (plane.h)
   Manipulator m;
   m.settings = std::move(s);

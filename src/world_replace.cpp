@@ -14,7 +14,8 @@
 
 namespace gradel {
 
-void World::replaceModel(std::shared_ptr<const RestModel> model, State state, std::vector<ContactBody> contactBodies) {
+void World::replaceModel(std::shared_ptr<const RestModel> model, State state, std::vector<ContactBody> contactBodies,
+                         const std::vector<PinSettings>* pins) {
   if (!model) throw std::invalid_argument("World::replaceModel: no model");
   if (state.positions.size() != model->numVertices() || state.velocities.size() != model->numVertices() ||
       state.rotations.size() != model->numElements())
@@ -51,8 +52,11 @@ void World::replaceModel(std::shared_ptr<const RestModel> model, State state, st
   for (Vec3& x : w.state_.positions) x = projectToPlane(x, w.model_->dim);  // a 2D state enters in its plane
   for (Vec3& v : w.state_.velocities) v = projectToPlane(v, w.model_->dim);
   // What may throw first (a pin that holds no vertex any more): this world is still untouched.
-  if (!pins_.empty()) w.setPins(pins_);
-  if (bodyContacts_ && !contactBodies.empty()) w.setBodyContacts(std::move(contactBodies), bodyContacts_->settings());
+  const std::vector<PinSettings>& newPins = pins ? *pins : pins_;
+  if (!newPins.empty()) w.setPins(newPins);
+  w.bodyContactSettings_ = bodyContactSettings_;
+  if (!contactBodies.empty())
+    w.setBodyContacts(std::move(contactBodies), bodyContacts_ ? bodyContacts_->settings() : bodyContactSettings_);
   w.manipulators_ = std::move(manipulators_);
   w.manipulatorScale_ = std::move(manipulatorScale_), w.manipulatorSize_ = std::move(manipulatorSize_);
   w.manipulatorGrowth_ = std::move(manipulatorGrowth_);
@@ -62,6 +66,7 @@ void World::replaceModel(std::shared_ptr<const RestModel> model, State state, st
   w.stepForces_ = stepForces_, w.averageImpulse_ = averageImpulse_, w.averageTime_ = averageTime_;
   w.contactWork_ = contactWork_, w.externalWork_ = externalWork_, w.externalImpulse_ = externalImpulse_;
   w.removed_ = std::move(removed_);
+  if (w.removed_.size() < w.model_->bodies.size()) w.removed_.resize(w.model_->bodies.size());
   *this = std::move(w);
 }
 

@@ -97,6 +97,12 @@ TEST_F(CliTest, RunBadSceneFilesExit2OneLineNothingWritten) {
   expectRejected("dim.json",
                  R"({"dim": 2, "body": {"shape": "sphere", "size": 4}, "manipulators": [{"type": "cylinder"}]})",
                  "manipulators[0].type");
+  expectRejected("blade.json", R"({"body": {"shape": "box", "size": 4}, "manipulators": [{"type": "blade",
+      "axes": ["x", [1, 1, 0]], "half_extents": [0.05, 0.02]}]})",
+                 "manipulators[0].axes");
+  expectRejected("blade-size.json", R"({"body": {"shape": "box", "size": 4}, "manipulators": [{"type": "blade",
+      "axes": ["x", "y"], "half_extents": [0.05]}]})",
+                 "manipulators[0].half_extents");
   // Valid JSON and schema, but an empty shape: caught when the body is built, still named.
   expectRejected("empty.json", R"({"body": {"shape": "union", "grid": [4, 4, 4],
       "primitives": [{"type": "sphere", "center": [40, 40, 40], "radius": 1}]}})",

@@ -22,9 +22,9 @@
 //   * Best-fit rotations (the warm start of eq. 1): an element of the new layout takes the one of
 //     the old element that held the voxel at its first filled cell's lower corner.
 //
-// Pieces: a body cut into several connected pieces stays one body (its pieces share no element,
-// so they move independently; they collide with each other only under self_contact). Removing
-// every voxel is refused (`emptied`: the body is returned unchanged).
+// Pieces: carveBody returns one body whatever its shape; a scene splits a carved body that fell
+// apart into one body per piece (pieces.h, carve_scene.h). Removing every voxel is refused
+// (`emptied`: the body is returned unchanged).
 #pragma once
 
 #include <cstddef>
@@ -89,5 +89,26 @@ std::vector<uint8_t> voxelsInCapsule(const CarveInput& body, const Vec3& from, c
 /// the move, a the unit axis). std::invalid_argument for a zero or non-finite axis.
 std::vector<uint8_t> voxelsInCylinder(const CarveInput& body, const Vec3& from, const Vec3& to, const Vec3& axis,
                                       Real radius, Real halfLength, size_t* count = nullptr);
+
+/// A blade (contacts.h ManipulatorShape::Blade): the rectangle centre +- halfLength along the
+/// unit `axis` +- halfWidth along the unit `widthAxis` (perpendicular), normal n = axis x
+/// widthAxis, moved without turning from `from` to `to`.
+struct BladeSweep {
+  Vec3 from{0, 0, 0}, to{0, 0, 0};
+  Vec3 axis{1, 0, 0}, widthAxis{0, 1, 0};
+  Real halfLength = 0, halfWidth = 0;
+};
+
+/// The blade's kerf: the voxels whose deformed centre x, at some moment t in [0, 1] of the
+/// sweep, lies over the rectangle (its projection along n inside it: the rectangle's edges are
+/// exact, not grown) and within the kerf's half width w of its plane: -w < n.(x - c(t)) <= w.
+/// w = 1/2 |F^T n|_1, F the voxel's mass cell's deformed lattice frame (its mean edge vectors
+/// per voxel; h I at rest, so w = h/2 (|n_x| + |n_y| + |n_z|)). Why: a blade whose normal is
+/// a lattice axis takes exactly one voxel layer (the half-open slab of width h holds one layer of
+/// centres); a tilted one takes the thinnest digital layer that separates voxels touching at an
+/// edge or a corner (the arithmetic "standard" plane), since those share a vertex and would hold
+/// the pieces together (pieces.h) -- a slab of width h at 45 degrees leaves them touching.
+/// std::invalid_argument for a 2D body or axes that are zero, not finite or not perpendicular.
+std::vector<uint8_t> voxelsAlongBlade(const CarveInput& body, const BladeSweep& blade, size_t* count = nullptr);
 
 }  // namespace gradel

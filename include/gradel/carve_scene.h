@@ -2,6 +2,12 @@
 // its volume, layout and rest model are replaced, and its World is made again over the new model
 // (World::replaceModel) with every other body's state as it was and the carved body's carried
 // over (a new vertex that would lie inside a manipulator put on its surface); the contact surfaces are rebuilt from the bodies' layouts when the world has body contacts.
+// A carved body whose material falls apart becomes one body per piece (pieces.h): the largest
+// keeps its index and name, the others are appended after every body, named "<name>-2",
+// "<name>-3", ... (the smallest number no body has); in 3D the world then has contact between
+// the bodies (the pieces collide like any two bodies); a pin of the body holds each piece it
+// selects vertices of; the removed-material ledger stays with the body's index (new pieces
+// start at zero: nothing was removed from them).
 // A body voxelised from a mesh loses its embedded render mesh (drawn by its voxel surface after).
 #pragma once
 
@@ -23,7 +29,10 @@ struct CarveEvent {
   Vec3 removedMomentum{0, 0, 0};  ///< [kg m/s]
   Real removedKineticEnergy = 0;  ///< [J]
   size_t newVertices = 0;
-  size_t vertices = 0, elements = 0;  ///< The body's, after.
+  size_t vertices = 0, elements = 0;  ///< The body's (its pieces' together), after.
+  /// The scene bodies holding the body's material after the event: {body}, or when it fell apart
+  /// (pieces.h) `body` (the largest piece, its name kept) then the new bodies appended for the others.
+  std::vector<size_t> pieces;
 };
 
 /// The body's part of a world (scene.h BuiltScene::range): its volume, layout, own model and state.
@@ -45,7 +54,11 @@ std::vector<CarveEvent> carveSceneSweep(BuiltScene& scene, const Vec3& from, con
 std::vector<CarveEvent> carveSceneCylinderSweep(BuiltScene& scene, const Vec3& from, const Vec3& to, const Vec3& axis,
                                                 Real radius, Real halfLength, Real reachVoxels = 0);
 
-/// The manipulators with `carve` set (spheres and cylinders): each removes the voxels within one
+/// Every 3D body's kerf along the blade's sweep (carve.h voxelsAlongBlade; no reach: a blade
+/// never pushes, it cuts exactly where it passes): one event per body that loses any.
+std::vector<CarveEvent> carveSceneBlade(BuiltScene& scene, const BladeSweep& blade);
+
+/// The manipulators with `carve` set (and every blade: carveSceneBlade) (spheres and cylinders): each removes the voxels within one
 /// voxel of what it swept (a cylinder: grown by one voxel in radius and half length; a carving
 /// tool still pushes the body like any manipulator, so the surface it meets stays about half a
 /// voxel outside it) since `previous` (its centre at

@@ -43,8 +43,10 @@
 
 namespace gradel {
 
-enum class ManipulatorShape { Sphere, Cylinder, Circle };
-ManipulatorShape parseManipulatorShape(const std::string& name);  ///< "sphere" | "cylinder" | "circle"
+/// Blade (3D): a flat rectangle that cuts (carve_scene.h) and never pushes: no vertex is ever
+/// inside it, so it has no contact and exerts no force (docs/carving.md, "The blade").
+enum class ManipulatorShape { Sphere, Cylinder, Circle, Blade };
+ManipulatorShape parseManipulatorShape(const std::string& name);  ///< "sphere" | "cylinder" | "circle" | "blade"
 const char* manipulatorShapeName(ManipulatorShape s);
 
 struct Keyframe {
@@ -69,7 +71,11 @@ struct ManipulatorSettings {
   Real restitution = 1.0;  ///< [-] 1 = elastic bounce (the paper), 0 = no bounce.
   Real friction = 0.0;     ///< [-] Coulomb coefficient; 0 = frictionless (the paper).
   Path path;               ///< Scripted motion; empty = pose set from outside (setPose).
-  bool carve = false;      ///< Sphere or cylinder: removes the voxels whose centres it sweeps (carve_scene.h).
+  bool carve = false;      ///< Sphere or cylinder: removes the voxels whose centres it sweeps (carve_scene.h); a blade always cuts.
+  /// Blade only: the rectangle centre +- halfLength along `axis` +- halfWidth along `widthAxis`
+  /// (both normalised when built, perpendicular); its normal is axis x widthAxis.
+  Vec3 widthAxis{1, 0, 0};
+  Real halfWidth = 0.05;  ///< [m]
 };
 
 /// The walls of the domain box, by index: 2 a + 1 for the wall at max[a], 2 a at min[a] (a the

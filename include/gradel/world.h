@@ -217,7 +217,12 @@ class World {
   /// warm starts (vertex ids) are dropped; derived rest data, scratch and threads are made anew
   /// (src/world_replace.cpp). std::invalid_argument when the state's sizes are not the model's.
   /// 2D: the state's positions and velocities put into the plane.
-  void replaceModel(std::shared_ptr<const RestModel> model, State state, std::vector<ContactBody> contactBodies);
+  /// `pins` (optional): the pins of the new world (bodies that fell apart, carve_scene.h); null:
+  /// the pins as they are. Contact surfaces given to a world that had no body contacts switch
+  /// them on with the settings it was made with (WorldSettings::bodyContact). The removed-material
+  /// ledger grows to the new model's bodies (zeros for new ones).
+  void replaceModel(std::shared_ptr<const RestModel> model, State state, std::vector<ContactBody> contactBodies,
+                    const std::vector<PinSettings>* pins = nullptr);
   /// Carving's ledger (carve_scene.h): adds what an event took from body `body` (RestModel::bodies
   /// index) to its total since t = 0, kept across replaceModel. The linear momentum of body b now
   /// plus removedMaterial()[b].momentum is what it would have been without carving.
@@ -334,6 +339,7 @@ class World {
   // Soft-soft contact: the stage, its last result, the boundary vertices' start of the step
   // (full-size arrays, only the bodies' boundary vertices written) and the inverse masses it uses.
   std::unique_ptr<BodyContacts> bodyContacts_;
+  BodyContactSettings bodyContactSettings_;  ///< WorldSettings::bodyContact (replaceModel: contacts switched on).
   BodyContactStats bodyContactStats_;
   std::vector<Vec3> bodyContactStartX_, bodyContactStartV_;
   std::vector<Real> bodyContactInvMass_;

@@ -140,6 +140,16 @@ class Simulation:
         """Removes every body's voxels whose deformed centres lie in the solid cylinder of
         `radius` and `half_length` [m] (flat caps) about `center` [m] along `axis`; the bodies are
         laid out again. Returns the voxels removed."""
+    def cut(
+        self,
+        center: Sequence[float],
+        axes: Sequence[Sequence[float]],
+        half_extents: Sequence[float],
+        to: Optional[Sequence[float]] = None,
+    ) -> int:
+        """A blade's cut: the rectangle about `center` [m] (half extents along the two
+        perpendicular `axes`), parked or moved to `to`, removes its one-voxel kerf from every
+        body; a body cut in two becomes two bodies. Returns the voxels removed."""
     def remove_voxels(self, body: int, mask: npt.ArrayLike) -> int:
         """Removes the voxels of body `body` where `mask` (its grid's shape) is true. Returns
         the voxels removed."""

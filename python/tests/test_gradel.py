@@ -260,6 +260,30 @@ def test_carve_sphere_and_remove_voxels_take_exactly_the_voxels_mass():
         sim.remove_voxels(0, np.zeros((3, 3, 3), dtype=bool))
 
 
+def test_cut_splits_a_box_into_two_bodies_that_keep_the_mass():
+    # A box of 8 voxels of 1 cm, corner at the origin; a blade in the plane x = 3.5 cm (the
+    # centres of the layer i = 3) parked across the whole box takes that layer (64 voxels); the
+    # box is then two bodies: x in [0, 3) cm (192 voxels, keeps the name) and [4, 8) cm (256):
+    # the larger is i >= 4, so "body0" is that one and "body0-2" the other.
+    body = gradel.Body.from_shape("box", 8)
+    sim = gradel.Simulation(body, gravity=[0, 0, 0], dt=1e-4)
+    sim.velocities[:] = [0.0, 0.2, 0.0]
+    mass = sim.masses.sum()
+    assert sim.cut([0.035, 0.04, 0.04], [[0, 1, 0], [0, 0, 1]], [0.1, 0.1]) == 64
+    assert sim.num_bodies == 2 and sim.body_names == ["body0", "body0-2"]
+    assert sim.masses.sum() == pytest.approx(mass - 64 * 1000 * 0.01 ** 3, rel=1e-12)
+    assert sim.body_positions(0)[:, 0].min() == pytest.approx(0.04)
+    assert sim.body_positions(1)[:, 0].max() == pytest.approx(0.03)
+    assert np.allclose(sim.velocities, [0.0, 0.2, 0.0])
+    assert sim.metrics()["removed_voxels"] == 64
+    sim.step(10)
+    assert np.isfinite(sim.positions).all()
+    for bad in ([[0, 0], [[0, 1, 0], [0, 0, 1]], [0.1, 0.1]], [[0, 0, 0], [[0, 1, 0], [0, 1, 1]], [0.1, 0.1]],
+                [[0, 0, 0], [[0, 1, 0], [0, 0, 1]], [0.1, -1]]):
+        with pytest.raises(ValueError):
+            sim.cut(*bad)
+
+
 def test_carve_cylinder_bores_exactly_the_voxels_it_holds():
     # A box of 8 voxels of 1 cm at rest, corner at the origin. A rod of radius 1.7 cm along z
     # through (4, 4) cm holds the voxel columns whose centres lie within 1.7 cm of its axis: the

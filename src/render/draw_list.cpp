@@ -118,6 +118,16 @@ void addCylinder(DrawList& list, const Manipulator& m, const Color& color) {
   }
 }
 
+// A blade: its rectangle, both faces.
+void addBlade(DrawList& list, const Manipulator& m, const Color& color) {
+  const Vec3 u = m.settings.halfLength * m.settings.axis.normalized();
+  const Vec3 w = m.settings.halfWidth * m.settings.widthAxis.normalized();
+  const Vec3 n = u.cross(w).normalized(), c = m.position;
+  const Vec3 p[4] = {c - u - w, c + u - w, c + u + w, c - u + w};
+  for (int i : {0, 1, 2, 0, 2, 3}) list.triangles.push_back(vertex(p[i], n, color));
+  for (int i : {0, 2, 1, 0, 3, 2}) list.triangles.push_back(vertex(p[i], -n, color));
+}
+
 void addDisk(DrawList& list, const Vec3& c, Real r, const Color& color) {
   constexpr int kSegments = 40;
   const Vec3 front = c + Vec3(0, 0, 1e-4);  // just in front of the z = 0 body
@@ -424,7 +434,9 @@ void sceneBounds(const World& world, Vec3* lo, Vec3* hi) {
   for (const Manipulator& m : world.manipulators()) {
     std::vector<Vec3> centres{m.position};
     for (const Keyframe& k : m.settings.path.keys) centres.push_back(k.position);
-    const Real r = m.settings.radius + (m.settings.shape == ManipulatorShape::Cylinder ? m.settings.halfLength : 0);
+    const Real r = m.settings.shape == ManipulatorShape::Blade
+                       ? std::hypot(m.settings.halfLength, m.settings.halfWidth)
+                       : m.settings.radius + (m.settings.shape == ManipulatorShape::Cylinder ? m.settings.halfLength : 0);
     for (const Vec3& c : centres) a = a.cwiseMin(c - Vec3::Constant(r)), b = b.cwiseMax(c + Vec3::Constant(r));
   }
   if (world.model().dim == 2) a.z() = b.z() = 0;
@@ -485,6 +497,8 @@ DrawList buildDrawList(const BodyView& body, const World& world, const ViewOptio
         addDisk(list, m.position, m.settings.radius, kManipulatorColor);
       else if (m.settings.shape == ManipulatorShape::Cylinder)
         addCylinder(list, m, kManipulatorColor);
+      else if (m.settings.shape == ManipulatorShape::Blade)
+        addBlade(list, m, kManipulatorColor);
       else
         addSphere(list, m.position, m.settings.radius, kManipulatorColor);
     }

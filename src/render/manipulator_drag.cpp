@@ -22,6 +22,7 @@ std::optional<size_t> pickManipulator(const Camera& camera, const World& world, 
     const Vec3 c = ms[i].position;
     Real r = ms[i].settings.radius;
     if (ms[i].settings.shape == ManipulatorShape::Cylinder) r = std::hypot(r, ms[i].settings.halfLength);
+    if (ms[i].settings.shape == ManipulatorShape::Blade) r = std::hypot(ms[i].settings.halfLength, ms[i].settings.halfWidth);
     if (camera.flat) {
       const Vec3 q = o - c;
       if (std::hypot(q.x(), q.y()) <= r && q.norm() < bestT) best = i, bestT = q.norm();

@@ -401,6 +401,36 @@ TEST(ViewerWindow, DrillSceneCarvesTheBlock) {
   fs::remove(base.string() + ".png"), fs::remove(base.string() + ".json");
 }
 
+// The viewer follows a body cut into pieces (issue 30): scenes/cut.json's blade cuts the held bar
+// in two by t = 0.45 s; at 0.8 s the viewer has two bodies, the 36 voxels of the kerf carved, and
+// draws the blade and both halves.
+TEST(ViewerWindow, CutSceneShowsTwoBodies) {
+  ASSERT_NE(std::getenv("DISPLAY"), nullptr) << "run under xvfb-run";
+  const fs::path base = fs::temp_directory_path() / ("gradel-view-cut-" + std::to_string(::getpid()));
+  const std::string cmd = std::string(GRADEL_VIEW_PATH) + " " + GRADEL_SOURCE_DIR +
+                          "/scenes/cut.json --size 480x360 --screenshot " + base.string() +
+                          ".png --screenshot-time 0.8 > " + base.string() + ".json";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  std::ifstream in(base.string() + ".json");
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string j = text.str();
+  auto number = [&](const std::string& key) {
+    const size_t at = j.find("\"" + key + "\":");
+    EXPECT_NE(at, std::string::npos) << key << " in " << j;
+    return at == std::string::npos ? -1.0 : std::stod(j.substr(at + key.size() + 3));
+  };
+  EXPECT_EQ(number("bodies"), 2) << j;
+  EXPECT_EQ(number("carved_voxels"), 36) << j;
+  const Image img = readPng(base.string() + ".png");
+  int body = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x)
+      if (img.pixel(x, y)[0] > img.pixel(x, y)[2] + 40) ++body;
+  EXPECT_GT(body, 500) << "the halves are drawn";
+  fs::remove(base.string() + ".png"), fs::remove(base.string() + ".json");
+}
+
 // The picture of docs/layout.md (materials per region): a 2D block of tissue (label 1) with a
 // round inclusion (label 2). Pure pixels, no OpenGL. With GRADEL_DOC_IMAGES=DIR set it also
 // writes DIR/layout-regions.png (the committed docs/img/layout-regions.png).
