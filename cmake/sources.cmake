@@ -122,6 +122,7 @@ set(GRADEL_TEST_SOURCES
   tests/test_carve.cpp
   tests/test_pieces.cpp
   tests/test_blade.cpp
+  tests/test_carve_labels.cpp
   tests/test_external_force.cpp
   tests/test_body_contacts.cpp
   tests/test_body_contacts_large.cpp

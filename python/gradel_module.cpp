@@ -157,6 +157,22 @@ struct Simulation {
   World& world() { return *built.world; }
 };
 
+/// A carving call's `labels` (None: every label): distinct integers 1 .. 65535, sorted.
+std::vector<uint16_t> carveLabelsArg(const char* call, const std::optional<std::vector<long long>>& labels) {
+  std::vector<uint16_t> out;
+  if (!labels) return out;
+  if (labels->empty()) throw InputError(std::string(call) + ": labels: expected at least one region label (or None)");
+  for (long long l : *labels) {
+    if (l < 1 || l > 65535)
+      throw InputError(std::string(call) + ": labels: " + std::to_string(l) + " is not a region label (1 .. 65535)");
+    out.push_back(uint16_t(l));
+  }
+  std::sort(out.begin(), out.end());
+  if (std::adjacent_find(out.begin(), out.end()) != out.end())
+    throw InputError(std::string(call) + ": labels: a label is listed twice");
+  return out;
+}
+
 /// A carving event (carve_scene.h) under the lock: the old state's buffers kept for the views taken
 /// before, the cached surfaces dropped. Returns the voxels removed.
 template <class F>
@@ -658,23 +674,26 @@ PYBIND11_MODULE(gradel, m) {
           "ValueError when it holds no vertex.")
       .def(
           "carve_sphere",
-          [](Simulation& s, const std::vector<double>& center, double radius) {
+          [](Simulation& s, const std::vector<double>& center, double radius, std::optional<std::vector<long long>> labels) {
+            const std::vector<uint16_t> only = carveLabelsArg("carve_sphere", labels);
             if (center.size() != 3) throw InputError("carve_sphere: center: expected 3 numbers [m]");
             if (!(radius > 0) || !std::isfinite(radius)) throw InputError("carve_sphere: radius: expected a positive number [m]");
             const Vec3 c(center[0], center[1], center[2]);
             if (!c.allFinite()) throw InputError("carve_sphere: center: not finite");
             WorldLock lock(s);
-            return carveLocked(s, [&] { return carveSceneSweep(s.built, c, c, radius); });
+            return carveLocked(s, [&] { return carveSceneSweep(s.built, c, c, radius, 0, only); });
           },
-          py::arg("center"), py::arg("radius"),
+          py::arg("center"), py::arg("radius"), py::arg("labels") = py::none(),
           "Removes from every body the voxels whose centres lie within `radius` [m] of `center` [m] in the deformed "
           "configuration (docs/carving.md): the body is laid out again, surviving vertices keep their positions and "
           "velocities. Returns the number of voxels removed. Views of positions and velocities taken before no "
-          "longer follow the world. A body is never emptied (removing every voxel of it does nothing).")
+          "longer follow the world. A body is never emptied (removing every voxel of it does nothing). `labels`: "
+          "only voxels of these region labels (a selective tool; None: every label).")
       .def(
           "carve_cylinder",
           [](Simulation& s, const std::vector<double>& center, const std::vector<double>& axis, double radius,
-             double halfLength) {
+             double halfLength, std::optional<std::vector<long long>> labels) {
+            const std::vector<uint16_t> only = carveLabelsArg("carve_cylinder", labels);
             if (center.size() != 3) throw InputError("carve_cylinder: center: expected 3 numbers [m]");
             if (axis.size() != 3) throw InputError("carve_cylinder: axis: expected 3 numbers");
             if (!(radius > 0) || !std::isfinite(radius))
@@ -685,13 +704,13 @@ PYBIND11_MODULE(gradel, m) {
             if (!c.allFinite()) throw InputError("carve_cylinder: center: not finite");
             if (!a.allFinite() || !(a.norm() > 0)) throw InputError("carve_cylinder: axis: expected a non-zero finite vector");
             WorldLock lock(s);
-            return carveLocked(s, [&] { return carveSceneCylinderSweep(s.built, c, c, a.normalized(), radius, halfLength); });
+            return carveLocked(s, [&] { return carveSceneCylinderSweep(s.built, c, c, a.normalized(), radius, halfLength, 0, only); });
           },
-          py::arg("center"), py::arg("axis"), py::arg("radius"), py::arg("half_length"),
+          py::arg("center"), py::arg("axis"), py::arg("radius"), py::arg("half_length"), py::arg("labels") = py::none(),
           "Removes from every body the voxels whose centres lie in the solid cylinder of `radius` [m] and half "
           "length `half_length` [m] (flat caps) about `center` [m] along `axis` (any length, normalised), in the "
-          "deformed configuration (docs/carving.md): a rod's or a core drill's bore. As carve_sphere otherwise; "
-          "returns the number of voxels removed.")
+          "deformed configuration (docs/carving.md): a rod's or a core drill's bore. As carve_sphere otherwise "
+          "(`labels` too); returns the number of voxels removed.")
       .def(
           "cut",
           [](Simulation& s, const std::vector<double>& center, const std::vector<std::vector<double>>& axes,

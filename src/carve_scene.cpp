@@ -1,6 +1,7 @@
 // Carving in a built scene: carveBody per body, then the world made again once (carve_scene.h).
 #include "gradel/carve_scene.h"
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -224,34 +225,54 @@ CarveEvent carveSceneBody(BuiltScene& scene, size_t body, const std::vector<uint
   return none;
 }
 
-// Every body's voxels of `toolVoxels(input, reach [m], &count)`: one event per body that loses any.
+// Keeps the voxels of `mask` whose label is one of `labels` (ascending; empty: all); returns how
+// many are left.
+size_t keepLabels(const VoxelVolume& volume, const std::vector<uint16_t>& labels, std::vector<uint8_t>& mask) {
+  size_t n = 0;
+  const std::vector<uint16_t>& of = volume.labels();  // empty for a binary volume: every voxel label 1
+  for (size_t q = 0; q < mask.size(); ++q) {
+    if (!mask[q]) continue;
+    const uint16_t label = of.empty() ? uint16_t(1) : of[q];
+    if (labels.empty() || std::binary_search(labels.begin(), labels.end(), label))
+      ++n;
+    else
+      mask[q] = 0;
+  }
+  return n;
+}
+
+// Every body's voxels of `toolVoxels(input, reach [m], &count)` with one of `labels` (empty: any):
+// one event per body that loses any.
 template <class ToolVoxels>
-std::vector<CarveEvent> carveSceneTool(BuiltScene& scene, Real reachVoxels, ToolVoxels&& toolVoxels) {
+std::vector<CarveEvent> carveSceneTool(BuiltScene& scene, Real reachVoxels, const std::vector<uint16_t>& labels,
+                                       ToolVoxels&& toolVoxels) {
   std::vector<std::pair<size_t, std::vector<uint8_t>>> masks;
   for (size_t b = 0; b < scene.numBodies(); ++b) {
     size_t n = 0;
     std::vector<uint8_t> mask = toolVoxels(carveInput(scene, b), reachVoxels * scene.bodies[b].volume.voxelSize(), &n);
+    if (n && !labels.empty()) n = keepLabels(scene.bodies[b].volume, labels, mask);
     if (n) masks.emplace_back(b, std::move(mask));
   }
   return carveBodies(scene, masks);
 }
 
 std::vector<CarveEvent> carveSceneSweep(BuiltScene& scene, const Vec3& from, const Vec3& to, Real radius,
-                                        Real reachVoxels) {
-  return carveSceneTool(scene, reachVoxels, [&](const CarveInput& in, Real reach, size_t* n) {
+                                        Real reachVoxels, const std::vector<uint16_t>& labels) {
+  return carveSceneTool(scene, reachVoxels, labels, [&](const CarveInput& in, Real reach, size_t* n) {
     return voxelsInCapsule(in, from, to, radius + reach, n);
   });
 }
 
 std::vector<CarveEvent> carveSceneCylinderSweep(BuiltScene& scene, const Vec3& from, const Vec3& to, const Vec3& axis,
-                                                Real radius, Real halfLength, Real reachVoxels) {
-  return carveSceneTool(scene, reachVoxels, [&](const CarveInput& in, Real reach, size_t* n) {
+                                                Real radius, Real halfLength, Real reachVoxels,
+                                                const std::vector<uint16_t>& labels) {
+  return carveSceneTool(scene, reachVoxels, labels, [&](const CarveInput& in, Real reach, size_t* n) {
     return voxelsInCylinder(in, from, to, axis, radius + reach, halfLength + reach, n);
   });
 }
 
-std::vector<CarveEvent> carveSceneBlade(BuiltScene& scene, const BladeSweep& blade) {
-  return carveSceneTool(scene, 0, [&](const CarveInput& in, Real, size_t* n) {
+std::vector<CarveEvent> carveSceneBlade(BuiltScene& scene, const BladeSweep& blade, const std::vector<uint16_t>& labels) {
+  return carveSceneTool(scene, 0, labels, [&](const CarveInput& in, Real, size_t* n) {
     if (in.layout->dim != 3) return std::vector<uint8_t>(in.volume->size(), 0);
     return voxelsAlongBlade(in, blade, n);
   });
@@ -270,13 +291,17 @@ std::vector<CarveEvent> carveWithManipulators(BuiltScene& scene, std::vector<Vec
     previous[i] = now;
     if (!m.settings.carve) continue;
     std::vector<CarveEvent> e;
+    const std::vector<uint16_t> labels = m.settings.carveLabels;  // a copy: an event makes the world again
     if (m.settings.shape == ManipulatorShape::Sphere)
-      e = carveSceneSweep(scene, from, now, m.settings.radius, 1.0);
+      e = carveSceneSweep(scene, from, now, m.settings.radius, 1.0, labels);
     else if (m.settings.shape == ManipulatorShape::Cylinder)
-      e = carveSceneCylinderSweep(scene, from, now, m.settings.axis, m.settings.radius, m.settings.halfLength, 1.0);
+      e = carveSceneCylinderSweep(scene, from, now, m.settings.axis, m.settings.radius, m.settings.halfLength, 1.0,
+                                  labels);
     else if (m.settings.shape == ManipulatorShape::Blade)
-      e = carveSceneBlade(scene, BladeSweep{from, now, m.settings.axis, m.settings.widthAxis, m.settings.halfLength,
-                                            m.settings.halfWidth});
+      e = carveSceneBlade(scene,
+                          BladeSweep{from, now, m.settings.axis, m.settings.widthAxis, m.settings.halfLength,
+                                     m.settings.halfWidth},
+                          labels);
     events.insert(events.end(), e.begin(), e.end());
   }
   return events;

@@ -1,5 +1,6 @@
 // The scene file's world sections (scene_schema.h): `simulation`, `domain`, `body_contact`,
 // `pins` and `manipulators` (with their keyframe paths).
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <memory>
@@ -184,6 +185,25 @@ void readBlade(Fields& f, ManipulatorSettings& m) {
   m.carve = true;
 }
 
+// "carve_labels": the regions a carving tool removes (ContactSettings::carveLabels), sorted.
+void readCarveLabels(Fields& f, ManipulatorSettings& m) {
+  const json* c = f.take("carve_labels");
+  if (!c) return;
+  const char* expected = "a list of region labels, integers 1 .. 65535";
+  if (!c->is_array() || c->empty()) f.failWrongType("carve_labels", *c, expected);
+  for (size_t i = 0; i < c->size(); ++i) {
+    const json& v = (*c)[i];
+    if (!v.is_number_integer() || v.get<long long>() < 1 || v.get<long long>() > 65535)
+      failAt(f.context(), f.keyPath("carve_labels") + "[" + std::to_string(i) + "]",
+             "got " + describeValue(v) + " (expected a region label, an integer 1 .. 65535)");
+    m.carveLabels.push_back(uint16_t(v.get<long long>()));
+  }
+  std::sort(m.carveLabels.begin(), m.carveLabels.end());
+  if (std::adjacent_find(m.carveLabels.begin(), m.carveLabels.end()) != m.carveLabels.end())
+    f.fail("carve_labels", "lists a label twice");
+  if (!m.carve) f.fail("carve_labels", "only a carving tool (\"carve\": true) takes \"carve_labels\"");
+}
+
 }  // namespace
 
 ManipulatorSettings readManipulator(Fields& f, int dim) {
@@ -195,6 +215,7 @@ ManipulatorSettings readManipulator(Fields& f, int dim) {
     readBlade(f, m);
     f.forbid("restitution", "a blade cuts and never touches the body (no contact)");
     f.forbid("friction", "a blade cuts and never touches the body (no contact)");
+    readCarveLabels(f, m);
     m.path = readPath(f);
     coreCheck(f, [&] { validate(m); });
     f.finish();
@@ -228,6 +249,7 @@ ManipulatorSettings readManipulator(Fields& f, int dim) {
   m.carve = f.optBool("carve", false);
   if (m.carve && m.shape == ManipulatorShape::Circle)
     f.fail("carve", "only a sphere or a cylinder manipulator carves (a 2D scene: \"sphere\")");
+  readCarveLabels(f, m);
   coreCheck(f, [&] { validate(m); });
   f.finish();
   return m;

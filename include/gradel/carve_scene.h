@@ -45,25 +45,29 @@ CarveEvent carveSceneBody(BuiltScene& scene, size_t body, const std::vector<uint
 
 /// Every body's voxels whose deformed centres lie within `radius` of the segment from `from` to
 /// `to` (a sphere swept over a step; from == to: a sphere), the radius grown by `reachVoxels` of
-/// each body's voxel size: one event per body that loses any, the world made again once.
+/// each body's voxel size: one event per body that loses any, the world made again once. Only
+/// voxels whose region label is in `labels` (ascending; empty: every label), here and below.
 std::vector<CarveEvent> carveSceneSweep(BuiltScene& scene, const Vec3& from, const Vec3& to, Real radius,
-                                        Real reachVoxels = 0);
+                                        Real reachVoxels = 0, const std::vector<uint16_t>& labels = {});
 
 /// The same for a cylinder (carve.h voxelsInCylinder: `axis`, `radius`, `halfLength` [m]) moved
 /// from `from` to `to`, its radius and half length grown by `reachVoxels` of each body's voxel size.
 std::vector<CarveEvent> carveSceneCylinderSweep(BuiltScene& scene, const Vec3& from, const Vec3& to, const Vec3& axis,
-                                                Real radius, Real halfLength, Real reachVoxels = 0);
+                                                Real radius, Real halfLength, Real reachVoxels = 0,
+                                                const std::vector<uint16_t>& labels = {});
 
 /// Every 3D body's kerf along the blade's sweep (carve.h voxelsAlongBlade; no reach: a blade
 /// never pushes, it cuts exactly where it passes): one event per body that loses any.
-std::vector<CarveEvent> carveSceneBlade(BuiltScene& scene, const BladeSweep& blade);
+std::vector<CarveEvent> carveSceneBlade(BuiltScene& scene, const BladeSweep& blade,
+                                        const std::vector<uint16_t>& labels = {});
 
 /// The manipulators with `carve` set (and every blade: carveSceneBlade) (spheres and cylinders): each removes the voxels within one
 /// voxel of what it swept (a cylinder: grown by one voxel in radius and half length; a carving
 /// tool still pushes the body like any manipulator, so the surface it meets stays about half a
 /// voxel outside it) since `previous` (its centre at
 /// the last call, one entry per manipulator; updated to the centres now; empty or of another
-/// size: the centres now, so the first call carves where the tools are).
+/// size: the centres now, so the first call carves where the tools are). A tool with
+/// `carveLabels` removes only voxels of those regions.
 std::vector<CarveEvent> carveWithManipulators(BuiltScene& scene, std::vector<Vec3>& previous);
 
 }  // namespace gradel

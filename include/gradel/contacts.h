@@ -72,6 +72,10 @@ struct ManipulatorSettings {
   Real friction = 0.0;     ///< [-] Coulomb coefficient; 0 = frictionless (the paper).
   Path path;               ///< Scripted motion; empty = pose set from outside (setPose).
   bool carve = false;      ///< Sphere or cylinder: removes the voxels whose centres it sweeps (carve_scene.h); a blade always cuts.
+  /// The region labels a carving tool removes (ascending, distinct, 1..65535); empty: every
+  /// label. Voxels of other regions in its sweep stay (a sphere or cylinder still pushes them):
+  /// a selective tool, e.g. an aspirator that takes soft tissue and spares a stiffer structure.
+  std::vector<uint16_t> carveLabels;
   /// Blade only: the rectangle centre +- halfLength along `axis` +- halfWidth along `widthAxis`
   /// (both normalised when built, perpendicular); its normal is axis x widthAxis.
   Vec3 widthAxis{1, 0, 0};

@@ -131,11 +131,19 @@ class Simulation:
         """Pins (anchors) the vertices of body `body` in the box [min, max] [m] or on the
         voxels of `mask` / `boxes`; `path`: their offset from rest over time. Returns the
         pin's index."""
-    def carve_sphere(self, center: Sequence[float], radius: float) -> int:
+    def carve_sphere(
+        self, center: Sequence[float], radius: float, labels: Optional[Sequence[int]] = None
+    ) -> int:
         """Removes every body's voxels whose deformed centres lie within `radius` [m] of
-        `center` [m]; the bodies are laid out again. Returns the voxels removed."""
+        `center` [m] (only those of region `labels`, if given); the bodies are laid out again.
+        Returns the voxels removed."""
     def carve_cylinder(
-        self, center: Sequence[float], axis: Sequence[float], radius: float, half_length: float
+        self,
+        center: Sequence[float],
+        axis: Sequence[float],
+        radius: float,
+        half_length: float,
+        labels: Optional[Sequence[int]] = None,
     ) -> int:
         """Removes every body's voxels whose deformed centres lie in the solid cylinder of
         `radius` and `half_length` [m] (flat caps) about `center` [m] along `axis`; the bodies are

@@ -260,6 +260,26 @@ def test_carve_sphere_and_remove_voxels_take_exactly_the_voxels_mass():
         sim.remove_voxels(0, np.zeros((3, 3, 3), dtype=bool))
 
 
+def test_carve_sphere_with_labels_takes_only_those_regions():
+    # The phantom (soft tissue label 1, a stiff inclusion label 2 of 1200 kg/m^3, voxels of 5 mm):
+    # a sphere around the inclusion's top takes both regions' voxels without labels, only the
+    # tissue's with labels=[1] (each at 1000 kg/m^3).
+    scene = os.path.join(os.path.dirname(__file__), "..", "..", "scenes", "phantom.json")
+    voxel = 1000 * 0.005 ** 3
+    both = gradel.Simulation.from_scene(scene)
+    mass = both.masses.sum()
+    n_both = both.carve_sphere([0.0, 0.05, 0.0], 0.012)
+    heavy = (mass - both.masses.sum() - n_both * voxel) / (0.2 * voxel)  # voxels at 1200 kg/m^3
+    assert round(heavy) > 0
+    soft = gradel.Simulation.from_scene(scene)
+    n_soft = soft.carve_sphere([0.0, 0.05, 0.0], 0.012, labels=[1])
+    assert n_soft == n_both - round(heavy)
+    assert soft.masses.sum() == pytest.approx(mass - n_soft * voxel, rel=1e-12)
+    for bad in ([], [0], [1, 1], [70000]):
+        with pytest.raises(ValueError):
+            soft.carve_sphere([0.0, 0.05, 0.0], 0.012, labels=bad)
+
+
 def test_cut_splits_a_box_into_two_bodies_that_keep_the_mass():
     # A box of 8 voxels of 1 cm, corner at the origin; a blade in the plane x = 3.5 cm (the
     # centres of the layer i = 3) parked across the whole box takes that layer (64 voxels); the
