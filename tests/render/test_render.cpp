@@ -368,37 +368,49 @@ TEST(ViewerWindow, ScreenshotShowsBodyAndPanel) {
   fs::remove(shot);
 }
 
+// The viewer's screenshot of `scene` at `time` [s] (its run JSON, the picture, counted body
+// pixels: red over blue by > 40), the files removed after.
+struct ViewerShot {
+  std::string json;
+  int bodyPixels = 0;
+  double number(const std::string& key) const {
+    const size_t at = json.find("\"" + key + "\":");
+    EXPECT_NE(at, std::string::npos) << key << " in " << json;
+    return at == std::string::npos ? -1.0 : std::stod(json.substr(at + key.size() + 3));
+  }
+};
+
+ViewerShot viewerShot(const std::string& scene, const char* time) {
+  const fs::path base = fs::temp_directory_path() / ("gradel-view-" + scene + "-" + std::to_string(::getpid()));
+  const std::string cmd = std::string(GRADEL_VIEW_PATH) + " " + GRADEL_SOURCE_DIR + "/scenes/" + scene +
+                          ".json --size 480x360 --screenshot " + base.string() + ".png --screenshot-time " + time +
+                          " > " + base.string() + ".json";
+  ViewerShot shot;
+  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  std::ifstream in(base.string() + ".json");
+  std::stringstream text;
+  text << in.rdbuf();
+  shot.json = text.str();
+  const Image img = readPng(base.string() + ".png");
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x)
+      if (img.pixel(x, y)[0] > img.pixel(x, y)[2] + 40) ++shot.bodyPixels;
+  fs::remove(base.string() + ".png"), fs::remove(base.string() + ".json");
+  return shot;
+}
+
 // The viewer carves (issue 30): scenes/drill.json's burr ("carve": true) drills into the block
 // in the viewer as in `gradel run` (296 voxels by t = 0.6 s there, per chunk of steps; the
 // viewer carves after each batch), the body is laid out again (its vertex count changes) and
 // the carved body is drawn.
 TEST(ViewerWindow, DrillSceneCarvesTheBlock) {
   ASSERT_NE(std::getenv("DISPLAY"), nullptr) << "run under xvfb-run";
-  const fs::path base = fs::temp_directory_path() / ("gradel-view-drill-" + std::to_string(::getpid()));
-  const std::string cmd = std::string(GRADEL_VIEW_PATH) + " " + GRADEL_SOURCE_DIR +
-                          "/scenes/drill.json --size 480x360 --screenshot " + base.string() +
-                          ".png --screenshot-time 0.6 > " + base.string() + ".json";
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
-  std::ifstream in(base.string() + ".json");
-  std::stringstream text;
-  text << in.rdbuf();
-  const std::string j = text.str();
-  auto number = [&](const std::string& key) {
-    const size_t at = j.find("\"" + key + "\":");
-    EXPECT_NE(at, std::string::npos) << key << " in " << j;
-    return at == std::string::npos ? -1.0 : std::stod(j.substr(at + key.size() + 3));
-  };
-  const double carved = number("carved_voxels"), vertices = number("vertices");
-  EXPECT_GT(carved, 200) << j;  // the burr's path into the block: ~300 voxels
-  EXPECT_LT(carved, 450) << j;
-  EXPECT_GT(vertices, 703) << j;  // the uncarved block has 703: small elements line the hole
-  const Image img = readPng(base.string() + ".png");
-  int body = 0;
-  for (int y = 0; y < img.height; ++y)
-    for (int x = 0; x < img.width; ++x)
-      if (img.pixel(x, y)[0] > img.pixel(x, y)[2] + 40) ++body;
-  EXPECT_GT(body, 1000) << "the carved body is drawn";
-  fs::remove(base.string() + ".png"), fs::remove(base.string() + ".json");
+  const ViewerShot shot = viewerShot("drill", "0.6");
+  const double carved = shot.number("carved_voxels"), vertices = shot.number("vertices");
+  EXPECT_GT(carved, 200) << shot.json;  // the burr's path into the block: ~300 voxels
+  EXPECT_LT(carved, 450) << shot.json;
+  EXPECT_GT(vertices, 703) << shot.json;  // the uncarved block has 703: small elements line the hole
+  EXPECT_GT(shot.bodyPixels, 1000) << "the carved body is drawn";
 }
 
 // The viewer follows a body cut into pieces (issue 30): scenes/cut.json's blade cuts the held bar
@@ -406,29 +418,10 @@ TEST(ViewerWindow, DrillSceneCarvesTheBlock) {
 // draws the blade and both halves.
 TEST(ViewerWindow, CutSceneShowsTwoBodies) {
   ASSERT_NE(std::getenv("DISPLAY"), nullptr) << "run under xvfb-run";
-  const fs::path base = fs::temp_directory_path() / ("gradel-view-cut-" + std::to_string(::getpid()));
-  const std::string cmd = std::string(GRADEL_VIEW_PATH) + " " + GRADEL_SOURCE_DIR +
-                          "/scenes/cut.json --size 480x360 --screenshot " + base.string() +
-                          ".png --screenshot-time 0.8 > " + base.string() + ".json";
-  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
-  std::ifstream in(base.string() + ".json");
-  std::stringstream text;
-  text << in.rdbuf();
-  const std::string j = text.str();
-  auto number = [&](const std::string& key) {
-    const size_t at = j.find("\"" + key + "\":");
-    EXPECT_NE(at, std::string::npos) << key << " in " << j;
-    return at == std::string::npos ? -1.0 : std::stod(j.substr(at + key.size() + 3));
-  };
-  EXPECT_EQ(number("bodies"), 2) << j;
-  EXPECT_EQ(number("carved_voxels"), 36) << j;
-  const Image img = readPng(base.string() + ".png");
-  int body = 0;
-  for (int y = 0; y < img.height; ++y)
-    for (int x = 0; x < img.width; ++x)
-      if (img.pixel(x, y)[0] > img.pixel(x, y)[2] + 40) ++body;
-  EXPECT_GT(body, 500) << "the halves are drawn";
-  fs::remove(base.string() + ".png"), fs::remove(base.string() + ".json");
+  const ViewerShot shot = viewerShot("cut", "0.8");
+  EXPECT_EQ(shot.number("bodies"), 2) << shot.json;
+  EXPECT_EQ(shot.number("carved_voxels"), 36) << shot.json;
+  EXPECT_GT(shot.bodyPixels, 500) << "the halves are drawn";
 }
 
 // The picture of docs/layout.md (materials per region): a 2D block of tissue (label 1) with a
