@@ -88,9 +88,7 @@ CarvedBody carveBody(const CarveInput& b, const std::vector<uint8_t>& remove) {
   for (size_t v = 0; v < oldModel.numVertices(); ++v) before += oldModel.mass[v] * b.velocities[v];
   Transferred t = transferState(oldLayout, owner, old, b.positions, b.velocities, b.rotations, out.volume, out.layout,
                                 *model, before - out.removedMomentum);
-  out.positions = std::move(t.positions), out.velocities = std::move(t.velocities);
-  out.rotations = std::move(t.rotations), out.fromVertex = std::move(t.fromVertex);
-  out.newVertices = t.newVertices, out.momentumCorrection = t.momentumCorrection;
+  takeTransferred(out, std::move(t));
   out.model = std::move(model);
   return out;
 }

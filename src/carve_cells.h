@@ -8,6 +8,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "gradel/carve.h"
@@ -76,6 +77,14 @@ struct Transferred {
   size_t newVertices = 0;
   Vec3 momentumCorrection{0, 0, 0};  ///< [m/s] added to every new vertex's interpolated velocity.
 };
+
+/// Moves a transfer into a carved body or a piece (CarveResult, BodyPiece: the same fields).
+template <class Body>
+void takeTransferred(Body& out, Transferred&& t) {
+  out.positions = std::move(t.positions), out.velocities = std::move(t.velocities);
+  out.rotations = std::move(t.rotations), out.fromVertex = std::move(t.fromVertex);
+  out.newVertices = t.newVertices, out.momentumCorrection = t.momentumCorrection;
+}
 
 /// Surviving vertices (same lattice point) keep position and velocity bit for bit; a new vertex
 /// takes the trilinear interpolation over the old mass cell (owner[] of the old layout) of a

@@ -93,9 +93,7 @@ std::vector<BodyPiece> splitBody(const CarveInput& b) {
       if (size_t(pieces.vertexPiece[v]) == k) target += model.mass[v] * b.velocities[v];
     Transferred t = transferState(layout, owner, volume, b.positions, b.velocities, b.rotations, p.volume, p.layout,
                                   *m, target);
-    p.positions = std::move(t.positions), p.velocities = std::move(t.velocities);
-    p.rotations = std::move(t.rotations), p.fromVertex = std::move(t.fromVertex);
-    p.newVertices = t.newVertices, p.momentumCorrection = t.momentumCorrection;
+    takeTransferred(p, std::move(t));
     p.model = std::move(m);
   }
   return out;
