@@ -30,7 +30,6 @@ set(GRADEL_CORE_SOURCES
   src/coarse_space.cpp
   src/element_stiffness.cpp
   src/element_stage.cpp
-  src/volume_substeps.cpp
   src/display_normals.cpp
   src/embedding.cpp
   src/external_force.cpp

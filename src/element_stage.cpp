@@ -8,7 +8,6 @@
 #include "gradel/material.h"
 #include "gradel/rotation_fit.h"
 #include "simd.h"
-#include "volume_substeps.h"
 
 namespace gradel {
 
@@ -142,9 +141,9 @@ namespace {
 // K as in elementFrames; Fr[col][row] the frames before the transpose.
 // H = -kappa e_v M_F V per lane (element.h's general form): F = (A / h) shape, M_F its own fit
 // (3D: four lanes at once, warm-started from A's rotations; 2D: the closed form),
-// e_v = tr(M_F^T F) - D, H = -(kappa / h) e_v M_F shape; M_F into `rotation`.
+// e_v = tr(M_F^T F) - D, H = -(kappa / h) e_v M_F shape.
 inline void anisotropicVolumeTerm(const ElementVolumeGroup& vg, int dim, const RotationBatch& batch, int maxIterations,
-                                  d4* H, d4* rotation) {
+                                  d4* H) {
   RotationBatch fit;
   d4 P[9];
   for (int k = 0; k < 9; ++k) P[k] = load4(vg.shape[k]);
@@ -170,27 +169,20 @@ inline void anisotropicVolumeTerm(const ElementVolumeGroup& vg, int dim, const R
   const d4 s = load4(vg.kappaOverH) * (splat(dim == 2 ? 2 : 3) - tr);  // -(kappa / h) e_v
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) H[3 * r + c] = s * (MF[3 * r] * P[c] + MF[3 * r + 1] * P[3 + c] + MF[3 * r + 2] * P[6 + c]);
-  for (int k = 0; k < 9; ++k) rotation[k] = MF[k];
 }
 
 inline void addVolumeTerm(const ElementVolumeGroup& vg, int dim, const RotationBatch& batch, int maxIterations,
-                          const d4* M, const d4* K, d4 (*Fr)[4], const VolumeSplit* split, size_t group) {
+                          const d4* M, const d4* K, d4 (*Fr)[4]) {
   const d4 kappa = load4(vg.stiffness);
   if (kappa[0] == 0 && kappa[1] == 0 && kappa[2] == 0 && kappa[3] == 0) return;
-  d4 H[9], R[9];  // R: the rotation the substeps keep (M, or M_F)
+  d4 H[9];
   if (vg.anisotropic) {
-    anisotropicVolumeTerm(vg, dim, batch, maxIterations, H, R);
+    anisotropicVolumeTerm(vg, dim, batch, maxIterations, H);
   } else {
     d4 tr = M[0] * load4(batch.A[0]);
     for (int j = 1; j < 9; ++j) tr += M[j] * load4(batch.A[j]);
     const d4 s = kappa * (splat(dim == 2 ? 2 : 3) - load4(vg.strainScale) * tr);  // -kappa D / tr S e_v
     for (int j = 0; j < 9; ++j) H[j] = s * M[j];
-    if (split)
-      for (int j = 0; j < 9; ++j) R[j] = M[j];
-  }
-  if (split) {  // volume_substeps.h: this kick's share, and the rotation for the substeps
-    VolumeBasisGroup& out = split->basis[group];
-    for (int j = 0; j < 9; ++j) store4(out.M[j], R[j]), H[j] *= split->scale;
   }
   for (int r = 0; r < 3; ++r) {
     const d4 h0 = H[3 * r], h1 = H[3 * r + 1], h2 = H[3 * r + 2];
@@ -201,7 +193,7 @@ inline void addVolumeTerm(const ElementVolumeGroup& vg, int dim, const RotationB
 
 template <bool Prefetch>
 void elementFrames(const RestModel& m, const ElementStageRest& rest, size_t begin, size_t end, const Vec3* x,
-                   Quat* rotations, ElementFrame* frames, int maxIterations, const VolumeSplit* split) {
+                   Quat* rotations, ElementFrame* frames, int maxIterations) {
   static_assert(kRotationLanes == 4, "the transposes below are 4 x 4");
   constexpr int L = kRotationLanes;
   if (begin % L != 0) throw std::logic_error("computeElementFrames: begin is not a multiple of kRotationLanes");
@@ -265,7 +257,7 @@ void elementFrames(const RestModel& m, const ElementStageRest& rest, size_t begi
       F[3][r] = k * (c[r] - (M[3 * r] * K[8] + M[3 * r + 1] * K[9] + M[3 * r + 2] * K[10]) -
                      (M[3 * r] * K[4] + M[3 * r + 1] * K[5] + M[3 * r + 2] * K[6]));
     F[3][3] = k;
-    if (!rest.volume.empty()) addVolumeTerm(rest.volume[e0 / L], m.dim, batch, maxIterations, M, K, F, split, e0 / L);
+    if (!rest.volume.empty()) addVolumeTerm(rest.volume[e0 / L], m.dim, batch, maxIterations, M, K, F);
     for (int col = 0; col < 4; ++col) transpose(F[col][0], F[col][1], F[col][2], F[col][3]);
     d4 q[4] = {load4(batch.q[1]), load4(batch.q[2]), load4(batch.q[3]), load4(batch.q[0])};
     transpose(q[0], q[1], q[2], q[3]);
@@ -280,11 +272,11 @@ void elementFrames(const RestModel& m, const ElementStageRest& rest, size_t begi
 }  // namespace
 
 void computeElementFrames(const RestModel& m, const ElementStageRest& rest, size_t begin, size_t end, const Vec3* x,
-                          Quat* rotations, ElementFrame* frames, int maxIterations, const VolumeSplit* split) {
+                          Quat* rotations, ElementFrame* frames, int maxIterations) {
   if (m.numVertices() * sizeof(Vec3) > kPrefetchAboveBytes)
-    elementFrames<true>(m, rest, begin, end, x, rotations, frames, maxIterations, split);
+    elementFrames<true>(m, rest, begin, end, x, rotations, frames, maxIterations);
   else
-    elementFrames<false>(m, rest, begin, end, x, rotations, frames, maxIterations, split);
+    elementFrames<false>(m, rest, begin, end, x, rotations, frames, maxIterations);
 }
 
 }  // namespace gradel

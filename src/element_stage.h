@@ -40,8 +40,6 @@
 
 namespace gradel {
 
-struct VolumeSplit;  // volume_substeps.h
-
 /// Per element, written by pass 1 and read by pass 2: the columns of k_e M (lane 3 zero) and
 /// (k_e (e - M C_e), k_e). 128 bytes, aligned for 4-wide loads.
 struct alignas(32) ElementFrame {
@@ -123,11 +121,9 @@ struct ElementStageRest {
 
 /// Pass 1 over elements [begin, end): updates their rotations (warm start in, fit out) and writes
 /// their frames. maxIterations bounds the 3D rotation refinement (as fitRotation3). begin must be
-/// a multiple of kRotationLanes (the constants' groups; std::logic_error otherwise). `split`
-/// (volume_substeps.h), when given, scales the volumetric term in the frames and stores its rotation.
+/// a multiple of kRotationLanes (the constants' groups; std::logic_error otherwise).
 void computeElementFrames(const RestModel& model, const ElementStageRest& rest, size_t begin, size_t end,
-                          const Vec3* positions, Quat* rotations, ElementFrame* frames, int maxIterations,
-                          const VolumeSplit* split = nullptr);
+                          const Vec3* positions, Quat* rotations, ElementFrame* frames, int maxIterations);
 
 /// Pass 2 for vertices [begin, end): calls sink(v, f) with each vertex's elastic force f [N] as
 /// (fx, fy, fz, 0). Inline, so that the caller's integration fuses with the gather.

@@ -18,7 +18,6 @@
 #include "gradel/world.h"
 #include "simd.h"
 #include "thread_team.h"
-#include "volume_substeps.h"
 
 namespace gradel {
 
@@ -46,8 +45,6 @@ struct StepContext {
   bool symplectic = false;   ///< The stored velocity is half a step behind (contacts.h StepStart).
   // The step's data.
   std::vector<ElementFrame> frames;      ///< Per element: k M and (k e, k), written by the element stage.
-  std::vector<VolumeBasisGroup> volumeBasis;  ///< Volumetric substeps only: the step's rotations per 4 elements (volume_substeps.h).
-  std::vector<ElementFrame> volumeFrames;     ///< Volumetric substeps only: a substep's frames.
   std::vector<Vec3> previousPositions;   ///< [m] start positions of a frame-size step (swept contacts).
   std::vector<Vec3> previousVelocities;  ///< [m/s] start velocities then (the bounce's crossing speed, contacts.h).
   std::vector<Real> contactDepth;        ///< [m] per vertex, implicit step only: depth before correction.

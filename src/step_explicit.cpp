@@ -18,30 +18,9 @@
 namespace gradel {
 
 // Stage 1: the elements [begin, end): rotations fitted (eq. 1) and their frames (element_stage.h).
-// With volumetric substeps (volume_substeps.h), the frames carry 1 / n of the volumetric force
-// and B_e is kept for the substeps.
 void World::stageElementFrames(size_t begin, size_t end) {
-  VolumeSplit split;
-  if (volumeSubsteps_ > 1) split.scale = 1.0 / volumeSubsteps_, split.basis = scratch_->volumeBasis.data();
   computeElementFrames(*model_, *stageRest_, begin, end, state_.positions.data(), state_.rotations.data(),
-                       scratch_->frames.data(), sim_.rotationIterations, volumeSubsteps_ > 1 ? &split : nullptr);
-}
-
-// A volumetric substep's kick and drift of vertices [begin, end) (volume_substeps.h): no gravity,
-// damping or contacts (the step's own pass has them).
-void World::volumeSubstepVertices(size_t begin, size_t end) {
-  using namespace simd;
-  const Real h = dt_ / volumeSubsteps_;
-  Vec3* positions = state_.positions.data();
-  Vec3* velocities = state_.velocities.data();
-  const Real* invMass = model_->invMass.data();
-  gatherVertexForces(*model_, *stageRest_, scratch_->volumeFrames.data(), positions, begin, end,
-                     [&](size_t i, d4 force) {
-                       d4 x = loadVec3(positions[i]), v = loadVec3(velocities[i]);
-                       v = v + h * (force * invMass[i]);
-                       x = x + h * v;
-                       storeVec3(positions[i], x), storeVec3(velocities[i], v);
-                     });
+                       scratch_->frames.data(), sim_.rotationIterations);
 }
 
 // Where contacts can happen this step (the broad phase of the vertex stage): each manipulator's
@@ -96,8 +75,6 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
   const size_t surfaces = manipulators_.size() + kWalls;
   const RestModel& m = *model_;
   const Real dt = dt_;
-  // The drift: the whole step, or its first volumetric substep (volume_substeps.h).
-  const Real drift = volumeSubsteps_ > 1 ? dt / volumeSubsteps_ : dt;
   const Real damp = dampingFactor(uniformDamping_, dt);  // integration.h
   const Real* vertexDamp = vertexDampFactor_.data();     // per vertex when the regions' rates differ
   const d4 g = loadVec3(sim_.gravity);
@@ -128,12 +105,10 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
         d4 x = x0, v = v0;
         Real vd = damp;
         if constexpr (perVertexDamping()) vd = vertexDamp[i];
-        if constexpr (forward()) {
+        if constexpr (forward())
           forwardEulerStep(x, v, a, dt, vd);  // integration.h
-        } else {
-          v = (v + dt * a) * vd;  // integration.h symplecticEulerStep, the drift apart
-          x = x + drift * v;
-        }
+        else
+          symplecticEulerStep(x, v, a, dt, vd);
         storeVec3(positions[i], x), storeVec3(velocities[i], v);
         if (motion) {
           const d4 d = x - x0, e = x - loadFloat4(reference[i].data());
@@ -266,35 +241,6 @@ ThreadTeam* World::frameStepTeam() {
   return team_.get();
 }
 
-// The volumetric substeps 2 .. n of a step (volume_substeps.h): per substep, the volumetric
-// frames of every element, a barrier, the vertices' kick and drift, a barrier. On the team, each
-// member takes its fixed share of the chunks (elementSplit_, vertexSplit_): no queue to reset
-// between the phases, and the results do not depend on the split.
-void World::stageVolumeSubsteps(bool team) {
-  const size_t V = model_->numVertices(), E = model_->numElements();
-  const VolumeBasisGroup* basis = scratch_->volumeBasis.data();
-  ElementFrame* frames = scratch_->volumeFrames.data();
-  if (!team) {
-    for (int k = 1; k < volumeSubsteps_; ++k) {
-      computeVolumeFrames(*model_, *stageRest_, basis, 0, E, state_.positions.data(), frames);
-      volumeSubstepVertices(0, V);
-    }
-    return;
-  }
-  team_->run([&](int t) {
-    const size_t e0 = std::min(E, elementSplit_[size_t(t)] * kElementChunk),
-                 e1 = std::min(E, elementSplit_[size_t(t) + 1] * kElementChunk);
-    const size_t v0 = std::min(V, vertexSplit_[size_t(t)] * kVertexChunk),
-                 v1 = std::min(V, vertexSplit_[size_t(t) + 1] * kVertexChunk);
-    for (int k = 1; k < volumeSubsteps_; ++k) {
-      if (e0 < e1) computeVolumeFrames(*model_, *stageRest_, basis, e0, e1, state_.positions.data(), frames);
-      team_->barrier();
-      if (v0 < v1) volumeSubstepVertices(v0, v1);
-      team_->barrier();
-    }
-  });
-}
-
 void World::stepExplicit() {
   const size_t V = model_->numVertices(), E = model_->numElements();
   const int members = stepMembers();
@@ -306,7 +252,6 @@ void World::stepExplicit() {
   auto runOnThisThread = [&] {
     stageElementFrames(0, E);
     scratch_->maxContactDepth = stageVertices(0, V, cb);
-    if (volumeSubsteps_ > 1) stageVolumeSubsteps(false);
   };
   if (members == 1) {
     runOnThisThread();
@@ -323,7 +268,6 @@ void World::stepExplicit() {
                             splitPoint(stageRest_->vertexStart, kVertexCost, t + 1, T, kVertexBlock), cb);
     }
     scratch_->maxContactDepth = depth;
-    if (volumeSubsteps_ > 1) stageVolumeSubsteps(false);
 #endif
   } else {
     // One job per step: element chunks, a barrier, vertex chunks (thread_team.h), with all
@@ -343,7 +287,6 @@ void World::stepExplicit() {
           depth = std::max(depth, stageVertices(c * kVertexChunk, std::min(V, (c + 1) * kVertexChunk), cb));
         memberContactDepth_[size_t(t)] = depth;
       });
-      if (volumeSubsteps_ > 1) stageVolumeSubsteps(true);
       scratch_->maxContactDepth = *std::max_element(memberContactDepth_.begin(), memberContactDepth_.end());
     }
     governor_->report(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());

@@ -7,8 +7,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
-#include <string>
 
 #include "element_stage.h"
 #include "gradel/contact_work.h"
@@ -55,28 +53,6 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
     // The body's own fastest vibration (stability.h); a model without elements keeps the vertex bound.
     frequency_ = highestFrequency(*model_);
     if (frequency_.omega > 0) period = 2 * M_PI / frequency_.omega;
-    // Volumetric substeps (volume_substeps.h), a measurement of issue 29 item 2 only
-    // (GRADEL_VOLUME_SUBSTEPS = auto or n; docs/speed.md "Poisson's ratio: the volumetric part in
-    // substeps"): the step at the operator without the volumetric term, the volumetric part in n
-    // substeps. Contacts and pins are not applied in the substeps.
-    const char* env = std::getenv("GRADEL_VOLUME_SUBSTEPS");
-    if (env && model_->hasVolumeTerm() && frequency_.omega > 0 && sim_.dt == 0 &&
-        sim_.integrator == IntegratorKind::SymplecticEuler) {
-      RestModel deviatoric = *model_;
-      deviatoric.volumeStiffness.clear();
-      const Real omegaDev = highestFrequency(deviatoric).omega;
-      // auto: two substeps at most; the outer step's resonance (omega_full dt < pi) caps it at
-      // twice the full operator's dt (omega_full dt = 2.2 at the default fraction).
-      const int n = std::string(env) == "auto" ? std::min(2, int(std::ceil(frequency_.omega / omegaDev - 1e-9)))
-                                               : std::atoi(env);
-      if (n > 1) {
-        volumeSubsteps_ = n;
-        period = std::min(2 * M_PI / omegaDev, n * period);
-        // The outer step's resonance limit (omega_full dt < pi): GRADEL_VOLUME_OUTER = omega_full dt.
-        if (const char* outer = std::getenv("GRADEL_VOLUME_OUTER"))
-          period = std::min(period, std::atof(outer) / (sim_.dtFraction * frequency_.omega));
-      }
-    }
   }
   // The implicit integrator is stable at any dt: "auto" is one display frame.
   if (sim_.integrator == IntegratorKind::Auto) chooseIntegrator(period);
@@ -121,7 +97,6 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   state_.velocities.assign(V, Vec3::Zero());
   state_.rotations.assign(E, Quat::Identity());
   scratch_->frames.resize(E);
-  if (volumeSubsteps_ > 1) scratch_->volumeBasis.resize((E + 3) / 4), scratch_->volumeFrames.resize(E);
   // The arrays the explicit step walks every step: 2 MiB pages for large bodies.
   const RestModel& m = *model_;
   adviseHugePages(state_.positions), adviseHugePages(state_.velocities), adviseHugePages(m.restPositions);

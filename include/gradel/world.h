@@ -273,8 +273,6 @@ class World {
   void advanceIntegrator();
   void stageElementFrames(size_t begin, size_t end);
   Real stageVertices(size_t begin, size_t end, const ContactBounds* contacts);
-  void stageVolumeSubsteps(bool team);
-  void volumeSubstepVertices(size_t begin, size_t end);
   ContactBounds contactBounds() const;
   Metrics metricsOf(const BodyRange& body, std::vector<Real>* elementStress, std::vector<Real>* elementStrain) const;
   void prepareTeam(int members);
@@ -319,8 +317,6 @@ class World {
   State state_;
   std::unique_ptr<StepContext> scratch_;  ///< The step's context: constants, start state, ledger (step_context.h).
   Real dt_ = 0;
-  /// The explicit step's volumetric substeps (volume_substeps.h): 1 = none.
-  int volumeSubsteps_ = 1;
   // Velocity damping of the explicit step (integration.h): one rate for every vertex (today's
   // path), or per vertex when regions set different rates (model.h RestModel::vertexDamping).
   Real uniformDamping_ = 0;             ///< [1/s] the rate of every vertex when vertexDampFactor_ is empty.
