@@ -39,6 +39,7 @@ inline ElementRows elementRows(const char* x, const StagePair* pair, uint32_t n)
     b0 = q[0] * w, b1 = q[1] * w, b2 = q[2] * w;
     i = 2;
   }
+#pragma GCC unroll 2
   for (; i + 1 < n; i += 2) {
     if constexpr (Prefetch) {
       __builtin_prefetch(x + pair[i + kPrefetchPairs].offset);
