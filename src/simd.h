@@ -51,7 +51,14 @@ inline void storeVec3(Vec3& v, d4 a) {
 #endif
 }
 
-inline d4 select(m4 m, d4 a, d4 b) { return (d4)(((m4)a & m) | ((m4)b & ~m)); }
+/// a where m is set, else b (one vblendvpd with AVX; the masks' lanes are all ones or zero).
+inline d4 select(m4 m, d4 a, d4 b) {
+#if defined(__AVX__)
+  return (d4)_mm256_blendv_pd((__m256d)b, (__m256d)a, (__m256d)m);
+#else
+  return (d4)(((m4)a & m) | ((m4)b & ~m));
+#endif
+}
 inline d4 abs(d4 a) { return (d4)((m4)a & ~(m4)splat(-0.0)); }  ///< Clears the sign bits.
 inline d4 sqrt(d4 a) {
 #if defined(__AVX__)
