@@ -27,6 +27,19 @@ template <bool Prefetch>
 inline ElementRows elementRows(const char* x, const StagePair* pair, uint32_t n) {
   d4 a0 = splat(0), a1 = a0, a2 = a0, b0 = a0, b1 = a0, b2 = a0;
   uint32_t i = 0;
+  if (n >= 2) {  // the first two pairs start the sums (instead of six zeroed registers)
+    if constexpr (Prefetch) {
+      __builtin_prefetch(x + pair[kPrefetchPairs].offset);
+      __builtin_prefetch(x + pair[1 + kPrefetchPairs].offset);
+    }
+    const Real* p = reinterpret_cast<const Real*>(x + pair[0].offset);
+    const Real* q = reinterpret_cast<const Real*>(x + pair[1].offset);
+    const d4 u = loadInt16x4(pair[0].lattice), w = loadInt16x4(pair[1].lattice);
+    a0 = p[0] * u, a1 = p[1] * u, a2 = p[2] * u;
+    b0 = q[0] * w, b1 = q[1] * w, b2 = q[2] * w;
+    i = 2;
+  }
+#pragma GCC unroll 2
   for (; i + 1 < n; i += 2) {
     if constexpr (Prefetch) {
       __builtin_prefetch(x + pair[i + kPrefetchPairs].offset);
@@ -198,6 +211,8 @@ void elementFrames(const RestModel& m, const ElementStageRest& rest, size_t begi
   constexpr int L = kRotationLanes;
   if (begin % L != 0) throw std::logic_error("computeElementFrames: begin is not a multiple of kRotationLanes");
   RotationBatch batch;
+  const uint32_t* elemStart = m.elemStart.data();
+  const StagePair* pairs = rest.pairs.data();
   for (size_t e0 = begin; e0 < end; e0 += L) {
     const int lanes = int(std::min<size_t>(L, end - e0));
     // 1. Rows of sum x_i (P_i, 1)^T per element, then transposed into lanes (one element per
@@ -211,8 +226,8 @@ void elementFrames(const RestModel& m, const ElementStageRest& rest, size_t begi
         continue;
       }
       const size_t e = e0 + l;
-      const uint32_t b = m.elemStart[e];
-      const ElementRows r = elementRows<Prefetch>(reinterpret_cast<const char*>(x), &rest.pairs[b], m.elemStart[e + 1] - b);
+      const uint32_t b = elemStart[e];
+      const ElementRows r = elementRows<Prefetch>(reinterpret_cast<const char*>(x), pairs + b, elemStart[e + 1] - b);
       S[0][l] = r.r0, S[1][l] = r.r1, S[2][l] = r.r2;
       Q[l] = load4(rotations[e].coeffs().data());  // x, y, z, w
     }

@@ -149,6 +149,7 @@ inline void gatherVertexForces(const RestModel& model, const ElementStageRest& r
       const ElementFrame& f = *reinterpret_cast<const ElementFrame*>(base + *j);
       g0 += load4(f.c0), g1 += load4(f.c1), g2 += load4(f.c2), t += load4(f.t);
     }
+    j = je;  // (it is: said here, the compiler takes je instead of recomputing j from the loop counter)
     const Real* r = X[v].data();
     sink(v, g0 * r[0] + g1 * r[1] + g2 * r[2] + t - t[3] * loadVec3(positions[v]));
   }

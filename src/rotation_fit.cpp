@@ -156,9 +156,11 @@ void fitRotation3Batch(RotationBatch& b, int maxIterations, Real tolerance) {
     active &= angle2 >= tol2;  // converged (or NaN): this lane stops unchanged
     if (none(active)) break;
     const m4 big = angle2 > 1.0;  // trust region: at most one radian a step
-    const d4 s = select(big, 1 / sqrt(select(big, angle2, splat(1))), splat(1));
-    w0 *= s, w1 *= s, w2 *= s;
-    angle2 = select(big, splat(1), angle2);
+    if (!none(big)) {  // (rare with a warm start: the root and division off the usual chain)
+      const d4 s = select(big, 1 / sqrt(select(big, angle2, splat(1))), splat(1));
+      w0 *= s, w1 *= s, w2 *= s;
+      angle2 = select(big, splat(1), angle2);
+    }
     // q <- q * exp(w / 2): cos(h) and sin(h) / (2 h), h = angle / 2 <= 1/2, from their series
     // to h^14 (the next terms are below 1e-18); when every active lane turns by less than 0.01 rad
     // (the usual case with a warm start: a short dependency chain), to h^6 (h^8 / 8! < 1e-23).

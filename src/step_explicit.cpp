@@ -89,9 +89,9 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
   BodyMotion* motion = bodyContacts_ ? bodyMotionBlock_.data() : nullptr;
   const RefPoint* reference = bodyContacts_ ? bodyContacts_->referencePositions() : nullptr;
   Real depth = 0;
-  // One loop per integrator and per "contacts possible": neither test is made per vertex, and
-  // without contacts nothing is kept for them.
-  auto run = [&](auto forward, auto contacts, auto perVertexDamping) {
+  // One loop per integrator, per "contacts possible" and per "soft-soft contact on": none of
+  // these tests is made per vertex, and without contacts nothing is kept for them.
+  auto run = [&](auto forward, auto contacts, auto perVertexDamping, auto soft) {
     d4 start[kBlock], startVelocity[kBlock];
     for (size_t b = begin, be; b < end; b = be) {
       be = std::min(end, (b / kBlock + 1) * kBlock);  // blocks aligned to kBlock (the contact forces' partial sums)
@@ -101,7 +101,7 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
       gatherVertexForces(m, *stageRest_, scratch_->frames.data(), positions, b, be, [&](size_t i, d4 force) {
         const d4 a = force * invMass[i] + g;
         const d4 x0 = loadVec3(positions[i]), v0 = loadVec3(velocities[i]);
-        if (startX) storeVec3(startX[i], x0), storeVec3(startV[i], v0);
+        if constexpr (soft()) storeVec3(startX[i], x0), storeVec3(startV[i], v0);
         d4 x = x0, v = v0;
         Real vd = damp;
         if constexpr (perVertexDamping()) vd = vertexDamp[i];
@@ -110,7 +110,7 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
         else
           symplecticEulerStep(x, v, a, dt, vd);
         storeVec3(positions[i], x), storeVec3(velocities[i], v);
-        if (motion) {
+        if constexpr (soft()) {
           const d4 d = x - x0, e = x - loadFloat4(reference[i].data());
           moved2 = max(d * d, moved2), since2 = max(e * e, since2);  // (a NaN lane keeps the maximum)
         }
@@ -138,7 +138,7 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
           }
         }
       }
-      if (motion) {
+      if constexpr (soft()) {
         BodyMotion& bm = motion[b / kBlock];
         if (touched) {  // a wall or manipulator may have moved a vertex: from the positions now (in cache)
           bm = BodyMotion{};
@@ -152,7 +152,10 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
   using Yes = std::true_type;
   using No = std::false_type;
   auto runDamped = [&](auto forward, auto contacts) {
-    vertexDamp ? run(forward, contacts, Yes{}) : run(forward, contacts, No{});
+    auto runSoft = [&](auto damped) {
+      bodyContacts_ ? run(forward, contacts, damped, Yes{}) : run(forward, contacts, damped, No{});
+    };
+    vertexDamp ? runSoft(Yes{}) : runSoft(No{});
   };
   if (sim_.integrator == IntegratorKind::ForwardEuler)
     cb ? runDamped(Yes{}, Yes{}) : runDamped(Yes{}, No{});
