@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
@@ -85,13 +86,12 @@ double dot(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
   return s;
 }
 
-}  // namespace
-
-FrequencyEstimate highestFrequency(const RestModel& m, int iterations) {
+// Lanczos from the unit vector q (`iterations` products at most): the estimate, and when
+// `ritzVector` is given the Ritz vector of the largest Ritz value (the Lanczos vectors kept in
+// single precision meanwhile: it only starts the next estimate, stabilityWarmStart).
+FrequencyEstimate lanczos(const RestModel& m, std::vector<Vec3> q, int iterations, std::vector<Vec3>* ritzVector) {
   FrequencyEstimate est;
   const size_t V = m.numVertices();
-  if (m.numElements() == 0 || V == 0) return est;
-
   // The upper bound: every element's K_e <= k_e I (with a volumetric term, + kappa_e sum |g_i|^2:
   // RestModel::elementStiffnessBound), so K <= diag(sum of the bounds at each vertex).
   std::vector<Real> kSum(V, 0.0);
@@ -104,20 +104,15 @@ FrequencyEstimate highestFrequency(const RestModel& m, int iterations) {
   est.gershgorin = std::sqrt(bound);
 
   const RestOperator op(m);
-  // A fixed start (a 64-bit LCG): the same estimate on every run and thread count.
-  std::vector<Vec3> q(V), qPrev(V, Vec3::Zero()), w(V);
-  uint64_t s = 0x9E3779B97F4A7C15ull;
-  auto uniform = [&] {
-    s = s * 6364136223846793005ull + 1442695040888963407ull;
-    return double(s >> 11) * 0x1.0p-53 - 0.5;
-  };
-  for (Vec3& v : q) v = Vec3(uniform(), uniform(), m.dim == 2 ? 0.0 : uniform());
-  const double n0 = std::sqrt(dot(q, q));
-  for (Vec3& v : q) v /= n0;
-
+  std::vector<Vec3> qPrev(V, Vec3::Zero()), w(V);
+  std::vector<std::vector<Eigen::Vector3f>> kept;
   std::vector<double> alpha, beta;
   double betaPrev = 0;
   for (int j = 0; j < iterations; ++j) {
+    if (ritzVector) {
+      kept.emplace_back(V);
+      for (size_t i = 0; i < V; ++i) kept.back()[i] = q[i].cast<float>();
+    }
     op.apply(q, w);
     const double a = dot(q, w);
     for (size_t i = 0; i < V; ++i) w[i] -= a * q[i] + betaPrev * qPrev[i];
@@ -140,7 +135,45 @@ FrequencyEstimate highestFrequency(const RestModel& m, int iterations) {
   const double residual = std::abs(beta[k - 1] * eig.eigenvectors()(k - 1, k - 1));
   est.ritz = std::sqrt(theta);
   est.omega = std::sqrt(std::min(theta + residual, bound));
+  if (ritzVector) {
+    ritzVector->assign(V, Vec3::Zero());
+    for (int j = 0; j < k; ++j) {
+      const double c = eig.eigenvectors()(j, k - 1);
+      for (size_t i = 0; i < V; ++i) (*ritzVector)[i] += c * kept[j][i].cast<double>();
+    }
+  }
   return est;
+}
+
+}  // namespace
+
+FrequencyEstimate highestFrequency(const RestModel& m, int iterations, std::vector<Vec3>* ritzVector) {
+  const size_t V = m.numVertices();
+  if (m.numElements() == 0 || V == 0) return {};
+  // A fixed start (a 64-bit LCG): the same estimate on every run and thread count.
+  std::vector<Vec3> q(V);
+  uint64_t s = 0x9E3779B97F4A7C15ull;
+  auto uniform = [&] {
+    s = s * 6364136223846793005ull + 1442695040888963407ull;
+    return double(s >> 11) * 0x1.0p-53 - 0.5;
+  };
+  for (Vec3& v : q) v = Vec3(uniform(), uniform(), m.dim == 2 ? 0.0 : uniform());
+  const double n0 = std::sqrt(dot(q, q));
+  for (Vec3& v : q) v /= n0;
+  return lanczos(m, std::move(q), iterations, ritzVector);
+}
+
+FrequencyEstimate highestFrequencyFrom(const RestModel& m, std::vector<Vec3> start, int iterations,
+                                       std::vector<Vec3>* ritzVector) {
+  const size_t V = m.numVertices();
+  if (m.numElements() == 0 || V == 0) return {};
+  if (start.size() != V) throw std::invalid_argument("highestFrequencyFrom: the start's size is not the model's");
+  if (m.dim == 2)
+    for (Vec3& v : start) v.z() = 0;
+  const double n0 = std::sqrt(dot(start, start));
+  if (!(n0 > 0) || !std::isfinite(n0)) return highestFrequency(m, iterations, ritzVector);
+  for (Vec3& v : start) v /= n0;
+  return lanczos(m, std::move(start), iterations, ritzVector);
 }
 
 }  // namespace gradel
