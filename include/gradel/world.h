@@ -224,7 +224,8 @@ class World {
   /// `fromVertex` (optional): per vertex of the new model, its vertex id in the current one
   /// (UINT32_MAX for a new vertex). With it the operator rule's estimate is warm started from the
   /// previous one's Ritz vector (stability_warm.h: kWarmStartIterations products instead of 48)
-  /// once this world holds one (the first replacement estimates from scratch and keeps it).
+  /// once this world holds one (made with a carving manipulator, or replaced before); otherwise
+  /// the estimate is made from scratch and its Ritz vector kept.
   void replaceModel(std::shared_ptr<const RestModel> model, State state, std::vector<ContactBody> contactBodies,
                     const std::vector<PinSettings>* pins = nullptr, const std::vector<uint32_t>* fromVertex = nullptr);
   /// Carving's ledger (carve_scene.h): adds what an event took from body `body` (RestModel::bodies
@@ -331,8 +332,9 @@ class World {
   std::string integratorChoice_;
   std::string dtRule_;
   FrequencyEstimate frequency_;  ///< World(): the operator rule's estimate (stability.h).
-  /// replaceModel: the Ritz vector of the last estimate (per vertex), the next one's warm start
-  /// (stability_warm.h); empty until the first replacement under the operator rule.
+  /// The Ritz vector of the last operator-rule estimate (per vertex), the next replaceModel's warm
+  /// start (stability_warm.h): kept by World() when a manipulator carves (or is a blade) and by
+  /// every replaceModel with a vertex map; empty otherwise.
   std::vector<Vec3> ritz_;
   std::vector<PinSettings> pins_;
   PinSet pinSet_;
