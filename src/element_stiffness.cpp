@@ -49,6 +49,27 @@ StiffnessFrame elementStiffnessFrame(int dim, const Mat3& A, const Quat& q, cons
   return fr;
 }
 
+StiffnessFrame elementRestStiffnessFrame(int dim, const Vec3* R0, int n) {
+  StiffnessFrame fr;
+  const Vec3 mean = meanOf(R0, n);
+  Mat3 C = Mat3::Zero();
+  for (int i = 0; i < n; ++i) {
+    const Vec3 r = R0[i] - mean;
+    C.noalias() += r * r.transpose();
+  }
+  const Mat3 T0 = C.trace() * Mat3::Identity() - C;
+  if (dim == 2) {
+    if (T0(2, 2) > 0) fr.Tinv(2, 2) = 1 / T0(2, 2);
+    return fr;
+  }
+  Eigen::SelfAdjointEigenSolver<Mat3> e0;
+  e0.computeDirect(T0);
+  const Vec3 l0 = e0.eigenvalues();
+  if (!(l0.minCoeff() > 1e-12 * std::max(l0.maxCoeff(), Real(1e-300)))) return fr;  // flat element: no rotation term
+  fr.Tinv = e0.eigenvectors() * l0.cwiseInverse().asDiagonal() * e0.eigenvectors().transpose();
+  return fr;
+}
+
 void elementStiffnessProduct(const StiffnessFrame& fr, const Vec3* p, const uint32_t* verts, const Vec3* R0, int n,
                              Real k, Vec3* out) {
   const Vec3 mean = meanOf(R0, n);

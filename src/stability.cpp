@@ -28,14 +28,21 @@ struct RestOperator {
   std::vector<Real> invSqrtMass;
   mutable std::vector<Vec3> scaled, elementOut;
 
-  explicit RestOperator(const RestModel& model) : m(model) {
+  /// restFrames: the frames by elementRestStiffnessFrame (the same to rounding, cheaper; the warm
+  /// start's estimate) instead of the general frame at the rest positions (the estimate's bits
+  /// from scratch, which every dt = auto depends on).
+  RestOperator(const RestModel& model, bool restFrames) : m(model) {
     const size_t E = m.numElements(), V = m.numVertices();
     frames.resize(E);
     size_t largest = 0;
     for (size_t e = 0; e < E; ++e) {
       const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
-      const Mat3 A = elementCovariance(m.restPositions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n));
-      frames[e] = elementStiffnessFrame(m.dim, A, Quat::Identity(), &m.restOffsets[b], int(n));
+      if (restFrames) {
+        frames[e] = elementRestStiffnessFrame(m.dim, &m.restOffsets[b], int(n));
+      } else {
+        const Mat3 A = elementCovariance(m.restPositions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n));
+        frames[e] = elementStiffnessFrame(m.dim, A, Quat::Identity(), &m.restOffsets[b], int(n));
+      }
       largest = std::max<size_t>(largest, n);
     }
     if (m.hasVolumeTerm()) {
@@ -89,7 +96,8 @@ double dot(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
 // Lanczos from the unit vector q (`iterations` products at most): the estimate, and when
 // `ritzVector` is given the Ritz vector of the largest Ritz value (the Lanczos vectors kept in
 // single precision meanwhile: it only starts the next estimate, stabilityWarmStart).
-FrequencyEstimate lanczos(const RestModel& m, std::vector<Vec3> q, int iterations, std::vector<Vec3>* ritzVector) {
+FrequencyEstimate lanczos(const RestModel& m, std::vector<Vec3> q, int iterations, std::vector<Vec3>* ritzVector,
+                          bool restFrames) {
   FrequencyEstimate est;
   const size_t V = m.numVertices();
   // The upper bound: every element's K_e <= k_e I (with a volumetric term, + kappa_e sum |g_i|^2:
@@ -103,7 +111,7 @@ FrequencyEstimate lanczos(const RestModel& m, std::vector<Vec3> q, int iteration
   for (size_t i = 0; i < V; ++i) bound = std::max(bound, double(kSum[i] / m.mass[i]));
   est.gershgorin = std::sqrt(bound);
 
-  const RestOperator op(m);
+  const RestOperator op(m, restFrames);
   std::vector<Vec3> qPrev(V, Vec3::Zero()), w(V);
   std::vector<std::vector<Eigen::Vector3f>> kept;
   std::vector<double> alpha, beta;
@@ -160,7 +168,7 @@ FrequencyEstimate highestFrequency(const RestModel& m, int iterations, std::vect
   for (Vec3& v : q) v = Vec3(uniform(), uniform(), m.dim == 2 ? 0.0 : uniform());
   const double n0 = std::sqrt(dot(q, q));
   for (Vec3& v : q) v /= n0;
-  return lanczos(m, std::move(q), iterations, ritzVector);
+  return lanczos(m, std::move(q), iterations, ritzVector, false);
 }
 
 FrequencyEstimate highestFrequencyFrom(const RestModel& m, std::vector<Vec3> start, int iterations,
@@ -173,7 +181,7 @@ FrequencyEstimate highestFrequencyFrom(const RestModel& m, std::vector<Vec3> sta
   const double n0 = std::sqrt(dot(start, start));
   if (!(n0 > 0) || !std::isfinite(n0)) return highestFrequency(m, iterations, ritzVector);
   for (Vec3& v : start) v /= n0;
-  return lanczos(m, std::move(start), iterations, ritzVector);
+  return lanczos(m, std::move(start), iterations, ritzVector, true);
 }
 
 }  // namespace gradel

@@ -37,7 +37,9 @@ struct FrequencyEstimate {
 FrequencyEstimate highestFrequency(const RestModel& model, int iterations = 48, std::vector<Vec3>* ritzVector = nullptr);
 
 /// The same estimate from a given start (one entry per vertex, normalised here; z dropped in 2D)
-/// instead of the fixed pseudo-random one. A zero start falls back to highestFrequency.
+/// instead of the fixed pseudo-random one, the elements' frames at rest made the cheaper way
+/// (element_stiffness.h elementRestStiffnessFrame: the same operator to rounding). A zero start
+/// falls back to highestFrequency.
 /// std::invalid_argument when the start's size is not the model's vertex count.
 FrequencyEstimate highestFrequencyFrom(const RestModel& model, std::vector<Vec3> start, int iterations,
                                        std::vector<Vec3>* ritzVector = nullptr);
