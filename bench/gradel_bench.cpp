@@ -30,7 +30,11 @@
 // gradational n^3 box (--sizes), a burr of radius 3 voxels at a new place on the top face each
 // repetition: its own CSV (set = carve), medians in ms of the tool's voxel set, the event (full
 // re-layout, rest model, state carried over), the re-layout and rest model alone, and the whole
-// scene event (event + the world made again, World::replaceModel).
+// scene event (event + the world made again, World::replaceModel); the first scene event alone
+// (the operator rule estimated from scratch: no warm start yet, stability_warm.h); the world's
+// remake (scene event less the event); the smallest and largest ratio of the event's omega_max
+// to the estimate from scratch on the same model (>= 1: dt errs short); ms per step after the
+// events and of a world made from scratch on the same model and state (interleaved), and both dt.
 // --drill: steady drilling (issue 30's second target): a gradational n^3 box of soft tissue (5 mm
 // voxels, E = 3e4 Pa, on the floor under gravity, damping 5/s) and a burr of radius 3 voxels with
 // "carve" that enters the top face and wanders down through it for 1 s (a circle of radius n/4
@@ -62,6 +66,7 @@
 
 #include "gradel/carve_scene.h"
 #include "gradel/pieces.h"
+#include "gradel/stability.h"
 #include "gradel/shared/scene_presets.h"
 
 using namespace gradel;
@@ -95,7 +100,8 @@ void measureCarve(int n, int threads, int reps) {
   BuiltScene b = buildScene(scene);
   b.world->step();
   const Real h = 0.005, r = 3 * h;
-  std::vector<double> tSet, tEvent, tLayout, tScene;
+  std::vector<double> tSet, tEvent, tLayout, tScene, tRemake, ratio;
+  double tFirst = 0;
   size_t removed = 0, verticesBefore = b.world->model().numVertices();
   for (int k = 0; k < reps; ++k) {
     const Vec3 centre(h * (n / 4 + (k * 7) % (n / 2)), h * n, h * (n / 4 + (k * 5) % (n / 2)));
@@ -113,10 +119,30 @@ void measureCarve(int n, int threads, int reps) {
     t0 = Clock::now();
     removed = carveSceneBody(b, 0, mask).removedVoxels;
     tScene.push_back(msSince(t0));
+    if (k == 0) tFirst = tScene.back();
+    tRemake.push_back(tScene.back() - tEvent.back());
+    // The event's omega_max against the estimate from scratch on the same model (not timed).
+    ratio.push_back(b.world->stabilityEstimate().omega / highestFrequency(b.world->model()).omega);
     b.world->step();
   }
-  std::printf("carve,%d,%d,%zu,%zu,%zu,%.3f,%.3f,%.3f,%.3f\n", n, threads, removed, verticesBefore,
-              b.world->model().numVertices(), medianOf(tSet), medianOf(tEvent), medianOf(tLayout), medianOf(tScene));
+  // The step after the events against a world made from scratch on the same model and state,
+  // interleaved, 20 steps each, 5 rounds: ms per step (median), and dt.
+  World fresh(b.bodies[0].model, b.world->settings(), b.world->domain(), {});
+  fresh.state() = b.world->state();
+  std::vector<double> tAfter, tScratch;
+  for (int round = 0; round < 5; ++round) {
+    auto t0 = Clock::now();
+    for (int s = 0; s < 20; ++s) b.world->step();
+    tAfter.push_back(msSince(t0) / 20);
+    t0 = Clock::now();
+    for (int s = 0; s < 20; ++s) fresh.step();
+    tScratch.push_back(msSince(t0) / 20);
+  }
+  std::printf("carve,%d,%d,%zu,%zu,%zu,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,%.4f,%.4f,%.6g,%.6g\n", n, threads, removed,
+              verticesBefore, b.world->model().numVertices(), medianOf(tSet), medianOf(tEvent), medianOf(tLayout),
+              medianOf(tScene), tFirst, medianOf(tRemake), *std::min_element(ratio.begin(), ratio.end()),
+              *std::max_element(ratio.begin(), ratio.end()), medianOf(tAfter), medianOf(tScratch), b.world->dt(),
+              fresh.dt());
   std::fflush(stdout);
 }
 
@@ -488,7 +514,8 @@ int main(int argc, char** argv) {
                               [&](int n, int t) { measureSplit(n, t, reps); });
   if (carve)
     return eachSizeAndThreads("set,n,threads,removed_voxels,vertices_before,vertices_after,ms_tool_voxels,ms_event,"
-                              "ms_relayout_and_model,ms_scene_event",
+                              "ms_relayout_and_model,ms_scene_event,ms_scene_event_first,ms_world_remake,"
+                              "omega_ratio_min,omega_ratio_max,ms_step_after,ms_step_scratch,dt_after,dt_scratch",
                               [&](int n, int t) { measureCarve(n, t, reps); });
   try {
     auto str = [](const std::string& s) { return s; };

@@ -52,6 +52,7 @@ set(GRADEL_CORE_SOURCES
   src/size_limits.cpp
   src/slow_stage.cpp
   src/stability.cpp
+  src/stability_warm.cpp
   src/surface.cpp
   src/thread_team.cpp
   src/volume.cpp
@@ -169,6 +170,7 @@ set(GRADEL_TEST_SOURCES
   tests/test_settings_check.cpp
   tests/test_shapes.cpp
   tests/test_stability.cpp
+  tests/test_stability_warm.cpp
   tests/test_poisson.cpp
   tests/test_step_pacer.cpp
   tests/test_surface.cpp)

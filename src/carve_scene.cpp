@@ -130,6 +130,30 @@ std::vector<CarveEvent> carveBodies(BuiltScene& scene, const std::vector<std::pa
   for (size_t b = 0; b < B; ++b)
     for (size_t k = 1; k < pieces[b].size(); ++k)
       append(pieces[b][k].positions, pieces[b][k].velocities, pieces[b][k].rotations);
+  // Per new vertex, its id in the world's model (UINT32_MAX: new), in the state's order: the
+  // operator rule's estimate starts from the last one's fastest mode (stability_warm.h).
+  std::vector<uint32_t> fromVertex;
+  fromVertex.reserve(state.positions.size());
+  auto appendMap = [&](size_t b, const std::vector<uint32_t>* piece) {
+    const uint32_t begin = uint32_t(scene.range(b).vertexBegin);
+    const std::vector<uint32_t>& carvedFrom = carved[b].fromVertex;
+    const size_t n = piece ? piece->size() : carvedFrom.size();
+    for (size_t i = 0; i < n; ++i) {
+      uint32_t v = piece ? (*piece)[i] : uint32_t(i);
+      if (v != Layout::kNoVertex) v = carvedFrom[v];
+      fromVertex.push_back(v == Layout::kNoVertex ? v : begin + v);
+    }
+  };
+  for (size_t b = 0; b < B; ++b) {
+    if (changed[b]) {
+      appendMap(b, pieces[b].empty() ? nullptr : &pieces[b][0].fromVertex);
+    } else {
+      const BodyRange& r = scene.range(b);
+      for (size_t v = r.vertexBegin; v < r.vertexEnd; ++v) fromVertex.push_back(uint32_t(v));
+    }
+  }
+  for (size_t b = 0; b < B; ++b)
+    for (size_t k = 1; k < pieces[b].size(); ++k) appendMap(b, &pieces[b][k].fromVertex);
   // The pins of a body that fell apart hold the pieces their box or mask selects (one pin each).
   const std::vector<PinSettings> oldPins = world.pins();
   bool split = false;
@@ -193,7 +217,7 @@ std::vector<CarveEvent> carveBodies(BuiltScene& scene, const std::vector<std::pa
     for (const BuiltBody& body : scene.bodies) layouts.push_back(&body.layout), volumes.push_back(&body.volume);
     contactBodies = buildContactBodies(*model, layouts, volumes);
   }
-  world.replaceModel(std::move(model), std::move(state), std::move(contactBodies), split ? &pins : nullptr);
+  world.replaceModel(std::move(model), std::move(state), std::move(contactBodies), split ? &pins : nullptr, &fromVertex);
   restore.done = true;
   for (CarveEvent& e : events) {
     world.recordRemoval(e.body, RemovedMaterial{e.removedVoxels, e.removedVolume, e.removedMass, e.removedMomentum});

@@ -14,18 +14,23 @@ Vec3 meanOf(const Vec3* R0, int n) {
   return s / Real(n);
 }
 
-}  // namespace
-
-StiffnessFrame elementStiffnessFrame(int dim, const Mat3& A, const Quat& q, const Vec3* R0, int n) {
-  StiffnessFrame fr;
-  fr.M = q.toRotationMatrix();
+// T0 = tr(C) I - C, C = sum R0'_i R0'_i^T the rest covariance about the mean.
+Mat3 restRotationMoment(const Vec3* R0, int n) {
   const Vec3 mean = meanOf(R0, n);
   Mat3 C = Mat3::Zero();
   for (int i = 0; i < n; ++i) {
     const Vec3 r = R0[i] - mean;
     C.noalias() += r * r.transpose();
   }
-  const Mat3 T0 = C.trace() * Mat3::Identity() - C;
+  return C.trace() * Mat3::Identity() - C;
+}
+
+}  // namespace
+
+StiffnessFrame elementStiffnessFrame(int dim, const Mat3& A, const Quat& q, const Vec3* R0, int n) {
+  StiffnessFrame fr;
+  fr.M = q.toRotationMatrix();
+  const Mat3 T0 = restRotationMoment(R0, n);
   const Mat3 MA = fr.M.transpose() * A;
   const Mat3 S = 0.5 * (MA + MA.transpose());
   const Mat3 T = S.trace() * Mat3::Identity() - S;
@@ -46,6 +51,21 @@ StiffnessFrame elementStiffnessFrame(int dim, const Mat3& A, const Quat& q, cons
   const Vec3 l = e.eigenvalues().cwiseMax(Real(1)).cwiseInverse();
   const Mat3 WV = W * e.eigenvectors();
   fr.Tinv = WV * l.asDiagonal() * WV.transpose();
+  return fr;
+}
+
+StiffnessFrame elementRestStiffnessFrame(int dim, const Vec3* R0, int n) {
+  StiffnessFrame fr;
+  const Mat3 T0 = restRotationMoment(R0, n);
+  if (dim == 2) {
+    if (T0(2, 2) > 0) fr.Tinv(2, 2) = 1 / T0(2, 2);
+    return fr;
+  }
+  Eigen::SelfAdjointEigenSolver<Mat3> e0;
+  e0.computeDirect(T0);
+  const Vec3 l0 = e0.eigenvalues();
+  if (!(l0.minCoeff() > 1e-12 * std::max(l0.maxCoeff(), Real(1e-300)))) return fr;  // flat element: no rotation term
+  fr.Tinv = e0.eigenvectors() * l0.cwiseInverse().asDiagonal() * e0.eigenvectors().transpose();
   return fr;
 }
 

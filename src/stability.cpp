@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
@@ -27,14 +28,21 @@ struct RestOperator {
   std::vector<Real> invSqrtMass;
   mutable std::vector<Vec3> scaled, elementOut;
 
-  explicit RestOperator(const RestModel& model) : m(model) {
+  /// restFrames: the frames by elementRestStiffnessFrame (the same to rounding, cheaper; the warm
+  /// start's estimate) instead of the general frame at the rest positions (the estimate's bits
+  /// from scratch, which every dt = auto depends on).
+  RestOperator(const RestModel& model, bool restFrames) : m(model) {
     const size_t E = m.numElements(), V = m.numVertices();
     frames.resize(E);
     size_t largest = 0;
     for (size_t e = 0; e < E; ++e) {
       const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
-      const Mat3 A = elementCovariance(m.restPositions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n));
-      frames[e] = elementStiffnessFrame(m.dim, A, Quat::Identity(), &m.restOffsets[b], int(n));
+      if (restFrames) {
+        frames[e] = elementRestStiffnessFrame(m.dim, &m.restOffsets[b], int(n));
+      } else {
+        const Mat3 A = elementCovariance(m.restPositions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n));
+        frames[e] = elementStiffnessFrame(m.dim, A, Quat::Identity(), &m.restOffsets[b], int(n));
+      }
       largest = std::max<size_t>(largest, n);
     }
     if (m.hasVolumeTerm()) {
@@ -85,13 +93,13 @@ double dot(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
   return s;
 }
 
-}  // namespace
-
-FrequencyEstimate highestFrequency(const RestModel& m, int iterations) {
+// Lanczos from the unit vector q (`iterations` products at most): the estimate, and when
+// `ritzVector` is given the Ritz vector of the largest Ritz value (the Lanczos vectors kept in
+// single precision meanwhile: it only starts the next estimate, stabilityWarmStart).
+FrequencyEstimate lanczos(const RestModel& m, std::vector<Vec3> q, int iterations, std::vector<Vec3>* ritzVector,
+                          bool restFrames) {
   FrequencyEstimate est;
   const size_t V = m.numVertices();
-  if (m.numElements() == 0 || V == 0) return est;
-
   // The upper bound: every element's K_e <= k_e I (with a volumetric term, + kappa_e sum |g_i|^2:
   // RestModel::elementStiffnessBound), so K <= diag(sum of the bounds at each vertex).
   std::vector<Real> kSum(V, 0.0);
@@ -103,21 +111,16 @@ FrequencyEstimate highestFrequency(const RestModel& m, int iterations) {
   for (size_t i = 0; i < V; ++i) bound = std::max(bound, double(kSum[i] / m.mass[i]));
   est.gershgorin = std::sqrt(bound);
 
-  const RestOperator op(m);
-  // A fixed start (a 64-bit LCG): the same estimate on every run and thread count.
-  std::vector<Vec3> q(V), qPrev(V, Vec3::Zero()), w(V);
-  uint64_t s = 0x9E3779B97F4A7C15ull;
-  auto uniform = [&] {
-    s = s * 6364136223846793005ull + 1442695040888963407ull;
-    return double(s >> 11) * 0x1.0p-53 - 0.5;
-  };
-  for (Vec3& v : q) v = Vec3(uniform(), uniform(), m.dim == 2 ? 0.0 : uniform());
-  const double n0 = std::sqrt(dot(q, q));
-  for (Vec3& v : q) v /= n0;
-
+  const RestOperator op(m, restFrames);
+  std::vector<Vec3> qPrev(V, Vec3::Zero()), w(V);
+  std::vector<std::vector<Eigen::Vector3f>> kept;
   std::vector<double> alpha, beta;
   double betaPrev = 0;
   for (int j = 0; j < iterations; ++j) {
+    if (ritzVector) {
+      kept.emplace_back(V);
+      for (size_t i = 0; i < V; ++i) kept.back()[i] = q[i].cast<float>();
+    }
     op.apply(q, w);
     const double a = dot(q, w);
     for (size_t i = 0; i < V; ++i) w[i] -= a * q[i] + betaPrev * qPrev[i];
@@ -140,7 +143,45 @@ FrequencyEstimate highestFrequency(const RestModel& m, int iterations) {
   const double residual = std::abs(beta[k - 1] * eig.eigenvectors()(k - 1, k - 1));
   est.ritz = std::sqrt(theta);
   est.omega = std::sqrt(std::min(theta + residual, bound));
+  if (ritzVector) {
+    ritzVector->assign(V, Vec3::Zero());
+    for (int j = 0; j < k; ++j) {
+      const double c = eig.eigenvectors()(j, k - 1);
+      for (size_t i = 0; i < V; ++i) (*ritzVector)[i] += c * kept[j][i].cast<double>();
+    }
+  }
   return est;
+}
+
+}  // namespace
+
+FrequencyEstimate highestFrequency(const RestModel& m, int iterations, std::vector<Vec3>* ritzVector) {
+  const size_t V = m.numVertices();
+  if (m.numElements() == 0 || V == 0) return {};
+  // A fixed start (a 64-bit LCG): the same estimate on every run and thread count.
+  std::vector<Vec3> q(V);
+  uint64_t s = 0x9E3779B97F4A7C15ull;
+  auto uniform = [&] {
+    s = s * 6364136223846793005ull + 1442695040888963407ull;
+    return double(s >> 11) * 0x1.0p-53 - 0.5;
+  };
+  for (Vec3& v : q) v = Vec3(uniform(), uniform(), m.dim == 2 ? 0.0 : uniform());
+  const double n0 = std::sqrt(dot(q, q));
+  for (Vec3& v : q) v /= n0;
+  return lanczos(m, std::move(q), iterations, ritzVector, false);
+}
+
+FrequencyEstimate highestFrequencyFrom(const RestModel& m, std::vector<Vec3> start, int iterations,
+                                       std::vector<Vec3>* ritzVector) {
+  const size_t V = m.numVertices();
+  if (m.numElements() == 0 || V == 0) return {};
+  if (start.size() != V) throw std::invalid_argument("highestFrequencyFrom: the start's size is not the model's");
+  if (m.dim == 2)
+    for (Vec3& v : start) v.z() = 0;
+  const double n0 = std::sqrt(dot(start, start));
+  if (!(n0 > 0) || !std::isfinite(n0)) return highestFrequency(m, iterations, ritzVector);
+  for (Vec3& v : start) v /= n0;
+  return lanczos(m, std::move(start), iterations, ritzVector, true);
 }
 
 }  // namespace gradel

@@ -33,6 +33,10 @@ std::shared_ptr<const RestModel> withBodies(std::shared_ptr<const RestModel> mod
 
 World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& sim, const DomainSettings& domain,
              std::vector<ManipulatorSettings> manipulators)
+    : World(std::move(model), sim, domain, std::move(manipulators), nullptr) {}
+
+World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& sim, const DomainSettings& domain,
+             std::vector<ManipulatorSettings> manipulators, const FrequencyEstimate* frequency)
     : model_(withBodies(std::move(model))), stageRest_(std::make_unique<const ElementStageRest>(*model_)), sim_(sim),
       domain_(domain), scratch_(std::make_unique<StepContext>()) {
   if (sim_.dtFraction == 0) sim_.dtFraction = defaultDtFraction(sim_.dtPeriod);
@@ -51,7 +55,12 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   Real period = sim_.dtPeriod == PeriodRule::Element ? model_->smallestPeriod : model_->smallestVertexPeriod;
   if (sim_.dtPeriod == PeriodRule::Operator) {
     // The body's own fastest vibration (stability.h); a model without elements keeps the vertex bound.
-    frequency_ = highestFrequency(*model_);
+    // A world with a carving tool keeps the Ritz vector: its first event is warm started too
+    // (stability_warm.h; the estimate's bits are the same).
+    const bool carving = std::any_of(manipulators.begin(), manipulators.end(), [](const ManipulatorSettings& s) {
+      return s.carve || s.shape == ManipulatorShape::Blade;
+    });
+    frequency_ = frequency ? *frequency : highestFrequency(*model_, 48, carving ? &ritz_ : nullptr);
     if (frequency_.omega > 0) period = 2 * M_PI / frequency_.omega;
   }
   // The implicit integrator is stable at any dt: "auto" is one display frame.

@@ -9,13 +9,15 @@
 #include <vector>
 
 #include "gradel/integrator.h"
+#include "gradel/stability.h"
+#include "gradel/stability_warm.h"
 #include "gradel/world.h"
 #include "plane.h"
 
 namespace gradel {
 
 void World::replaceModel(std::shared_ptr<const RestModel> model, State state, std::vector<ContactBody> contactBodies,
-                         const std::vector<PinSettings>* pins) {
+                         const std::vector<PinSettings>* pins, const std::vector<uint32_t>* fromVertex) {
   if (!model) throw std::invalid_argument("World::replaceModel: no model");
   if (state.positions.size() != model->numVertices() || state.velocities.size() != model->numVertices() ||
       state.rotations.size() != model->numElements())
@@ -43,7 +45,19 @@ void World::replaceModel(std::shared_ptr<const RestModel> model, State state, st
     sim.dt = dt;
     sim.dtPeriod = PeriodRule::Vertex;  // no estimate in the constructor: dt is given
   }
-  World w(std::move(model), sim, domain_, {});
+  // The estimate: warm started from the last one's Ritz vector carried over by fromVertex
+  // (stability_warm.h), or from scratch keeping its Ritz vector for the next event.
+  FrequencyEstimate frequency;
+  std::vector<Vec3> ritz;
+  if (estimate) {
+    if (fromVertex && !ritz_.empty() && ritz_.size() == model_->numVertices() && fromVertex->size() == model->numVertices())
+      frequency = highestFrequencyFrom(*model, stabilityWarmStart(*model_, *model, ritz_, *fromVertex),
+                                       kWarmStartIterations, &ritz);
+    else
+      frequency = highestFrequency(*model, 48, fromVertex ? &ritz : nullptr);
+  }
+  World w(std::move(model), sim, domain_, {}, estimate ? &frequency : nullptr);
+  w.ritz_ = std::move(ritz);
   w.sim_ = sim_;
   w.dtRule_ = estimate ? w.dtRule_ + " (estimated again after carving)" : rule;
   w.integratorChoice_ = integratorChoice_;

@@ -109,3 +109,26 @@ TEST(ElementStiffness, PositiveSemidefiniteWhenCompressedOrInverted) {
 }
 
 }  // namespace
+
+// The frame at rest made directly (T0^-1) is the general frame at the rest positions to rounding,
+// in 3D (a cube with a hanging vertex, an incomplete element) and 2D, and a flat element (its
+// offsets on a line) has no rotation term either way.
+TEST(ElementStiffness, RestFrameIsTheGeneralFrameAtRest) {
+  const Cube c = cube(Mat3::Identity());
+  std::vector<Vec3> partial(c.R0.begin(), c.R0.begin() + 5);
+  Vec3 m = Vec3::Zero();
+  for (const Vec3& p : partial) m += p;
+  for (Vec3& p : partial) p -= m / Real(partial.size());
+  std::vector<Vec3> line = {Vec3(-1, 0, 0), Vec3(0, 0, 0), Vec3(1, 0, 0)};
+  for (int dim : {2, 3})
+    for (const std::vector<Vec3>* R0 : std::vector<const std::vector<Vec3>*>{&c.R0, &partial, &line}) {
+      const int n = int(R0->size());
+      std::vector<uint32_t> ids(n);
+      for (int i = 0; i < n; ++i) ids[i] = uint32_t(i);
+      const Mat3 A = elementCovariance(R0->data(), ids.data(), R0->data(), n);  // rest positions = offsets
+      const StiffnessFrame general = elementStiffnessFrame(dim, A, Quat::Identity(), R0->data(), n);
+      const StiffnessFrame rest = elementRestStiffnessFrame(dim, R0->data(), n);
+      EXPECT_TRUE(rest.M.isIdentity(0));
+      EXPECT_LE((rest.Tinv - general.Tinv).norm(), 1e-12 * std::max(Real(1), general.Tinv.norm()));
+    }
+}

@@ -35,6 +35,11 @@ struct StiffnessFrame {
 /// The frame of an element with covariance A (element.h elementCovariance) and fitted rotation q.
 StiffnessFrame elementStiffnessFrame(int dim, const Mat3& A, const Quat& q, const Vec3* R0, int n);
 
+/// The frame at rest (positions at their rest offsets, q = identity): there A = C, so T = T0 and
+/// the clamp is the identity, T'^-1 = T0^-1 (one symmetric eigensolve instead of two, no
+/// covariance). Equal to elementStiffnessFrame(dim, C, identity, R0, n) to rounding.
+StiffnessFrame elementRestStiffnessFrame(int dim, const Vec3* R0, int n);
+
 /// out[i] = (K p)_i for the element's n vertices (p read at verts[i]).
 void elementStiffnessProduct(const StiffnessFrame& frame, const Vec3* p, const uint32_t* verts, const Vec3* R0, int n,
                              Real k, Vec3* out);

@@ -17,6 +17,8 @@
 // the work of three explicit steps), 48 iterations by default.
 #pragma once
 
+#include <vector>
+
 #include "gradel/model.h"
 
 namespace gradel {
@@ -29,7 +31,17 @@ struct FrequencyEstimate {
 };
 
 /// omega_max of the model at rest (all bodies: the largest over them). A model with no element
-/// gives 0 everywhere.
-FrequencyEstimate highestFrequency(const RestModel& model, int iterations = 48);
+/// gives 0 everywhere. `ritzVector` (optional): the Ritz vector of the largest Ritz value (unit
+/// length to single precision; the estimate's bits do not depend on asking for it), the start of
+/// the next estimate after a change of the model (stability_warm.h).
+FrequencyEstimate highestFrequency(const RestModel& model, int iterations = 48, std::vector<Vec3>* ritzVector = nullptr);
+
+/// The same estimate from a given start (one entry per vertex, normalised here; z dropped in 2D)
+/// instead of the fixed pseudo-random one, the elements' frames at rest made the cheaper way
+/// (element_stiffness.h elementRestStiffnessFrame: the same operator to rounding). A zero start
+/// falls back to highestFrequency.
+/// std::invalid_argument when the start's size is not the model's vertex count.
+FrequencyEstimate highestFrequencyFrom(const RestModel& model, std::vector<Vec3> start, int iterations,
+                                       std::vector<Vec3>* ritzVector = nullptr);
 
 }  // namespace gradel

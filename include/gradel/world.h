@@ -221,8 +221,13 @@ class World {
   /// the pins as they are. Contact surfaces given to a world that had no body contacts switch
   /// them on with the settings it was made with (WorldSettings::bodyContact). The removed-material
   /// ledger grows to the new model's bodies (zeros for new ones).
+  /// `fromVertex` (optional): per vertex of the new model, its vertex id in the current one
+  /// (UINT32_MAX for a new vertex). With it the operator rule's estimate is warm started from the
+  /// previous one's Ritz vector (stability_warm.h: kWarmStartIterations products instead of 48)
+  /// once this world holds one (made with a carving manipulator, or replaced before); otherwise
+  /// the estimate is made from scratch and its Ritz vector kept.
   void replaceModel(std::shared_ptr<const RestModel> model, State state, std::vector<ContactBody> contactBodies,
-                    const std::vector<PinSettings>* pins = nullptr);
+                    const std::vector<PinSettings>* pins = nullptr, const std::vector<uint32_t>* fromVertex = nullptr);
   /// Carving's ledger (carve_scene.h): adds what an event took from body `body` (RestModel::bodies
   /// index) to its total since t = 0, kept across replaceModel. The linear momentum of body b now
   /// plus removedMaterial()[b].momentum is what it would have been without carving.
@@ -267,6 +272,9 @@ class World {
   size_t memoryBytes() const;
 
  private:
+  /// The bare world with the operator rule's estimate given (replaceModel) instead of made here.
+  World(std::shared_ptr<const RestModel> model, const SimulationSettings& sim, const DomainSettings& domain,
+        std::vector<ManipulatorSettings> manipulators, const FrequencyEstimate* frequency);
   struct ContactBounds;
   struct HeldContacts;
   void beginStep();
@@ -324,6 +332,10 @@ class World {
   std::string integratorChoice_;
   std::string dtRule_;
   FrequencyEstimate frequency_;  ///< World(): the operator rule's estimate (stability.h).
+  /// The Ritz vector of the last operator-rule estimate (per vertex), the next replaceModel's warm
+  /// start (stability_warm.h): kept by World() when a manipulator carves (or is a blade) and by
+  /// every replaceModel with a vertex map; empty otherwise.
+  std::vector<Vec3> ritz_;
   std::vector<PinSettings> pins_;
   PinSet pinSet_;
   std::unique_ptr<ProjectiveSolver>
