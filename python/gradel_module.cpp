@@ -147,6 +147,9 @@ struct Simulation {
   Scene scene;
   BuiltScene built;
   bool stepped = false;  ///< A step was made: the bodies are fixed from now on.
+  /// A carving event changed the bodies (carveLocked): they are fixed from now on too, since
+  /// building the scene again would undo the carving (and a body cut in two has no scene entry).
+  bool carved = false;
   std::vector<std::unique_ptr<BuiltScene>> retired;
   std::map<std::pair<size_t, SurfaceKind>, DisplaySurface> surfaces;  ///< Per (body, kind), built on first use.
   /// surface("embedded") of a body from a volume: its isosurface, built on first use (per body).
@@ -182,7 +185,7 @@ size_t carveLocked(Simulation& s, F&& carve) {
   s.world().state() = std::move(copy);
   size_t removed = 0;
   for (const CarveEvent& e : carve()) removed += e.removedVoxels;
-  if (removed) s.surfaces.clear(), s.isoEmbedded.clear();
+  if (removed) s.surfaces.clear(), s.isoEmbedded.clear(), s.carved = true;
   return removed;
 }
 
@@ -267,18 +270,21 @@ Scene readScene(const py::object& scene) {
 }
 
 /// Stand-ins for the simulation's bodies in a scene fragment: what a pin is read against (its
-/// body's lattice: voxel size and position; the number of bodies).
-py::list bodyStandIns(const Scene& scene) {
+/// body's lattice: voxel size and position; the number of bodies). The pieces of a body cut in
+/// two (appended after the scene's bodies, carve_scene.h) stand in with their own lattice.
+py::list bodyStandIns(const Scene& scene, const BuiltScene& built) {
   py::list bodies;
-  for (size_t i = 0; i < scene.numBodies(); ++i) {
-    const BodySettings& b = scene.bodies[i];
+  auto add = [&](Real voxelSize, const Vec3& position) {
     py::dict d;
     d["shape"] = "box";
     d["size"] = 1;
-    d["voxel_size"] = b.shape.voxelSize;
-    d["position"] = std::vector<double>{b.position.x(), b.position.y(), b.position.z()};
+    d["voxel_size"] = voxelSize;
+    d["position"] = std::vector<double>{position.x(), position.y(), position.z()};
     bodies.append(d);
-  }
+  };
+  for (size_t i = 0; i < scene.numBodies(); ++i) add(scene.bodies[i].shape.voxelSize, scene.bodies[i].position);
+  for (size_t i = scene.numBodies(); i < built.numBodies(); ++i)
+    add(built.bodies[i].volume.voxelSize(), built.bodies[i].model->origin);
   return bodies;
 }
 
@@ -579,6 +585,9 @@ PYBIND11_MODULE(gradel, m) {
             if (s.stepped)
               throw InputError("add_body: bodies are added before the first step (the simulation is at t = " +
                                num(s.world().time()) + " s); build a new Simulation");
+            if (s.carved)
+              throw InputError("add_body: bodies are added before the first carving event (building the scene "
+                               "again would undo it); build a new Simulation");
             const size_t index = s.scene.numBodies();
             if (!entry.contains("name")) b.name = "body" + std::to_string(index);
             for (size_t i = 0; i < index; ++i)
@@ -631,7 +640,7 @@ PYBIND11_MODULE(gradel, m) {
             if (path) pin["path"] = pathList(*path);
             py::dict scene;
             scene["dim"] = s.scene.dim;
-            scene["bodies"] = bodyStandIns(s.scene);
+            scene["bodies"] = bodyStandIns(s.scene, s.built);
             scene["pins"] = py::make_tuple(pin);
             Scene parsed = parseFragment(toJson(scene, "add_pin"), "add_pin", "pins[0].");
             PinSettings p = std::move(parsed.pins.at(0));
@@ -647,7 +656,7 @@ PYBIND11_MODULE(gradel, m) {
             next.pins.push_back(p);
             const std::string key = "pins[" + std::to_string(next.pins.size() - 1) + "]";
             try {
-              if (!s.stepped) {
+              if (!s.stepped && !s.carved) {
                 rebuild(s, std::move(next));
               } else {  // an anchor made while running: the live world takes it (its solvers refactor)
                 s.world().setPins(next.pins);
@@ -848,7 +857,7 @@ PYBIND11_MODULE(gradel, m) {
               m["type"] = s.scene.dim == 3 ? "sphere" : "circle";
               m["path"] = pathList(*path);
               scene["dim"] = s.scene.dim;
-              scene["bodies"] = bodyStandIns(s.scene);
+              scene["bodies"] = bodyStandIns(s.scene, s.built);
               scene["manipulators"] = py::make_tuple(m);
               mp.path = parseFragment(toJson(scene, "add_manipulator"), "add_manipulator", "manipulators[0].")
                             .manipulators.at(0)

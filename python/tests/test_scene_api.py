@@ -214,3 +214,25 @@ def test_forces_act_for_one_call_and_per_body():
         sim.apply_force([0, 1], np.zeros((3, 3)))
     with pytest.raises(gradel.InputError, match="not finite"):
         sim.apply_force([0], [np.nan, 0, 0])
+
+
+def test_a_carving_event_fixes_the_bodies_and_a_piece_takes_pins():
+    # A box of 8 voxels of 1 cm cut in two before the first step (the kerf i = 3): "body0" is
+    # x in [4, 8) cm, "body0-2" x in [0, 3) cm. Building the scene again would undo the cut, so
+    # add_pin takes the live world's path and add_body is refused; a pin on the piece (body 1)
+    # holds its vertices while the other half moves off.
+    sim = gradel.Simulation(gradel.Body.from_shape("box", 8), gravity=[0, 0, 0], dt=1e-4)
+    mass = sim.masses.sum()
+    assert sim.cut([0.035, 0.04, 0.04], [[0, 1, 0], [0, 0, 1]], [0.1, 0.1]) == 64
+    assert sim.num_bodies == 2
+    sim.add_pin(min=[-1, -1, -1], max=[0.0005, 1, 1], body=1)  # the piece's face x = 0
+    assert sim.num_bodies == 2  # the cut was not undone
+    assert sim.masses.sum() == pytest.approx(mass - 64 * 1000 * 0.01 ** 3, rel=1e-12)
+    pinned = np.array(sim.pinned_vertices)
+    assert len(pinned) > 0 and sim.rest_positions[pinned, 0].max() < 1e-9
+    with pytest.raises(gradel.InputError, match="before the first carving event"):
+        sim.add_body(shape="sphere", size=4)
+    sim.velocities[:] = [0.5, 0.0, 0.0]
+    sim.advance_to(0.01)
+    np.testing.assert_array_equal(sim.positions[pinned], sim.rest_positions[pinned])
+    assert sim.body_positions(0)[:, 0].min() > 0.04 + 0.004  # the free half moved on
