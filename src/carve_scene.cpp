@@ -103,57 +103,46 @@ std::vector<CarveEvent> carveBodies(BuiltScene& scene, const std::vector<std::pa
     in.positions = c.positions.data(), in.velocities = c.velocities.data(), in.rotations = c.rotations.data();
     pieces[b] = splitBody(in);
   }
-  // The new state, body by body: the carved bodies' from their event, the others' as they were.
+  // The new state, body by body in the new bodies' order (the carved bodies' from their event or
+  // their largest piece, the others' as they were, then the other pieces), and per new vertex its
+  // id in the world's model (UINT32_MAX: new): the operator rule's estimate starts from the last
+  // one's fastest mode (stability_warm.h).
   const State& old = world.state();
   State state;
   state.time = old.time;
-  auto append = [&](const std::vector<Vec3>& x, const std::vector<Vec3>& v, const std::vector<Quat>& q) {
+  std::vector<uint32_t> fromVertex;
+  // Carved body b, whole (piece null) or one of its pieces.
+  auto appendCarved = [&](size_t b, const BodyPiece* piece) {
+    const CarvedBody& c = carved[b];
+    const std::vector<Vec3>& x = piece ? piece->positions : c.positions;
+    const std::vector<Vec3>& v = piece ? piece->velocities : c.velocities;
+    const std::vector<Quat>& q = piece ? piece->rotations : c.rotations;
     state.positions.insert(state.positions.end(), x.begin(), x.end());
     state.velocities.insert(state.velocities.end(), v.begin(), v.end());
     state.rotations.insert(state.rotations.end(), q.begin(), q.end());
-  };
-  for (size_t b = 0; b < B; ++b) {
-    if (changed[b] && !pieces[b].empty()) {
-      append(pieces[b][0].positions, pieces[b][0].velocities, pieces[b][0].rotations);
-    } else if (changed[b]) {
-      append(carved[b].positions, carved[b].velocities, carved[b].rotations);
-    } else {
-      const BodyRange& r = scene.range(b);
-      state.positions.insert(state.positions.end(), old.positions.begin() + r.vertexBegin,
-                             old.positions.begin() + r.vertexEnd);
-      state.velocities.insert(state.velocities.end(), old.velocities.begin() + r.vertexBegin,
-                              old.velocities.begin() + r.vertexEnd);
-      state.rotations.insert(state.rotations.end(), old.rotations.begin() + r.elementBegin,
-                             old.rotations.begin() + r.elementEnd);
-    }
-  }
-  for (size_t b = 0; b < B; ++b)
-    for (size_t k = 1; k < pieces[b].size(); ++k)
-      append(pieces[b][k].positions, pieces[b][k].velocities, pieces[b][k].rotations);
-  // Per new vertex, its id in the world's model (UINT32_MAX: new), in the state's order: the
-  // operator rule's estimate starts from the last one's fastest mode (stability_warm.h).
-  std::vector<uint32_t> fromVertex;
-  fromVertex.reserve(state.positions.size());
-  auto appendMap = [&](size_t b, const std::vector<uint32_t>* piece) {
     const uint32_t begin = uint32_t(scene.range(b).vertexBegin);
-    const std::vector<uint32_t>& carvedFrom = carved[b].fromVertex;
-    const size_t n = piece ? piece->size() : carvedFrom.size();
-    for (size_t i = 0; i < n; ++i) {
-      uint32_t v = piece ? (*piece)[i] : uint32_t(i);
-      if (v != Layout::kNoVertex) v = carvedFrom[v];
-      fromVertex.push_back(v == Layout::kNoVertex ? v : begin + v);
+    for (size_t i = 0; i < x.size(); ++i) {
+      uint32_t from = piece ? piece->fromVertex[i] : uint32_t(i);  // into the carved body, then the world
+      if (from != Layout::kNoVertex) from = c.fromVertex[from];
+      fromVertex.push_back(from == Layout::kNoVertex ? from : begin + from);
     }
   };
   for (size_t b = 0; b < B; ++b) {
     if (changed[b]) {
-      appendMap(b, pieces[b].empty() ? nullptr : &pieces[b][0].fromVertex);
-    } else {
-      const BodyRange& r = scene.range(b);
-      for (size_t v = r.vertexBegin; v < r.vertexEnd; ++v) fromVertex.push_back(uint32_t(v));
+      appendCarved(b, pieces[b].empty() ? nullptr : &pieces[b][0]);
+      continue;
     }
+    const BodyRange& r = scene.range(b);
+    state.positions.insert(state.positions.end(), old.positions.begin() + r.vertexBegin,
+                           old.positions.begin() + r.vertexEnd);
+    state.velocities.insert(state.velocities.end(), old.velocities.begin() + r.vertexBegin,
+                            old.velocities.begin() + r.vertexEnd);
+    state.rotations.insert(state.rotations.end(), old.rotations.begin() + r.elementBegin,
+                           old.rotations.begin() + r.elementEnd);
+    for (size_t v = r.vertexBegin; v < r.vertexEnd; ++v) fromVertex.push_back(uint32_t(v));
   }
   for (size_t b = 0; b < B; ++b)
-    for (size_t k = 1; k < pieces[b].size(); ++k) appendMap(b, &pieces[b][k].fromVertex);
+    for (size_t k = 1; k < pieces[b].size(); ++k) appendCarved(b, &pieces[b][k]);
   // The pins of a body that fell apart hold the pieces their box or mask selects (one pin each).
   const std::vector<PinSettings> oldPins = world.pins();
   bool split = false;
