@@ -11,6 +11,7 @@
 #include "gradel/element.h"
 #include "gradel/element_stiffness.h"
 #include "gradel/material.h"
+#include "lcg.h"
 
 namespace gradel {
 
@@ -160,12 +161,8 @@ FrequencyEstimate highestFrequency(const RestModel& m, int iterations, std::vect
   if (m.numElements() == 0 || V == 0) return {};
   // A fixed start (a 64-bit LCG): the same estimate on every run and thread count.
   std::vector<Vec3> q(V);
-  uint64_t s = 0x9E3779B97F4A7C15ull;
-  auto uniform = [&] {
-    s = s * 6364136223846793005ull + 1442695040888963407ull;
-    return double(s >> 11) * 0x1.0p-53 - 0.5;
-  };
-  for (Vec3& v : q) v = Vec3(uniform(), uniform(), m.dim == 2 ? 0.0 : uniform());
+  Lcg r{0x9E3779B97F4A7C15ull};
+  for (Vec3& v : q) v = Vec3(r.centred(), r.centred(), m.dim == 2 ? 0.0 : r.centred());
   const double n0 = std::sqrt(dot(q, q));
   for (Vec3& v : q) v /= n0;
   return lanczos(m, std::move(q), iterations, ritzVector, false);

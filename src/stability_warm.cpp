@@ -3,6 +3,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "lcg.h"
+
 namespace gradel {
 
 std::vector<Vec3> stabilityWarmStart(const RestModel& oldModel, const RestModel& m, const std::vector<Vec3>& oldRitz,
@@ -31,13 +33,9 @@ std::vector<Vec3> stabilityWarmStart(const RestModel& oldModel, const RestModel&
       for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) region[m.elemVerts[p]] = 1;
   }
   std::vector<Vec3> local(V, Vec3::Zero());
-  uint64_t s = 0xD1B54A32D192ED03ull;
-  auto uniform = [&] {
-    s = s * 6364136223846793005ull + 1442695040888963407ull;
-    return double(s >> 11) * 0x1.0p-53 - 0.5;
-  };
+  Lcg r{0xD1B54A32D192ED03ull};
   for (size_t i = 0; i < V; ++i)
-    if (region[i]) local[i] = Vec3(uniform(), uniform(), m.dim == 2 ? 0.0 : uniform());
+    if (region[i]) local[i] = Vec3(r.centred(), r.centred(), m.dim == 2 ? 0.0 : r.centred());
   double nc = 0, nl = 0;
   for (size_t i = 0; i < V; ++i) nc += carried[i].squaredNorm(), nl += local[i].squaredNorm();
   nc = std::sqrt(nc), nl = std::sqrt(nl);
