@@ -198,10 +198,7 @@ void readCarveLabels(Fields& f, ManipulatorSettings& m) {
              "got " + describeValue(v) + " (expected a region label, an integer 1 .. 65535)");
     m.carveLabels.push_back(uint16_t(v.get<long long>()));
   }
-  std::sort(m.carveLabels.begin(), m.carveLabels.end());
-  if (std::adjacent_find(m.carveLabels.begin(), m.carveLabels.end()) != m.carveLabels.end())
-    f.fail("carve_labels", "lists a label twice");
-  if (!m.carve) f.fail("carve_labels", "only a carving tool (\"carve\": true) takes \"carve_labels\"");
+  std::sort(m.carveLabels.begin(), m.carveLabels.end());  // a label twice, or no "carve": validate's
 }
 
 }  // namespace

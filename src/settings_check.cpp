@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <sstream>
+#include <string>
 
 namespace gradel {
 
@@ -55,10 +56,15 @@ void validate(const SimulationSettings& s) {
 }
 
 void validate(const ManipulatorSettings& s) {
-  if (!s.carveLabels.empty() && !s.carve) throw InputError("", "carve_labels", "needs \"carve\": true");
-  for (size_t i = 0; i < s.carveLabels.size(); ++i)
-    if (s.carveLabels[i] == 0 || (i > 0 && !(s.carveLabels[i - 1] < s.carveLabels[i])))
-      throw InputError("", "carve_labels", "must be distinct labels 1..65535");
+  if (!s.carveLabels.empty() && !s.carve)
+    throw InputError("", "carve_labels", "only a carving tool (\"carve\": true) takes \"carve_labels\"");
+  for (size_t i = 0; i < s.carveLabels.size(); ++i) {
+    if (s.carveLabels[i] == 0) throw InputError("", "carve_labels", "0 is not a region label (1 .. 65535)");
+    if (i > 0 && s.carveLabels[i - 1] == s.carveLabels[i])
+      throw InputError("", "carve_labels", "lists label " + std::to_string(s.carveLabels[i]) + " twice");
+    if (i > 0 && s.carveLabels[i - 1] > s.carveLabels[i])
+      throw InputError("", "carve_labels", "must be in ascending order");
+  }
   if (s.shape == ManipulatorShape::Blade) {  // a rectangle: its axes and half extents, no radius
     for (const Vec3* a : {&s.axis, &s.widthAxis})
       if (!(a->norm() > 0) || !a->allFinite()) throw InputError("", "axes", "must be finite non-zero directions");
