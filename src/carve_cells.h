@@ -32,17 +32,16 @@ inline Int3 cornerOffset(int k, int dim) { return Int3(k & 1, (k >> 1) & 1, dim 
 
 /// Calls f(e, lo, edge) for every mass cell of the layout, in element order.
 template <class F>
+void forEachMassCellOf(const Layout& layout, size_t e, F&& f) {
+  const int cs = layout.cellSize[e];
+  if (layout.isFull(e)) return f(e, layout.origin[e], 2 * cs);
+  for (int c = 0; c < cornerCount(layout.dim); ++c)
+    if (layout.cellMask[e] >> c & 1) f(e, Int3(layout.origin[e] + cornerOffset(c, layout.dim) * cs), cs);
+}
+
+template <class F>
 void forEachMassCell(const Layout& layout, F&& f) {
-  const int cells = cornerCount(layout.dim);
-  for (size_t e = 0; e < layout.numElements(); ++e) {
-    const int cs = layout.cellSize[e];
-    if (layout.isFull(e)) {
-      f(e, layout.origin[e], 2 * cs);
-      continue;
-    }
-    for (int c = 0; c < cells; ++c)
-      if (layout.cellMask[e] >> c & 1) f(e, Int3(layout.origin[e] + cornerOffset(c, layout.dim) * cs), cs);
-  }
+  for (size_t e = 0; e < layout.numElements(); ++e) forEachMassCellOf(layout, e, f);
 }
 
 /// The cell of edge `edge` at `lo` with its corners' vertex ids (std::logic_error if one is not a vertex).
@@ -109,7 +108,12 @@ std::vector<uint8_t> voxelsWhere(const CarveInput& b, Near&& near, Inside&& insi
   const int D = layout.dim;
   std::vector<uint8_t> mask(volume.size(), 0);
   size_t n = 0;
-  forEachMassCell(layout, [&](size_t, const Int3& lo, int edge) {
+  // An element whose vertices' box is not near: none of its cells' boxes (within it) is.
+  for (size_t e = 0; e < layout.numElements(); ++e) {
+    Vec3 emin = b.positions[layout.elemVerts[layout.elemStart[e]]], emax = emin;
+    for (uint32_t p = layout.elemStart[e] + 1; p < layout.elemStart[e + 1]; ++p)
+      emin = emin.cwiseMin(b.positions[layout.elemVerts[p]]), emax = emax.cwiseMax(b.positions[layout.elemVerts[p]]);
+    if (near(emin, emax)) forEachMassCellOf(layout, e, [&](size_t, const Int3& lo, int edge) {
     const MassCell c = massCell(layout, lo, edge);
     Vec3 bmin = b.positions[c.corner[0]], bmax = bmin;
     for (int k = 1; k < c.corners; ++k)
@@ -124,7 +128,8 @@ std::vector<uint8_t> voxelsWhere(const CarveInput& b, Near&& near, Inside&& insi
           uint8_t& m = mask[volume.index(lo.x() + i, lo.y() + j, lo.z() + k)];
           if (!m) m = 1, ++n;
         }
-  });
+    });
+  }
   if (count) *count = n;
   return mask;
 }

@@ -61,6 +61,14 @@ StiffnessFrame elementRestStiffnessFrame(int dim, const Vec3* R0, int n) {
     if (T0(2, 2) > 0) fr.Tinv(2, 2) = 1 / T0(2, 2);
     return fr;
   }
+  // T0 >= 0 with eigenvalues l1 <= l2 <= l3: l1 = det / (l2 l3) >= det / tr^2, so det > 1e-12 tr^3
+  // proves l1 > 1e-12 l3 (not flat) and the inverse is the adjugate over det; otherwise the
+  // eigenvalues decide, as in elementStiffnessFrame.
+  const Real tr = T0.trace(), det = T0.determinant();
+  if (tr > 0 && det > 1e-12 * tr * tr * tr) {
+    fr.Tinv = T0.inverse();
+    return fr;
+  }
   Eigen::SelfAdjointEigenSolver<Mat3> e0;
   e0.computeDirect(T0);
   const Vec3 l0 = e0.eigenvalues();

@@ -48,6 +48,18 @@ struct GridView {
     else
       return v;
   }
+  /// at() for a cell known to be inside the grid.
+  uint16_t in(int i, int j, int k) const {
+    const T v = cells[size_t(i) + size_t(n[0]) * (size_t(j) + size_t(n[1]) * size_t(k))];
+    if constexpr (sizeof(T) == 1)
+      return v != 0 ? 1 : 0;
+    else
+      return v;
+  }
+  /// Whether the 2x2x2 group with first cell (bx, by, bz) and its face neighbours are all inside.
+  bool groupInside(int bx, int by, int bz, int dim) const {
+    return bx >= 1 && by >= 1 && bx + 2 < n[0] && by + 2 < n[1] && (dim == 2 || (bz >= 1 && bz + 2 < n[2]));
+  }
 };
 
 int cellCount(int dim) { return dim == 3 ? 8 : 4; }
@@ -91,11 +103,13 @@ std::vector<uint16_t> scanLevel(const GridView<T>& g, int dim, int level, Layout
   // The group at (gx, gy, gz): its filled cells' mask, their labels, and whether it is mixed.
   auto readGroup = [&](int gx, int gy, int gz, uint16_t* lab, uint16_t& first, bool& mixed) {
     const int bx = 2 * gx, by = 2 * gy, bz = dim == 3 ? 2 * gz : 0;  // first cell of the group
+    const bool inside = g.groupInside(bx, by, bz, dim);
     uint8_t mask = 0;
     first = 0;  // label of the group's first filled cell
     mixed = false;
     for (int c = 0; c < cells; ++c) {
-      lab[c] = g.at(bx + cellCoord(c, 0), by + cellCoord(c, 1), bz + cellCoord(c, 2));
+      const int i = bx + cellCoord(c, 0), j = by + cellCoord(c, 1), k = bz + cellCoord(c, 2);
+      lab[c] = inside ? g.in(i, j, k) : g.at(i, j, k);
       if (lab[c] == 0) continue;
       mask |= uint8_t(1u << c);
       if (first == 0) first = lab[c];
@@ -123,10 +137,12 @@ std::vector<uint16_t> scanLevel(const GridView<T>& g, int dim, int level, Layout
     // A full group of one label: inner face neighbours are of its label, so only the outward
     // neighbour of each cell on each axis can make it a surface cell (empty or another label).
     const int bx = 2 * gx, by = 2 * gy, bz = dim == 3 ? 2 * gz : 0;
+    const bool inside = g.groupInside(bx, by, bz, dim);
+    auto get = [&](int i, int j, int k) { return inside ? g.in(i, j, k) : g.at(i, j, k); };
     for (int c = 0; c < cells; ++c) {
       const int i = bx + cellCoord(c, 0), j = by + cellCoord(c, 1), k = bz + cellCoord(c, 2);
       const int di = cellCoord(c, 0) ? 1 : -1, dj = cellCoord(c, 1) ? 1 : -1, dk = cellCoord(c, 2) ? 1 : -1;
-      if (g.at(i + di, j, k) != first || g.at(i, j + dj, k) != first || (dim == 3 && g.at(i, j, k + dk) != first))
+      if (get(i + di, j, k) != first || get(i, j + dj, k) != first || (dim == 3 && get(i, j, k + dk) != first))
         return true;
     }
     return false;
@@ -249,6 +265,19 @@ class VertexSet {
     }
     return points;
   }
+  /// Calls f(id) for every vertex with a key in [k0, k1], in ascending order. Only after finish().
+  template <class F>
+  void forEachIn(uint64_t k0, uint64_t k1, F&& f) const {
+    for (uint64_t w = k0 >> 6, last = k1 >> 6; w <= last; ++w) {
+      uint64_t m = bits_[w];
+      if (w == k0 >> 6) m &= ~uint64_t(0) << (k0 & 63);
+      if (w == last && (k1 & 63) != 63) m &= (uint64_t(1) << ((k1 & 63) + 1)) - 1;
+      if (!m) continue;
+      // The set bits of m are consecutive vertices: the first one's rank, then one more each.
+      uint32_t id = before_[w] + uint32_t(std::popcount(bits_[w] & ((uint64_t(1) << std::countr_zero(m)) - 1)));
+      for (; m; m &= m - 1, ++id) f(id);
+    }
+  }
   /// Vertex id at `key`, or -1 when no element owns a vertex there. Only after finish().
   int64_t find(uint64_t key) const {
     const uint64_t word = bits_[key >> 6], bit = uint64_t(1) << (key & 63);
@@ -304,6 +333,7 @@ bool isOwnCorner(const Int3& p, const Placed& e, int dim) {
     if (a[b] < 0 || a[b] > 2) return false;
     if (e.mask == fullMask(dim) && a[b] == 1) return false;  // a full element owns only block corners
   }
+  if (e.mask == fullMask(dim)) return true;  // a block corner: a corner of a (filled) cell
   for (int c = 0; c < cellCount(dim); ++c) {
     if (!(e.mask & (1u << c))) continue;
     bool corner = true;
@@ -475,25 +505,44 @@ Layout buildLayout(const VoxelVolume& volume, LayoutKind kind) {
   std::vector<uint32_t> found;
   for (const Placed& e : placed) {
     found.clear();
-    forEachBoundaryFace(e, dim, [&](const Int3& low, int edge, int ax, int side) {
-      int lo[3], hi[3];  // closed lattice box of the face
-      for (int b = 0; b < 3; ++b) {
-        lo[b] = low[b];
-        hi[b] = b < dim ? low[b] + edge : low[b];
-      }
-      lo[ax] = hi[ax] = low[ax] + side * edge;
-      for (int z = lo[2]; z <= hi[2]; ++z)
-        for (int y = lo[1]; y <= hi[1]; ++y)
-          for (int x = lo[0]; x <= hi[0]; ++x) {
-            const int64_t id = set.find(set.key(x, y, z));
-            if (id >= 0) found.push_back(uint32_t(id));
+    if (e.mask == fullMask(dim)) {
+      // A full element's region is its block: the lattice points on the block's surface, row by
+      // row in (z, y, x) order, i.e. ascending ids (no sort): whole rows on the faces z = lo, hi
+      // and y = lo, hi, the two ends x = lo, hi of the other rows.
+      const int edge = 2 * e.cellSize;
+      const Int3 lo = e.origin;
+      const int zHi = dim == 3 ? lo.z() + edge : lo.z();
+      for (int z = lo.z(); z <= zHi; ++z)
+        for (int y = lo.y(); y <= lo.y() + edge; ++y) {
+          const uint64_t k0 = set.key(lo.x(), y, z), k1 = k0 + uint64_t(edge);
+          if ((dim == 3 && (z == lo.z() || z == zHi)) || y == lo.y() || y == lo.y() + edge) {
+            set.forEachIn(k0, k1, [&](uint32_t id) { found.push_back(id); });
+          } else {
+            if (const int64_t id = set.find(k0); id >= 0) found.push_back(uint32_t(id));
+            if (const int64_t id = set.find(k1); id >= 0) found.push_back(uint32_t(id));
           }
-    });
+        }
+    } else {
+      forEachBoundaryFace(e, dim, [&](const Int3& low, int edge, int ax, int side) {
+        int lo[3], hi[3];  // closed lattice box of the face
+        for (int b = 0; b < 3; ++b) {
+          lo[b] = low[b];
+          hi[b] = b < dim ? low[b] + edge : low[b];
+        }
+        lo[ax] = hi[ax] = low[ax] + side * edge;
+        for (int z = lo[2]; z <= hi[2]; ++z)
+          for (int y = lo[1]; y <= hi[1]; ++y)
+            for (int x = lo[0]; x <= hi[0]; ++x) {
+              const int64_t id = set.find(set.key(x, y, z));
+              if (id >= 0) found.push_back(uint32_t(id));
+            }
+      });
+      std::sort(found.begin(), found.end());
+      found.erase(std::unique(found.begin(), found.end()), found.end());
+    }
     // Ids and pair offsets are 32-bit (layout.h); only a voxel layout of ~1000^3 gets there.
     if (L.elemVerts.size() + found.size() > UINT32_MAX)
       throw InputError("layout: more than 2^32 element-vertex pairs; use a coarser layout or volume");
-    std::sort(found.begin(), found.end());
-    found.erase(std::unique(found.begin(), found.end()), found.end());
     for (uint32_t v : found) {
       L.elemVerts.push_back(v);
       L.pairIsOwn.push_back(isOwnCorner(L.vertices[v], e, dim) ? 1 : 0);

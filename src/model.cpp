@@ -115,16 +115,27 @@ void lumpMasses(const Layout& layout, RestModel& m) {
     const int corners = D == 3 ? 8 : 4;
     for (size_t e = 0; e < layout.numElements(); ++e) {
       const bool full = layout.isFull(e);
-      const int cs = full ? 2 * layout.cellSize[e] : layout.cellSize[e];
+      const int cellSize = layout.cellSize[e], cs = full ? 2 * cellSize : cellSize;
       const Real cornerMass = cellCornerMass(m.materials[m.elementMaterial[e]], layout.voxelSize, cs, D);
       const int cells = D == 3 ? 8 : 4;
+      // The element's vertices at the 3^D points of its block at its cell size (slot a_x + 3 a_y
+      // + 9 a_z, a in {0, 1, 2}): the corners of its cells are among them (its own vertices).
+      uint32_t slot[27];
+      std::fill(slot, slot + 27, Layout::kNoVertex);
+      for (uint32_t q = layout.elemStart[e]; q < layout.elemStart[e + 1]; ++q) {
+        const Int3 r = layout.vertices[layout.elemVerts[q]] - layout.origin[e];
+        if (r.x() % cellSize || r.y() % cellSize || r.z() % cellSize || (r.array() < 0).any() ||
+            (r.array() > 2 * cellSize).any())
+          continue;
+        const Int3 a = r / cellSize;
+        slot[a.x() + 3 * a.y() + 9 * a.z()] = layout.elemVerts[q];
+      }
       for (int c = 0; c < (full ? 1 : cells); ++c) {
         if (!full && !(layout.cellMask[e] >> c & 1)) continue;
-        const Int3 lo =
-            layout.origin[e] + (full ? Int3(0, 0, 0) : Int3(c & 1, (c >> 1) & 1, (c >> 2) & 1) * layout.cellSize[e]);
+        const Int3 lo = full ? Int3(0, 0, 0) : Int3(c & 1, (c >> 1) & 1, (c >> 2) & 1);
         for (int k = 0; k < corners; ++k) {
-          const Int3 p = lo + Int3(k & 1, (k >> 1) & 1, D == 3 ? (k >> 2) & 1 : 0) * cs;
-          const uint32_t id = layout.vertexAt(p);
+          const Int3 a = lo + Int3(k & 1, (k >> 1) & 1, D == 3 ? (k >> 2) & 1 : 0) * (full ? 2 : 1);
+          const uint32_t id = slot[a.x() + 3 * a.y() + 9 * a.z()];
           if (id == Layout::kNoVertex) throw std::logic_error("buildRestModel: a cell corner is not a model vertex");
           m.mass[id] += cornerMass;
           damping.add(id, cornerMass, m.elementMaterial[e]);
@@ -186,21 +197,43 @@ void vertexPeriod(RestModel& m) {
   m.smallestVertexPeriod = tv;
 }
 
-// Step 5: surface vertices, the corners of the voxel faces on the body's boundary.
+// Step 5: surface vertices, the corners of the voxel faces on the body's boundary. Row by row:
+// a voxel is looked at only when it is filled and one of its face neighbours is not (a byte test
+// over the row and its four neighbour rows, which the compiler vectorises); the corners of its
+// boundary faces are marked in a bitmap over the lattice, and each vertex then reads its point.
 void markSurfaceVertices(const Layout& layout, const VoxelVolume& volume, RestModel& m) {
   const int D = m.dim;
   m.onSurface.assign(m.numVertices(), 0);
   const auto& n = volume.dims();
+  const uint8_t* filled = volume.data().data();
+  const size_t sx = size_t(n[0]) + 1, sy = size_t(n[1]) + 1;
+  auto key = [&](const Int3& p) { return (size_t(p.z()) * sy + size_t(p.y())) * sx + size_t(p.x()); };
+  std::vector<uint64_t> corner((sx * sy * (D == 3 ? size_t(n[2]) + 1 : 1) + 63) / 64, 0);
+  const std::vector<uint8_t> none(size_t(n[0]), 0), all(size_t(n[0]), 1);
+  std::vector<uint8_t> boundary(static_cast<size_t>(n[0]));
+  const size_t stride[3] = {1, size_t(n[0]), size_t(n[0]) * size_t(n[1])};
   for (int k = 0; k < n[2]; ++k)
-    for (int j = 0; j < n[1]; ++j)
-      for (int i = 0; i < n[0]; ++i) {
-        if (!volume.isSurface(i, j, k)) continue;
+    for (int j = 0; j < n[1]; ++j) {
+      const uint8_t* row = filled + volume.index(0, j, k);
+      const uint8_t* ym = j > 0 ? row - stride[1] : none.data();
+      const uint8_t* yp = j + 1 < n[1] ? row + stride[1] : none.data();
+      const uint8_t* zm = D == 2 ? all.data() : k > 0 ? row - stride[2] : none.data();
+      const uint8_t* zp = D == 2 ? all.data() : k + 1 < n[2] ? row + stride[2] : none.data();
+      const int nx = n[0];
+      for (int i = 0; i < nx; ++i) {
+        const bool inner = i > 0 && i + 1 < nx && row[i - 1] && row[i + 1];
+        boundary[size_t(i)] = (row[i] != 0) & !(inner & (ym[i] != 0) & (yp[i] != 0) & (zm[i] != 0) & (zp[i] != 0));
+      }
+      for (int i = 0; i < nx; ++i) {
+        if (!boundary[size_t(i)]) continue;
+        const size_t at = volume.index(i, j, k);
+        const int c[3] = {i, j, k};
         for (int a = 0; a < D; ++a)
           for (int s = -1; s <= 1; s += 2) {
-            Int3 q(i, j, k);
-            q[a] += s;
-            if (volume.at(q.x(), q.y(), q.z())) continue;
-            // The face of voxel (i,j,k) towards q: its corners.
+            // A filled face neighbour: no boundary face there (outside the grid counts as empty).
+            const int q = c[a] + s;
+            if (q >= 0 && q < n[a] && filled[s > 0 ? at + stride[a] : at - stride[a]]) continue;
+            // The face of voxel (i,j,k) towards the neighbour: its corners.
             const int b0 = (a + 1) % 3, b1 = (a + 2) % 3;
             for (int u = 0; u < 2; ++u)
               for (int w = 0; w < (D == 3 ? 2 : 1); ++w) {
@@ -210,11 +243,16 @@ void markSurfaceVertices(const Layout& layout, const VoxelVolume& volume, RestMo
                   p[b0] += u, p[b1] += w;
                 else
                   p[a == 0 ? 1 : 0] += u;
-                const uint32_t id = layout.vertexAt(p);
-                if (id != Layout::kNoVertex) m.onSurface[id] = 1;
+                const size_t b = key(p);
+                corner[b >> 6] |= uint64_t(1) << (b & 63);
               }
           }
       }
+    }
+  for (size_t v = 0; v < m.numVertices(); ++v) {
+    const size_t b = key(layout.vertices[v]);
+    m.onSurface[v] = (corner[b >> 6] >> (b & 63)) & 1;
+  }
 }
 
 }  // namespace

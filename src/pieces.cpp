@@ -18,14 +18,11 @@ uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t v) {
   return v;
 }
 
-}  // namespace
-
-BodyPieces findPieces(const Layout& layout, const VoxelVolume& volume) {
-  if (volume.dims() != layout.dims) throw std::invalid_argument("findPieces: the volume is not the layout's");
-  const size_t V = layout.numVertices(), E = layout.numElements();
-  std::vector<uint32_t> parent(V);
+// Union-find over the vertices, joining each element's: parent links (the lowest id of a piece is its root).
+std::vector<uint32_t> joinElements(const Layout& layout) {
+  std::vector<uint32_t> parent(layout.numVertices());
   std::iota(parent.begin(), parent.end(), 0u);
-  for (size_t e = 0; e < E; ++e) {
+  for (size_t e = 0; e < layout.numElements(); ++e) {
     uint32_t first = findRoot(parent, layout.elemVerts[layout.elemStart[e]]);
     for (uint32_t p = layout.elemStart[e] + 1; p < layout.elemStart[e + 1]; ++p) {
       const uint32_t r = findRoot(parent, layout.elemVerts[p]);
@@ -34,6 +31,24 @@ BodyPieces findPieces(const Layout& layout, const VoxelVolume& volume) {
       first = std::min(r, first);
     }
   }
+  return parent;
+}
+
+// Whether every vertex reaches root 0: the body is one piece (the common case of a carving event,
+// decided without the voxel passes of findPieces).
+bool onePiece(const Layout& layout) {
+  std::vector<uint32_t> parent = joinElements(layout);
+  for (uint32_t v = 0; v < parent.size(); ++v)
+    if (findRoot(parent, v) != 0) return false;
+  return true;
+}
+
+}  // namespace
+
+BodyPieces findPieces(const Layout& layout, const VoxelVolume& volume) {
+  if (volume.dims() != layout.dims) throw std::invalid_argument("findPieces: the volume is not the layout's");
+  const size_t V = layout.numVertices();
+  std::vector<uint32_t> parent = joinElements(layout);
   // Components in order of their first voxel (storage order), then sorted largest first.
   const std::vector<int32_t> owner = voxelOwners(layout, volume);
   std::vector<int32_t> rootPiece(V, -1);
@@ -71,6 +86,7 @@ std::vector<BodyPiece> splitBody(const CarveInput& b) {
   const VoxelVolume& volume = *b.volume;
   const Layout& layout = *b.layout;
   const RestModel& model = *b.model;
+  if (volume.dims() == layout.dims && onePiece(layout)) return {};
   const BodyPieces pieces = findPieces(layout, volume);
   if (pieces.count() <= 1) return {};
   const std::vector<int32_t> owner = voxelOwners(layout, volume);

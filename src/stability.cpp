@@ -12,80 +12,121 @@
 #include "gradel/element_stiffness.h"
 #include "gradel/material.h"
 #include "lcg.h"
+#include "thread_team.h"
 
 namespace gradel {
 
 namespace {
 
-// y = M^-1/2 K M^-1/2 x over every element (frames at rest, fixed), z zeroed in 2D. K includes
-// the volumetric term's rest Hessian kappa_e g g^T, g_i = (D / tr S_e) R0_i (element.h, M = I;
-// an anisotropic S_e: g_i = V_e R0_i).
+// y = M^-1/2 K M^-1/2 x over every element (frames at rest, fixed), z zeroed in 2D: with the rest
+// rotation M = I (element_stiffness.h), per element e with centred offsets c_i = R0_i - mean R0,
+//   b = sum_i c_i x p_i,  w = T0^-1 b,  (K p)_i = k ((p_i - mean p) - w x c_i),
+// plus the volumetric term's rest Hessian kappa_e g g^T, g_i = (D / tr S_e) R0_i (element.h; an
+// anisotropic S_e: g_i = V_e R0_i): (K p)_i += s_e g_i, s_e = kappa_e sum_j g_j . p_j.
+// Two passes, as the step's element stage: each element its (mean p, w, s) alone, then each vertex
+// the sum over its pairs in element order. Each result is computed by one member the same way, so
+// the estimate is the same bits at any thread count.
 struct RestOperator {
+  /// What the vertex pass reads of an element: its mean p and w at the last product, and k.
+  struct Term {
+    Vec3 meanP, w;
+    Real k;
+  };
   const RestModel& m;
-  std::vector<StiffnessFrame> frames;
-  std::vector<Real> restScale;  ///< D / tr S_e per element (empty without a volumetric term).
-  /// Per element: whether S_e is anisotropic, and then V_e (g_i = V_e R0_i, element.h).
-  std::vector<std::pair<bool, Mat3>> restStrain;
+  ThreadTeam* team;
+  std::vector<Mat3> tinv;    ///< T0^-1 per element (the frame at rest; 0 for a flat element).
+  std::vector<Vec3> centre;  ///< mean R0 per element (0 to rounding).
+  std::vector<Vec3> g;        ///< g_i per pair (empty without a volumetric term).
+  std::vector<uint8_t> hasVolume;
   std::vector<Real> invSqrtMass;
-  mutable std::vector<Vec3> scaled, elementOut;
+  /// Each vertex's pairs in element order (slots): the element, c_i and g_i in slot order (the
+  /// vertex pass reads them as one stream).
+  std::vector<uint32_t> vertexPairStart, slotElement;
+  std::vector<Vec3> slotCentred, slotG;
+  mutable std::vector<Vec3> scaled;
+  mutable std::vector<Term> term;
+  mutable std::vector<Real> volume;  ///< s_e at the last product.
 
-  /// restFrames: the frames by elementRestStiffnessFrame (the same to rounding, cheaper; the warm
-  /// start's estimate) instead of the general frame at the rest positions (the estimate's bits
-  /// from scratch, which every dt = auto depends on).
-  RestOperator(const RestModel& model, bool restFrames) : m(model) {
-    const size_t E = m.numElements(), V = m.numVertices();
-    frames.resize(E);
-    size_t largest = 0;
-    for (size_t e = 0; e < E; ++e) {
+  /// T0^-1 by elementRestStiffnessFrame (the general frame at the rest positions to rounding).
+  RestOperator(const RestModel& model, ThreadTeam* t) : m(model), team(t) {
+    const size_t E = m.numElements(), V = m.numVertices(), P = m.elemVerts.size();
+    tinv.resize(E), centre.resize(E), term.resize(E);
+    forEachInChunks(team, E, kElementChunk, [&](size_t e) {
       const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
-      if (restFrames) {
-        frames[e] = elementRestStiffnessFrame(m.dim, &m.restOffsets[b], int(n));
-      } else {
-        const Mat3 A = elementCovariance(m.restPositions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n));
-        frames[e] = elementStiffnessFrame(m.dim, A, Quat::Identity(), &m.restOffsets[b], int(n));
-      }
-      largest = std::max<size_t>(largest, n);
-    }
+      tinv[e] = elementRestStiffnessFrame(m.dim, &m.restOffsets[b], int(n)).Tinv;
+      Vec3 c = Vec3::Zero();
+      for (uint32_t k = 0; k < n; ++k) c += m.restOffsets[b + k];
+      centre[e] = c / Real(n);
+      term[e].k = m.stiffness[e];
+    });
     if (m.hasVolumeTerm()) {
-      restScale.resize(E), restStrain.resize(E);
+      g.assign(P, Vec3::Zero()), hasVolume.assign(E, 0);
       for (size_t e = 0; e < E; ++e) {
+        if (!(m.volumeStiffness[e] > 0)) continue;
         const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
-        restScale[e] = Real(m.dim == 2 ? 2 : 3) / restMomentTrace(&m.restOffsets[b], int(n));
-        if (volumeStrainMatrix(m.dim, &m.restOffsets[b], int(n), restStrain[e].second)) restStrain[e].first = true;
+        hasVolume[e] = 1;
+        Mat3 Ve;
+        if (volumeStrainMatrix(m.dim, &m.restOffsets[b], int(n), Ve))
+          for (uint32_t k = 0; k < n; ++k) g[b + k] = Ve * m.restOffsets[b + k];
+        else
+          for (uint32_t k = 0; k < n; ++k)
+            g[b + k] = (Real(m.dim == 2 ? 2 : 3) / restMomentTrace(&m.restOffsets[b], int(n))) * m.restOffsets[b + k];
       }
+      volume.assign(E, 0), slotG.resize(P);
     }
     invSqrtMass.resize(V);
     for (size_t i = 0; i < V; ++i) invSqrtMass[i] = 1 / std::sqrt(m.mass[i]);
-    scaled.resize(V), elementOut.resize(largest);
+    // Counting sort of the pairs by vertex: pairs taken in order, so each vertex's run is in
+    // element order.
+    vertexPairStart.assign(V + 1, 0);
+    for (uint32_t v : m.elemVerts) ++vertexPairStart[v + 1];
+    for (size_t i = 0; i < V; ++i) vertexPairStart[i + 1] += vertexPairStart[i];
+    slotElement.resize(P), slotCentred.resize(P);
+    std::vector<uint32_t> fill(vertexPairStart.begin(), vertexPairStart.end() - 1);
+    for (uint32_t e = 0; e < E; ++e)
+      for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) {
+        const uint32_t slot = fill[m.elemVerts[p]]++;
+        slotElement[slot] = e, slotCentred[slot] = m.restOffsets[p] - centre[e];
+        if (!g.empty()) slotG[slot] = g[p];
+      }
+    scaled.resize(V);
   }
 
   void apply(const std::vector<Vec3>& x, std::vector<Vec3>& y) const {
-    const size_t V = m.numVertices();
-    for (size_t i = 0; i < V; ++i) scaled[i] = invSqrtMass[i] * x[i];
-    std::fill(y.begin(), y.end(), Vec3::Zero());
-    for (size_t e = 0; e < m.numElements(); ++e) {
+    forEachInChunks(team, m.numVertices(), kVertexChunk, [&](size_t i) { scaled[i] = invSqrtMass[i] * x[i]; });
+    forEachInChunks(team, m.numElements(), kElementChunk, [&](size_t e) {
       const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
-      elementStiffnessProduct(frames[e], scaled.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[e],
-                              elementOut.data());
-      for (uint32_t k = 0; k < n; ++k) y[m.elemVerts[b + k]] += elementOut[k];
-      if (!restScale.empty() && m.volumeStiffness[e] > 0 && restStrain[e].first) {
-        const Mat3& Ve = restStrain[e].second;
-        Real s = 0;
-        for (uint32_t k = 0; k < n; ++k) s += (Ve * m.restOffsets[b + k]).dot(scaled[m.elemVerts[b + k]]);
-        s *= m.volumeStiffness[e];
-        for (uint32_t k = 0; k < n; ++k) y[m.elemVerts[b + k]] += s * (Ve * m.restOffsets[b + k]);
-      } else if (!restScale.empty() && m.volumeStiffness[e] > 0) {
-        Real s = 0;
-        for (uint32_t k = 0; k < n; ++k) s += m.restOffsets[b + k].dot(scaled[m.elemVerts[b + k]]);
-        s *= m.volumeStiffness[e] * restScale[e] * restScale[e];
-        for (uint32_t k = 0; k < n; ++k) y[m.elemVerts[b + k]] += s * m.restOffsets[b + k];
+      const Vec3 c0 = centre[e];
+      Vec3 sum = Vec3::Zero(), bv = Vec3::Zero();
+      for (uint32_t k = 0; k < n; ++k) {
+        const Vec3& p = scaled[m.elemVerts[b + k]];
+        sum += p;
+        bv += (m.restOffsets[b + k] - c0).cross(p);
       }
-    }
-    for (size_t i = 0; i < V; ++i) {
-      y[i] *= invSqrtMass[i];
-      if (m.dim == 2) y[i].z() = 0;
-    }
+      term[e].meanP = sum / Real(n);
+      term[e].w = tinv[e] * bv;
+      if (!g.empty() && hasVolume[e]) {
+        Real s = 0;
+        for (uint32_t k = 0; k < n; ++k) s += g[b + k].dot(scaled[m.elemVerts[b + k]]);
+        volume[e] = m.volumeStiffness[e] * s;
+      }
+    });
+    forEachInChunks(team, m.numVertices(), kVertexChunk, [&](size_t i) {
+      const Vec3 p = scaled[i];
+      Vec3 s = Vec3::Zero();
+      for (uint32_t k = vertexPairStart[i]; k < vertexPairStart[i + 1]; ++k) {
+        const uint32_t e = slotElement[k];
+        const Term& t = term[e];
+        s += t.k * (p - t.meanP - t.w.cross(slotCentred[k]));
+        if (!g.empty() && hasVolume[e]) s += volume[e] * slotG[k];
+      }
+      s *= invSqrtMass[i];
+      if (m.dim == 2) s.z() = 0;
+      y[i] = s;
+    });
   }
+
+  static constexpr size_t kVertexChunk = 2048, kElementChunk = 256;
 };
 
 double dot(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
@@ -98,7 +139,7 @@ double dot(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
 // `ritzVector` is given the Ritz vector of the largest Ritz value (the Lanczos vectors kept in
 // single precision meanwhile: it only starts the next estimate, stabilityWarmStart).
 FrequencyEstimate lanczos(const RestModel& m, std::vector<Vec3> q, int iterations, std::vector<Vec3>* ritzVector,
-                          bool restFrames) {
+                          ThreadTeam* team) {
   FrequencyEstimate est;
   const size_t V = m.numVertices();
   // The upper bound: every element's K_e <= k_e I (with a volumetric term, + kappa_e sum |g_i|^2:
@@ -112,7 +153,10 @@ FrequencyEstimate lanczos(const RestModel& m, std::vector<Vec3> q, int iteration
   for (size_t i = 0; i < V; ++i) bound = std::max(bound, double(kSum[i] / m.mass[i]));
   est.gershgorin = std::sqrt(bound);
 
-  const RestOperator op(m, restFrames);
+  const RestOperator op(m, team);
+  // Element-wise vector work on the team (each entry alone: the same bits); the dot products
+  // stay serial (their order of summation is the estimate's bits).
+  auto each = [&](auto&& f) { forEachInChunks(team, V, RestOperator::kVertexChunk, f); };
   std::vector<Vec3> qPrev(V, Vec3::Zero()), w(V);
   std::vector<std::vector<Eigen::Vector3f>> kept;
   std::vector<double> alpha, beta;
@@ -120,17 +164,18 @@ FrequencyEstimate lanczos(const RestModel& m, std::vector<Vec3> q, int iteration
   for (int j = 0; j < iterations; ++j) {
     if (ritzVector) {
       kept.emplace_back(V);
-      for (size_t i = 0; i < V; ++i) kept.back()[i] = q[i].cast<float>();
+      std::vector<Eigen::Vector3f>& to = kept.back();
+      each([&](size_t i) { to[i] = q[i].cast<float>(); });
     }
     op.apply(q, w);
     const double a = dot(q, w);
-    for (size_t i = 0; i < V; ++i) w[i] -= a * q[i] + betaPrev * qPrev[i];
+    each([&](size_t i) { w[i] -= a * q[i] + betaPrev * qPrev[i]; });
     const double b = std::sqrt(dot(w, w));
     alpha.push_back(a), beta.push_back(b);
     est.iterations = j + 1;
     if (!(b > 1e-12 * std::max(std::abs(a), 1e-300))) break;  // the Krylov space closed: theta is exact
     qPrev.swap(q);
-    for (size_t i = 0; i < V; ++i) q[i] = w[i] / b;
+    each([&](size_t i) { q[i] = w[i] / b; });
     betaPrev = b;
   }
   const int k = int(alpha.size());
@@ -146,17 +191,19 @@ FrequencyEstimate lanczos(const RestModel& m, std::vector<Vec3> q, int iteration
   est.omega = std::sqrt(std::min(theta + residual, bound));
   if (ritzVector) {
     ritzVector->assign(V, Vec3::Zero());
-    for (int j = 0; j < k; ++j) {
-      const double c = eig.eigenvectors()(j, k - 1);
-      for (size_t i = 0; i < V; ++i) (*ritzVector)[i] += c * kept[j][i].cast<double>();
-    }
+    const Eigen::VectorXd c = eig.eigenvectors().col(k - 1);
+    each([&](size_t i) {
+      Vec3 r = Vec3::Zero();
+      for (int j = 0; j < k; ++j) r += c(j) * kept[size_t(j)][i].cast<double>();
+      (*ritzVector)[i] = r;
+    });
   }
   return est;
 }
 
 }  // namespace
 
-FrequencyEstimate highestFrequency(const RestModel& m, int iterations, std::vector<Vec3>* ritzVector) {
+FrequencyEstimate highestFrequency(const RestModel& m, int iterations, std::vector<Vec3>* ritzVector, ThreadTeam* team) {
   const size_t V = m.numVertices();
   if (m.numElements() == 0 || V == 0) return {};
   // A fixed start (a 64-bit LCG): the same estimate on every run and thread count.
@@ -165,20 +212,20 @@ FrequencyEstimate highestFrequency(const RestModel& m, int iterations, std::vect
   for (Vec3& v : q) v = Vec3(r.centred(), r.centred(), m.dim == 2 ? 0.0 : r.centred());
   const double n0 = std::sqrt(dot(q, q));
   for (Vec3& v : q) v /= n0;
-  return lanczos(m, std::move(q), iterations, ritzVector, false);
+  return lanczos(m, std::move(q), iterations, ritzVector, team);
 }
 
 FrequencyEstimate highestFrequencyFrom(const RestModel& m, std::vector<Vec3> start, int iterations,
-                                       std::vector<Vec3>* ritzVector) {
+                                       std::vector<Vec3>* ritzVector, ThreadTeam* team) {
   const size_t V = m.numVertices();
   if (m.numElements() == 0 || V == 0) return {};
   if (start.size() != V) throw std::invalid_argument("highestFrequencyFrom: the start's size is not the model's");
   if (m.dim == 2)
     for (Vec3& v : start) v.z() = 0;
   const double n0 = std::sqrt(dot(start, start));
-  if (!(n0 > 0) || !std::isfinite(n0)) return highestFrequency(m, iterations, ritzVector);
+  if (!(n0 > 0) || !std::isfinite(n0)) return highestFrequency(m, iterations, ritzVector, team);
   for (Vec3& v : start) v /= n0;
-  return lanczos(m, std::move(start), iterations, ritzVector, true);
+  return lanczos(m, std::move(start), iterations, ritzVector, team);
 }
 
 }  // namespace gradel

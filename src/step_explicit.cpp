@@ -244,6 +244,16 @@ ThreadTeam* World::frameStepTeam() {
   return team_.get();
 }
 
+ThreadTeam* World::estimateTeam(std::unique_ptr<ThreadTeam>& local) const {
+  const int members = stepMembers();
+  // One thread when the step's governor found one faster on this machine now (a busy machine:
+  // thread_team.h), as the step does.
+  if (members == 1 || (governor_ && governor_->usingOne())) return nullptr;
+  if (team_ && team_->ownedByCaller() && team_->members() == members) return team_.get();
+  local = std::make_unique<ThreadTeam>(members);
+  return local.get();
+}
+
 void World::stepExplicit() {
   const size_t V = model_->numVertices(), E = model_->numElements();
   const int members = stepMembers();

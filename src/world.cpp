@@ -60,7 +60,8 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
     const bool carving = std::any_of(manipulators.begin(), manipulators.end(), [](const ManipulatorSettings& s) {
       return s.carve || s.shape == ManipulatorShape::Blade;
     });
-    frequency_ = frequency ? *frequency : highestFrequency(*model_, 48, carving ? &ritz_ : nullptr);
+    std::unique_ptr<ThreadTeam> team;  // the same bits at any thread count
+    frequency_ = frequency ? *frequency : highestFrequency(*model_, 48, carving ? &ritz_ : nullptr, estimateTeam(team));
     if (frequency_.omega > 0) period = 2 * M_PI / frequency_.omega;
   }
   // The implicit integrator is stable at any dt: "auto" is one display frame.

@@ -13,6 +13,7 @@
 #include "gradel/stability_warm.h"
 #include "gradel/world.h"
 #include "plane.h"
+#include "thread_team.h"
 
 namespace gradel {
 
@@ -50,11 +51,12 @@ void World::replaceModel(std::shared_ptr<const RestModel> model, State state, st
   FrequencyEstimate frequency;
   std::vector<Vec3> ritz;
   if (estimate) {
+    std::unique_ptr<ThreadTeam> team;  // the same bits at any thread count
     if (fromVertex && !ritz_.empty() && ritz_.size() == model_->numVertices() && fromVertex->size() == model->numVertices())
       frequency = highestFrequencyFrom(*model, stabilityWarmStart(*model_, *model, ritz_, *fromVertex),
-                                       kWarmStartIterations, &ritz);
+                                       kWarmStartIterations, &ritz, estimateTeam(team));
     else
-      frequency = highestFrequency(*model, 48, fromVertex ? &ritz : nullptr);
+      frequency = highestFrequency(*model, 48, fromVertex ? &ritz : nullptr, estimateTeam(team));
   }
   World w(std::move(model), sim, domain_, {}, estimate ? &frequency : nullptr);
   w.ritz_ = std::move(ritz);

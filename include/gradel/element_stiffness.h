@@ -36,8 +36,9 @@ struct StiffnessFrame {
 StiffnessFrame elementStiffnessFrame(int dim, const Mat3& A, const Quat& q, const Vec3* R0, int n);
 
 /// The frame at rest (positions at their rest offsets, q = identity): there A = C, so T = T0 and
-/// the clamp is the identity, T'^-1 = T0^-1 (one symmetric eigensolve instead of two, no
-/// covariance). Equal to elementStiffnessFrame(dim, C, identity, R0, n) to rounding.
+/// the clamp is the identity, T'^-1 = T0^-1 (a 3x3 inverse where T0 is clearly not flat, else one
+/// symmetric eigensolve; no covariance). Equal to elementStiffnessFrame(dim, C, identity, R0, n)
+/// to rounding.
 StiffnessFrame elementRestStiffnessFrame(int dim, const Vec3* R0, int n);
 
 /// out[i] = (K p)_i for the element's n vertices (p read at verts[i]).

@@ -23,6 +23,8 @@
 
 namespace gradel {
 
+class ThreadTeam;
+
 struct FrequencyEstimate {
   double omega = 0;       ///< [rad/s] the estimate used: sqrt(min(theta + residual, gershgorin^2)).
   double ritz = 0;        ///< [rad/s] sqrt(theta): Lanczos's value, a lower bound of omega_max.
@@ -33,15 +35,15 @@ struct FrequencyEstimate {
 /// omega_max of the model at rest (all bodies: the largest over them). A model with no element
 /// gives 0 everywhere. `ritzVector` (optional): the Ritz vector of the largest Ritz value (unit
 /// length to single precision; the estimate's bits do not depend on asking for it), the start of
-/// the next estimate after a change of the model (stability_warm.h).
-FrequencyEstimate highestFrequency(const RestModel& model, int iterations = 48, std::vector<Vec3>* ritzVector = nullptr);
+/// the next estimate after a change of the model (stability_warm.h). `team` (optional, the
+/// engine's own): the products and vector updates on its members; the same bits at any count.
+FrequencyEstimate highestFrequency(const RestModel& model, int iterations = 48, std::vector<Vec3>* ritzVector = nullptr,
+                                   ThreadTeam* team = nullptr);
 
 /// The same estimate from a given start (one entry per vertex, normalised here; z dropped in 2D)
-/// instead of the fixed pseudo-random one, the elements' frames at rest made the cheaper way
-/// (element_stiffness.h elementRestStiffnessFrame: the same operator to rounding). A zero start
-/// falls back to highestFrequency.
+/// instead of the fixed pseudo-random one. A zero start falls back to highestFrequency.
 /// std::invalid_argument when the start's size is not the model's vertex count.
 FrequencyEstimate highestFrequencyFrom(const RestModel& model, std::vector<Vec3> start, int iterations,
-                                       std::vector<Vec3>* ritzVector = nullptr);
+                                       std::vector<Vec3>* ritzVector = nullptr, ThreadTeam* team = nullptr);
 
 }  // namespace gradel

@@ -286,6 +286,10 @@ class World {
   void prepareTeam(int members);
   int stepMembers() const;
   ThreadTeam* frameStepTeam();
+  /// The team an estimate of omega_max runs on (stability.h): the step's own when this thread made
+  /// it, else one made in `local` for the estimate (a world may be made on one thread and stepped
+  /// on another: the step's team must be made by the stepping thread); null for one thread.
+  ThreadTeam* estimateTeam(std::unique_ptr<ThreadTeam>& local) const;
   void stageContacts(size_t begin, size_t end);
   Real resolveVertexContacts(const Vec3& previous, const Vec3& previousVelocity, Vec3& x, Vec3& v, Real mass,
                              Real stiffness, ContactForce* impulse, Real* work, int* surface = nullptr) const;
