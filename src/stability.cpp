@@ -43,7 +43,6 @@ struct RestOperator {
   /// vertex pass reads them as one stream).
   std::vector<uint32_t> vertexPairStart, slotElement;
   std::vector<Vec3> slotCentred, slotG;
-  mutable std::vector<Vec3> scaled;
   mutable std::vector<Term> term;
   mutable std::vector<Real> volume;  ///< s_e at the last product.
 
@@ -89,17 +88,16 @@ struct RestOperator {
         slotElement[slot] = e, slotCentred[slot] = m.restOffsets[p] - centre[e];
         if (!g.empty()) slotG[slot] = g[p];
       }
-    scaled.resize(V);
   }
 
   void apply(const std::vector<Vec3>& x, std::vector<Vec3>& y) const {
-    forEachInChunks(team, m.numVertices(), kVertexChunk, [&](size_t i) { scaled[i] = invSqrtMass[i] * x[i]; });
     forEachInChunks(team, m.numElements(), kElementChunk, [&](size_t e) {
       const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
       const Vec3 c0 = centre[e];
       Vec3 sum = Vec3::Zero(), bv = Vec3::Zero();
       for (uint32_t k = 0; k < n; ++k) {
-        const Vec3& p = scaled[m.elemVerts[b + k]];
+        const uint32_t v = m.elemVerts[b + k];
+        const Vec3 p = invSqrtMass[v] * x[v];
         sum += p;
         bv += (m.restOffsets[b + k] - c0).cross(p);
       }
@@ -107,12 +105,12 @@ struct RestOperator {
       term[e].w = tinv[e] * bv;
       if (!g.empty() && hasVolume[e]) {
         Real s = 0;
-        for (uint32_t k = 0; k < n; ++k) s += g[b + k].dot(scaled[m.elemVerts[b + k]]);
+        for (uint32_t k = 0; k < n; ++k) s += g[b + k].dot(invSqrtMass[m.elemVerts[b + k]] * x[m.elemVerts[b + k]]);
         volume[e] = m.volumeStiffness[e] * s;
       }
     });
     forEachInChunks(team, m.numVertices(), kVertexChunk, [&](size_t i) {
-      const Vec3 p = scaled[i];
+      const Vec3 p = invSqrtMass[i] * x[i];
       Vec3 s = Vec3::Zero();
       for (uint32_t k = vertexPairStart[i]; k < vertexPairStart[i + 1]; ++k) {
         const uint32_t e = slotElement[k];
@@ -161,12 +159,12 @@ FrequencyEstimate lanczos(const RestModel& m, std::vector<Vec3> q, int iteration
   std::vector<std::vector<Eigen::Vector3f>> kept;
   std::vector<double> alpha, beta;
   double betaPrev = 0;
+  if (ritzVector) {
+    kept.reserve(size_t(iterations));
+    kept.emplace_back(V);
+    each([&](size_t i) { kept.back()[i] = q[i].cast<float>(); });
+  }
   for (int j = 0; j < iterations; ++j) {
-    if (ritzVector) {
-      kept.emplace_back(V);
-      std::vector<Eigen::Vector3f>& to = kept.back();
-      each([&](size_t i) { to[i] = q[i].cast<float>(); });
-    }
     op.apply(q, w);
     const double a = dot(q, w);
     each([&](size_t i) { w[i] -= a * q[i] + betaPrev * qPrev[i]; });
@@ -175,7 +173,13 @@ FrequencyEstimate lanczos(const RestModel& m, std::vector<Vec3> q, int iteration
     est.iterations = j + 1;
     if (!(b > 1e-12 * std::max(std::abs(a), 1e-300))) break;  // the Krylov space closed: theta is exact
     qPrev.swap(q);
-    each([&](size_t i) { q[i] = w[i] / b; });
+    // The next Lanczos vector, and its single-precision copy for the Ritz vector (kept[j + 1]).
+    std::vector<Eigen::Vector3f>* to = nullptr;
+    if (ritzVector && j + 1 < iterations) to = &kept.emplace_back(V);
+    each([&](size_t i) {
+      q[i] = w[i] / b;
+      if (to) (*to)[i] = q[i].cast<float>();
+    });
     betaPrev = b;
   }
   const int k = int(alpha.size());
