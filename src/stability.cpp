@@ -2,6 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
@@ -33,7 +34,7 @@ struct RestOperator {
     Real k;
   };
   const RestModel& m;
-  ThreadTeam* team;
+  ThreadTeam* team;  ///< The products' team (null: this thread); lanczos may switch it.
   std::vector<Mat3> tinv;    ///< T0^-1 per element (the frame at rest; 0 for a flat element).
   std::vector<Vec3> centre;  ///< mean R0 per element (0 to rounding).
   std::vector<Vec3> g;        ///< g_i per pair (empty without a volumetric term).
@@ -50,14 +51,14 @@ struct RestOperator {
   RestOperator(const RestModel& model, ThreadTeam* t) : m(model), team(t) {
     const size_t E = m.numElements(), V = m.numVertices(), P = m.elemVerts.size();
     tinv.resize(E), centre.resize(E), term.resize(E);
-    forEachInChunks(team, E, kElementChunk, [&](size_t e) {
+    for (size_t e = 0; e < E; ++e) {
       const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
       tinv[e] = elementRestStiffnessFrame(m.dim, &m.restOffsets[b], int(n)).Tinv;
       Vec3 c = Vec3::Zero();
       for (uint32_t k = 0; k < n; ++k) c += m.restOffsets[b + k];
       centre[e] = c / Real(n);
       term[e].k = m.stiffness[e];
-    });
+    }
     if (m.hasVolumeTerm()) {
       g.assign(P, Vec3::Zero()), hasVolume.assign(E, 0);
       for (size_t e = 0; e < E; ++e) {
@@ -127,6 +128,9 @@ struct RestOperator {
   static constexpr size_t kVertexChunk = 2048, kElementChunk = 256;
 };
 
+/// The team carries on only when its iteration took less than this share of the serial one.
+constexpr double kTeamMargin = 0.9;
+
 double dot(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
   double s = 0;
   for (size_t i = 0; i < a.size(); ++i) s += a[i].dot(b[i]);
@@ -151,10 +155,16 @@ FrequencyEstimate lanczos(const RestModel& m, std::vector<Vec3> q, int iteration
   for (size_t i = 0; i < V; ++i) bound = std::max(bound, double(kSum[i] / m.mass[i]));
   est.gershgorin = std::sqrt(bound);
 
-  const RestOperator op(m, team);
+  RestOperator op(m, team);
   // Element-wise vector work on the team (each entry alone: the same bits); the dot products
-  // stay serial (their order of summation is the estimate's bits).
-  auto each = [&](auto&& f) { forEachInChunks(team, V, RestOperator::kVertexChunk, f); };
+  // stay serial (their order of summation is the estimate's bits). Whether the team pays is
+  // measured, as the step's governor does (thread_team.h): the first iteration runs on this
+  // thread, the second on the team, and the faster carries on (on a machine with other busy
+  // programs each of the ~4 hand-overs per iteration can wait a time slice for a member).
+  ThreadTeam* const offered = team && team->members() > 1 ? team : nullptr;
+  op.team = nullptr;
+  auto each = [&](auto&& f) { forEachInChunks(op.team, V, RestOperator::kVertexChunk, f); };
+  double serialSeconds = 0;
   std::vector<Vec3> qPrev(V, Vec3::Zero()), w(V);
   std::vector<std::vector<Eigen::Vector3f>> kept;
   std::vector<double> alpha, beta;
@@ -165,6 +175,8 @@ FrequencyEstimate lanczos(const RestModel& m, std::vector<Vec3> q, int iteration
     each([&](size_t i) { kept.back()[i] = q[i].cast<float>(); });
   }
   for (int j = 0; j < iterations; ++j) {
+    const auto t0 = std::chrono::steady_clock::now();
+    if (j == 1 && offered) op.team = offered;
     op.apply(q, w);
     const double a = dot(q, w);
     each([&](size_t i) { w[i] -= a * q[i] + betaPrev * qPrev[i]; });
@@ -181,6 +193,9 @@ FrequencyEstimate lanczos(const RestModel& m, std::vector<Vec3> q, int iteration
       if (to) (*to)[i] = q[i].cast<float>();
     });
     betaPrev = b;
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (j == 0) serialSeconds = seconds;
+    if (j == 1 && op.team && !(seconds < kTeamMargin * serialSeconds)) op.team = nullptr;
   }
   const int k = int(alpha.size());
   Eigen::MatrixXd T = Eigen::MatrixXd::Zero(k, k);
