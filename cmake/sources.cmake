@@ -127,6 +127,7 @@ set(GRADEL_TEST_SOURCES
   tests/test_external_force.cpp
   tests/test_body_contacts.cpp
   tests/test_body_contacts_large.cpp
+  tests/test_frame_holds.cpp
   tests/test_broad_phase.cpp
   tests/test_cantilever.cpp
   tests/test_cli.cpp

@@ -25,8 +25,11 @@
 // held rows zeroed and warm-started from the last pass: a held vertex costs nothing per
 // iteration (the exact capacitance matrix E^T A^-1 E cost one back-solve per held vertex and a
 // dense |held|^2 matrix, ~1.3 GB for the 64-voxel box on the floor). With the contact normals
-// given, the holds are one-sided: after each pass a held vertex whose hold pulls it into the
-// surface (the reaction A x - b on its row points inwards) is let go for the remaining passes.
+// given, the holds are one-sided, an active set over the step's passes: after each pass a held
+// vertex whose hold pulls it into the surface (the reaction A x - b on its row points inwards) is
+// let go, and one let go earlier that is now behind its surface's plane is held again (the
+// reactions come from a few PCG iterations: let go for good on an early pass's, a block resting on
+// the floor fell through it for the rest of the step, issue 26).
 // Without that a stiff ball resting on the floor at dt = 1/30 s was crushed: every vertex within
 // one step's fall (dt^2 g = 1.1 cm, a voxel) of the floor ended below it in the free solve and
 // was held flat on the floor. A hold on a frictionless surface (given the surfaces' friction)
