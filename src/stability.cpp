@@ -128,6 +128,91 @@ struct RestOperator {
   static constexpr size_t kVertexChunk = 2048, kElementChunk = 256;
 };
 
+// The estimate from scratch's operator, the bits every dt = auto of a new World depends on: per
+// element the product of element_stiffness.h with the general frame at the rest positions, each
+// element into its own pairs' slots, then each vertex the sum of its slots in element order (the
+// sum a serial scatter in element order makes, bit for bit, at any thread count). The same operator
+// as RestOperator to rounding, ~1.5x its cost per product. Kept for its bits: the body-contact
+// scenes' tests are chaotic in dt's last bits, and one of them (two 8-voxel balls head on at
+// 0.5 m/s) ends a step with a vertex 9.6 um inside the other ball at RestOperator's dt (issue 26).
+struct ReferenceOperator {
+  const RestModel& m;
+  ThreadTeam* team;
+  std::vector<StiffnessFrame> frames;
+  std::vector<Real> restScale;  ///< D / tr S_e per element (empty without a volumetric term).
+  /// Per element: whether S_e is anisotropic, and then V_e (g_i = V_e R0_i, element.h).
+  std::vector<std::pair<bool, Mat3>> restStrain;
+  std::vector<Real> invSqrtMass;
+  std::vector<uint32_t> vertexPairStart, vertexPairs;  ///< Each vertex's pairs, in element order.
+  std::vector<uint8_t> pairVolume;                     ///< Whether the pair's element adds a volumetric part.
+  mutable std::vector<Vec3> scaled, pairOut, pairVolumeOut;
+
+  ReferenceOperator(const RestModel& model, ThreadTeam* t) : m(model), team(t) {
+    const size_t E = m.numElements(), V = m.numVertices(), P = m.elemVerts.size();
+    frames.resize(E);
+    for (size_t e = 0; e < E; ++e) {
+      const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
+      const Mat3 A = elementCovariance(m.restPositions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n));
+      frames[e] = elementStiffnessFrame(m.dim, A, Quat::Identity(), &m.restOffsets[b], int(n));
+    }
+    if (m.hasVolumeTerm()) {
+      restScale.resize(E), restStrain.resize(E);
+      pairVolume.assign(P, 0);
+      for (size_t e = 0; e < E; ++e) {
+        const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
+        restScale[e] = Real(m.dim == 2 ? 2 : 3) / restMomentTrace(&m.restOffsets[b], int(n));
+        if (volumeStrainMatrix(m.dim, &m.restOffsets[b], int(n), restStrain[e].second)) restStrain[e].first = true;
+        if (m.volumeStiffness[e] > 0) std::fill(pairVolume.begin() + b, pairVolume.begin() + b + n, uint8_t(1));
+      }
+      pairVolumeOut.resize(P);
+    }
+    invSqrtMass.resize(V);
+    for (size_t i = 0; i < V; ++i) invSqrtMass[i] = 1 / std::sqrt(m.mass[i]);
+    vertexPairStart.assign(V + 1, 0);
+    for (uint32_t v : m.elemVerts) ++vertexPairStart[v + 1];
+    for (size_t i = 0; i < V; ++i) vertexPairStart[i + 1] += vertexPairStart[i];
+    vertexPairs.resize(P);
+    std::vector<uint32_t> fill(vertexPairStart.begin(), vertexPairStart.end() - 1);
+    for (uint32_t p = 0; p < P; ++p) vertexPairs[fill[m.elemVerts[p]]++] = p;
+    scaled.resize(V), pairOut.resize(P);
+  }
+
+  void apply(const std::vector<Vec3>& x, std::vector<Vec3>& y) const {
+    forEachInChunks(team, m.numVertices(), kVertexChunk, [&](size_t i) { scaled[i] = invSqrtMass[i] * x[i]; });
+    forEachInChunks(team, m.numElements(), kElementChunk, [&](size_t e) {
+      const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
+      elementStiffnessProduct(frames[e], scaled.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[e],
+                              &pairOut[b]);
+      if (!restScale.empty() && m.volumeStiffness[e] > 0 && restStrain[e].first) {
+        const Mat3& Ve = restStrain[e].second;
+        Real s = 0;
+        for (uint32_t k = 0; k < n; ++k) s += (Ve * m.restOffsets[b + k]).dot(scaled[m.elemVerts[b + k]]);
+        s *= m.volumeStiffness[e];
+        for (uint32_t k = 0; k < n; ++k) pairVolumeOut[b + k] = s * (Ve * m.restOffsets[b + k]);
+      } else if (!restScale.empty() && m.volumeStiffness[e] > 0) {
+        Real s = 0;
+        for (uint32_t k = 0; k < n; ++k) s += m.restOffsets[b + k].dot(scaled[m.elemVerts[b + k]]);
+        s *= m.volumeStiffness[e] * restScale[e] * restScale[e];
+        for (uint32_t k = 0; k < n; ++k) pairVolumeOut[b + k] = s * m.restOffsets[b + k];
+      }
+    });
+    const bool volume = !pairVolume.empty();
+    forEachInChunks(team, m.numVertices(), kVertexChunk, [&](size_t i) {
+      Vec3 s = Vec3::Zero();
+      for (uint32_t k = vertexPairStart[i]; k < vertexPairStart[i + 1]; ++k) {
+        const uint32_t p = vertexPairs[k];
+        s += pairOut[p];
+        if (volume && pairVolume[p]) s += pairVolumeOut[p];
+      }
+      s *= invSqrtMass[i];
+      if (m.dim == 2) s.z() = 0;
+      y[i] = s;
+    });
+  }
+
+  static constexpr size_t kVertexChunk = 2048, kElementChunk = 256;
+};
+
 /// The team carries on only when its iteration took less than this share of the serial one.
 constexpr double kTeamMargin = 0.9;
 
@@ -140,6 +225,7 @@ double dot(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
 // Lanczos from the unit vector q (`iterations` products at most): the estimate, and when
 // `ritzVector` is given the Ritz vector of the largest Ritz value (the Lanczos vectors kept in
 // single precision meanwhile: it only starts the next estimate, stabilityWarmStart).
+template <class Operator>
 FrequencyEstimate lanczos(const RestModel& m, std::vector<Vec3> q, int iterations, std::vector<Vec3>* ritzVector,
                           ThreadTeam* team) {
   FrequencyEstimate est;
@@ -155,7 +241,7 @@ FrequencyEstimate lanczos(const RestModel& m, std::vector<Vec3> q, int iteration
   for (size_t i = 0; i < V; ++i) bound = std::max(bound, double(kSum[i] / m.mass[i]));
   est.gershgorin = std::sqrt(bound);
 
-  RestOperator op(m, team);
+  Operator op(m, team);
   // Element-wise vector work on the team (each entry alone: the same bits); the dot products
   // stay serial (their order of summation is the estimate's bits). Whether the team pays is
   // measured, as the step's governor does (thread_team.h): the first iteration runs on this
@@ -163,7 +249,7 @@ FrequencyEstimate lanczos(const RestModel& m, std::vector<Vec3> q, int iteration
   // programs each of the ~4 hand-overs per iteration can wait a time slice for a member).
   ThreadTeam* const offered = team && team->members() > 1 ? team : nullptr;
   op.team = nullptr;
-  auto each = [&](auto&& f) { forEachInChunks(op.team, V, RestOperator::kVertexChunk, f); };
+  auto each = [&](auto&& f) { forEachInChunks(op.team, V, Operator::kVertexChunk, f); };
   double serialSeconds = 0;
   std::vector<Vec3> qPrev(V, Vec3::Zero()), w(V);
   std::vector<std::vector<Eigen::Vector3f>> kept;
@@ -231,7 +317,7 @@ FrequencyEstimate highestFrequency(const RestModel& m, int iterations, std::vect
   for (Vec3& v : q) v = Vec3(r.centred(), r.centred(), m.dim == 2 ? 0.0 : r.centred());
   const double n0 = std::sqrt(dot(q, q));
   for (Vec3& v : q) v /= n0;
-  return lanczos(m, std::move(q), iterations, ritzVector, team);
+  return lanczos<ReferenceOperator>(m, std::move(q), iterations, ritzVector, team);
 }
 
 FrequencyEstimate highestFrequencyFrom(const RestModel& m, std::vector<Vec3> start, int iterations,
@@ -244,7 +330,7 @@ FrequencyEstimate highestFrequencyFrom(const RestModel& m, std::vector<Vec3> sta
   const double n0 = std::sqrt(dot(start, start));
   if (!(n0 > 0) || !std::isfinite(n0)) return highestFrequency(m, iterations, ritzVector, team);
   for (Vec3& v : start) v /= n0;
-  return lanczos(m, std::move(start), iterations, ritzVector, team);
+  return lanczos<RestOperator>(m, std::move(start), iterations, ritzVector, team);
 }
 
 }  // namespace gradel

@@ -41,7 +41,9 @@ FrequencyEstimate highestFrequency(const RestModel& model, int iterations = 48, 
                                    ThreadTeam* team = nullptr);
 
 /// The same estimate from a given start (one entry per vertex, normalised here; z dropped in 2D)
-/// instead of the fixed pseudo-random one. A zero start falls back to highestFrequency.
+/// instead of the fixed pseudo-random one, with the cheaper operator (the frames at rest, each
+/// product one element pass and one vertex pass: the same operator to rounding, ~1.5x faster).
+/// A zero start falls back to highestFrequency.
 /// std::invalid_argument when the start's size is not the model's vertex count.
 FrequencyEstimate highestFrequencyFrom(const RestModel& model, std::vector<Vec3> start, int iterations,
                                        std::vector<Vec3>* ritzVector = nullptr, ThreadTeam* team = nullptr);
