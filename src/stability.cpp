@@ -132,9 +132,9 @@ struct RestOperator {
 // element the product of element_stiffness.h with the general frame at the rest positions, each
 // element into its own pairs' slots, then each vertex the sum of its slots in element order (the
 // sum a serial scatter in element order makes, bit for bit, at any thread count). The same operator
-// as RestOperator to rounding, ~1.5x its cost per product. Kept for its bits: the body-contact
-// scenes' tests are chaotic in dt's last bits, and one of them (two 8-voxel balls head on at
-// 0.5 m/s) ends a step with a vertex 9.6 um inside the other ball at RestOperator's dt (issue 26).
+// as RestOperator to rounding (48 Lanczos products amplify the difference: dt 6 ppm apart), ~1.5x
+// its cost per product. Kept for its bits: at RestOperator's dt one body-contact test (two 8-voxel
+// balls head on at 0.5 m/s) ends a step with a vertex 9.6 um inside the other ball (issue 26).
 struct ReferenceOperator {
   const RestModel& m;
   ThreadTeam* team;
