@@ -133,8 +133,10 @@ struct RestOperator {
 // element into its own pairs' slots, then each vertex the sum of its slots in element order (the
 // sum a serial scatter in element order makes, bit for bit, at any thread count). The same operator
 // as RestOperator to rounding (48 Lanczos products amplify the difference: dt 6 ppm apart), ~1.5x
-// its cost per product. Kept for its bits: at RestOperator's dt one body-contact test (two 8-voxel
-// balls head on at 0.5 m/s) ends a step with a vertex 9.6 um inside the other ball (issue 26).
+// its cost per product. Kept for its bits: every scene's dt = auto stays what it was (at
+// RestOperator's dt one body-contact test, two 8-voxel balls head on at 0.5 m/s, ended a step with
+// a vertex 9.6 um inside the other ball: a weakness of the folded-surface allowance, since fixed,
+// body_contact_response.cpp allowedDepth).
 struct ReferenceOperator {
   const RestModel& m;
   ThreadTeam* team;
