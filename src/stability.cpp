@@ -35,6 +35,7 @@ struct RestOperator {
   };
   const RestModel& m;
   ThreadTeam* team;  ///< The products' team (null: this thread); lanczos may switch it.
+  std::vector<Vec3> restOffsets;  ///< R0 per pair (RestModel::restOffset), read in every product.
   std::vector<Mat3> tinv;    ///< T0^-1 per element (the frame at rest; 0 for a flat element).
   std::vector<Vec3> centre;  ///< mean R0 per element (0 to rounding).
   std::vector<Vec3> g;        ///< g_i per pair (empty without a volumetric term).
@@ -50,12 +51,13 @@ struct RestOperator {
   /// T0^-1 by elementRestStiffnessFrame (the general frame at the rest positions to rounding).
   RestOperator(const RestModel& model, ThreadTeam* t) : m(model), team(t) {
     const size_t E = m.numElements(), V = m.numVertices(), P = m.elemVerts.size();
-    tinv.resize(E), centre.resize(E), term.resize(E);
+    tinv.resize(E), centre.resize(E), term.resize(E), restOffsets.resize(P);
     for (size_t e = 0; e < E; ++e) {
       const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
-      tinv[e] = elementRestStiffnessFrame(m.dim, &m.restOffsets[b], int(n)).Tinv;
+      for (uint32_t p = b; p < b + n; ++p) restOffsets[p] = m.restOffset(e, p);
+      tinv[e] = elementRestStiffnessFrame(m.dim, &restOffsets[b], int(n)).Tinv;
       Vec3 c = Vec3::Zero();
-      for (uint32_t k = 0; k < n; ++k) c += m.restOffsets[b + k];
+      for (uint32_t k = 0; k < n; ++k) c += restOffsets[b + k];
       centre[e] = c / Real(n);
       term[e].k = m.stiffness[e];
     }
@@ -66,11 +68,11 @@ struct RestOperator {
         const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
         hasVolume[e] = 1;
         Mat3 Ve;
-        if (volumeStrainMatrix(m.dim, &m.restOffsets[b], int(n), Ve))
-          for (uint32_t k = 0; k < n; ++k) g[b + k] = Ve * m.restOffsets[b + k];
+        if (volumeStrainMatrix(m.dim, &restOffsets[b], int(n), Ve))
+          for (uint32_t k = 0; k < n; ++k) g[b + k] = Ve * restOffsets[b + k];
         else
           for (uint32_t k = 0; k < n; ++k)
-            g[b + k] = (Real(m.dim == 2 ? 2 : 3) / restMomentTrace(&m.restOffsets[b], int(n))) * m.restOffsets[b + k];
+            g[b + k] = (Real(m.dim == 2 ? 2 : 3) / restMomentTrace(&restOffsets[b], int(n))) * restOffsets[b + k];
       }
       volume.assign(E, 0), slotG.resize(P);
     }
@@ -86,7 +88,7 @@ struct RestOperator {
     for (uint32_t e = 0; e < E; ++e)
       for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) {
         const uint32_t slot = fill[m.elemVerts[p]]++;
-        slotElement[slot] = e, slotCentred[slot] = m.restOffsets[p] - centre[e];
+        slotElement[slot] = e, slotCentred[slot] = restOffsets[p] - centre[e];
         if (!g.empty()) slotG[slot] = g[p];
       }
   }
@@ -100,7 +102,7 @@ struct RestOperator {
         const uint32_t v = m.elemVerts[b + k];
         const Vec3 p = invSqrtMass[v] * x[v];
         sum += p;
-        bv += (m.restOffsets[b + k] - c0).cross(p);
+        bv += (restOffsets[b + k] - c0).cross(p);
       }
       term[e].meanP = sum / Real(n);
       term[e].w = tinv[e] * bv;

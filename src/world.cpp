@@ -111,7 +111,7 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   const RestModel& m = *model_;
   adviseHugePages(state_.positions), adviseHugePages(state_.velocities), adviseHugePages(m.restPositions);
   adviseHugePages(state_.rotations), adviseHugePages(scratch_->frames), adviseHugePages(m.invMass);
-  adviseHugePages(m.elemVerts), adviseHugePages(m.restOffsets), adviseHugePages(m.elemStart),
+  adviseHugePages(m.elemVerts), adviseHugePages(m.elemStart),
       adviseHugePages(m.stiffness);
   adviseHugePages(stageRest_->vertexFrames), adviseHugePages(stageRest_->vertexStart);
   adviseHugePages(stageRest_->groups), adviseHugePages(stageRest_->pairs);
