@@ -360,8 +360,7 @@ std::shared_ptr<RestModel> mortonOrdered(const RestModel& m) {
     std::sort(r.elemVerts.begin() + p, r.elemVerts.begin() + p + n);
     Vec3 c = Vec3::Zero();
     for (uint32_t q = 0; q < n; ++q) c += r.restPositions[r.elemVerts[p + q]];
-    c /= Real(n);
-    for (uint32_t q = 0; q < n; ++q) r.restOffsets[p + q] = r.restPositions[r.elemVerts[p + q]] - c;
+    r.restCentroids[i] = c / Real(n);
     p += n;
   }
   r.elemStart[E] = uint32_t(p);
