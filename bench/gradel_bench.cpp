@@ -59,7 +59,6 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
-#include <cstdlib>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -305,75 +304,10 @@ void timeSteps(World& w, Row& r, int hashSteps, double frameInterval, int reps, 
   setStepTime(r, perStep);
 }
 
-
-// PROBE (issue 31 item 3, not for merging as is): the model's vertices and elements renumbered
-// along a Morton curve (vertices by their lattice point, elements by their block's centre), each
-// element's pairs by new vertex id, the rest offsets recomputed as model.cpp does.
-uint64_t mortonSpread(uint64_t v) {
-  uint64_t r = 0;
-  for (int b = 0; b < 21; ++b) r |= ((v >> b) & 1) << (3 * b);
-  return r;
-}
-uint64_t mortonKey(const Vec3& p, const Vec3& origin, Real h) {
-  uint64_t k = 0;
-  for (int a = 0; a < 3; ++a) k |= mortonSpread(uint64_t(std::llround(2 * (p[a] - origin[a]) / h))) << a;
-  return k;
-}
-std::shared_ptr<RestModel> mortonOrdered(const RestModel& m) {
-  auto out = std::make_shared<RestModel>(m);
-  RestModel& r = *out;
-  const size_t V = m.numVertices(), E = m.numElements();
-  std::vector<uint64_t> vk(V);
-  for (size_t v = 0; v < V; ++v) vk[v] = mortonKey(m.restPositions[v], m.origin, m.voxelSize);
-  std::vector<uint32_t> order(V), rank(V);
-  for (uint32_t v = 0; v < V; ++v) order[v] = v;
-  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return vk[a] < vk[b]; });
-  for (uint32_t i = 0; i < V; ++i) rank[order[i]] = i;
-  auto permuteV = [&](auto& dst, const auto& src) {
-    if (src.empty()) return;
-    for (size_t i = 0; i < V; ++i) dst[i] = src[order[i]];
-  };
-  permuteV(r.restPositions, m.restPositions), permuteV(r.mass, m.mass), permuteV(r.invMass, m.invMass);
-  permuteV(r.onSurface, m.onSurface), permuteV(r.dampingOwn, m.dampingOwn);
-  permuteV(r.dampingDefaultShare, m.dampingDefaultShare);
-  std::vector<uint64_t> ek(E);
-  for (size_t e = 0; e < E; ++e) {
-    Vec3 lo = m.restPositions[m.elemVerts[m.elemStart[e]]], hi = lo;
-    for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p)
-      lo = lo.cwiseMin(m.restPositions[m.elemVerts[p]]), hi = hi.cwiseMax(m.restPositions[m.elemVerts[p]]);
-    ek[e] = mortonKey(0.5 * (lo + hi), m.origin, m.voxelSize);
-  }
-  std::vector<uint32_t> eorder(E);
-  for (uint32_t e = 0; e < E; ++e) eorder[e] = e;
-  std::stable_sort(eorder.begin(), eorder.end(), [&](uint32_t a, uint32_t b) { return ek[a] < ek[b]; });
-  auto permuteE = [&](auto& dst, const auto& src) {
-    if (src.empty()) return;
-    for (size_t i = 0; i < E; ++i) dst[i] = src[eorder[i]];
-  };
-  permuteE(r.stiffness, m.stiffness), permuteE(r.size, m.size), permuteE(r.level, m.level);
-  permuteE(r.elementMaterial, m.elementMaterial), permuteE(r.volumeStiffness, m.volumeStiffness);
-  size_t p = 0;
-  for (size_t i = 0; i < E; ++i) {
-    const uint32_t e = eorder[i], b = m.elemStart[e], n = m.elemStart[e + 1] - b;
-    r.elemStart[i] = uint32_t(p);
-    for (uint32_t q = b; q < b + n; ++q) r.elemVerts[p + q - b] = rank[m.elemVerts[q]];
-    std::sort(r.elemVerts.begin() + p, r.elemVerts.begin() + p + n);
-    Vec3 c = Vec3::Zero();
-    for (uint32_t q = 0; q < n; ++q) c += r.restPositions[r.elemVerts[p + q]];
-    r.restCentroids[i] = c / Real(n);
-    p += n;
-  }
-  r.elemStart[E] = uint32_t(p);
-  return out;
-}
-
 Row measure(const std::string& shape, int n, LayoutKind layout, int threads, int reps, double minTime) {
   BuiltScene b = buildScene(paperBenchScene(shape, n, layout, threads));
   for (BuiltBody& body : b.bodies)  // build inputs are not part of the running simulation's memory
     body.layout = Layout(), body.volume = VoxelVolume();
-  if (std::getenv("GRADEL_MORTON"))
-    b.world = std::make_unique<World>(mortonOrdered(b.world->model()), b.world->settings(), b.world->domain(),
-                                      std::vector<ManipulatorSettings>{});
   preparePaperBench(*b.world);
   Row r;
   r.set = "paper", r.shape = shape, r.layout = layoutKindName(layout), r.n = n, r.threads = threads;
