@@ -140,6 +140,7 @@ struct RestOperator {
 struct ReferenceOperator {
   const RestModel& m;
   ThreadTeam* team;
+  std::vector<Vec3> restOffsets;  ///< R0 per pair (RestModel::pairRestOffsets), read in every product.
   std::vector<StiffnessFrame> frames;
   std::vector<Real> restScale;  ///< D / tr S_e per element (empty without a volumetric term).
   /// Per element: whether S_e is anisotropic, and then V_e (g_i = V_e R0_i, element.h).
@@ -149,21 +150,21 @@ struct ReferenceOperator {
   std::vector<uint8_t> pairVolume;                     ///< Whether the pair's element adds a volumetric part.
   mutable std::vector<Vec3> scaled, pairOut, pairVolumeOut;
 
-  ReferenceOperator(const RestModel& model, ThreadTeam* t) : m(model), team(t) {
+  ReferenceOperator(const RestModel& model, ThreadTeam* t) : m(model), team(t), restOffsets(model.pairRestOffsets()) {
     const size_t E = m.numElements(), V = m.numVertices(), P = m.elemVerts.size();
     frames.resize(E);
     for (size_t e = 0; e < E; ++e) {
       const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
-      const Mat3 A = elementCovariance(m.restPositions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n));
-      frames[e] = elementStiffnessFrame(m.dim, A, Quat::Identity(), &m.restOffsets[b], int(n));
+      const Mat3 A = elementCovariance(m.restPositions.data(), &m.elemVerts[b], &restOffsets[b], int(n));
+      frames[e] = elementStiffnessFrame(m.dim, A, Quat::Identity(), &restOffsets[b], int(n));
     }
     if (m.hasVolumeTerm()) {
       restScale.resize(E), restStrain.resize(E);
       pairVolume.assign(P, 0);
       for (size_t e = 0; e < E; ++e) {
         const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
-        restScale[e] = Real(m.dim == 2 ? 2 : 3) / restMomentTrace(&m.restOffsets[b], int(n));
-        if (volumeStrainMatrix(m.dim, &m.restOffsets[b], int(n), restStrain[e].second)) restStrain[e].first = true;
+        restScale[e] = Real(m.dim == 2 ? 2 : 3) / restMomentTrace(&restOffsets[b], int(n));
+        if (volumeStrainMatrix(m.dim, &restOffsets[b], int(n), restStrain[e].second)) restStrain[e].first = true;
         if (m.volumeStiffness[e] > 0) std::fill(pairVolume.begin() + b, pairVolume.begin() + b + n, uint8_t(1));
       }
       pairVolumeOut.resize(P);
@@ -183,19 +184,19 @@ struct ReferenceOperator {
     forEachInChunks(team, m.numVertices(), kVertexChunk, [&](size_t i) { scaled[i] = invSqrtMass[i] * x[i]; });
     forEachInChunks(team, m.numElements(), kElementChunk, [&](size_t e) {
       const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
-      elementStiffnessProduct(frames[e], scaled.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[e],
+      elementStiffnessProduct(frames[e], scaled.data(), &m.elemVerts[b], &restOffsets[b], int(n), m.stiffness[e],
                               &pairOut[b]);
       if (!restScale.empty() && m.volumeStiffness[e] > 0 && restStrain[e].first) {
         const Mat3& Ve = restStrain[e].second;
         Real s = 0;
-        for (uint32_t k = 0; k < n; ++k) s += (Ve * m.restOffsets[b + k]).dot(scaled[m.elemVerts[b + k]]);
+        for (uint32_t k = 0; k < n; ++k) s += (Ve * restOffsets[b + k]).dot(scaled[m.elemVerts[b + k]]);
         s *= m.volumeStiffness[e];
-        for (uint32_t k = 0; k < n; ++k) pairVolumeOut[b + k] = s * (Ve * m.restOffsets[b + k]);
+        for (uint32_t k = 0; k < n; ++k) pairVolumeOut[b + k] = s * (Ve * restOffsets[b + k]);
       } else if (!restScale.empty() && m.volumeStiffness[e] > 0) {
         Real s = 0;
-        for (uint32_t k = 0; k < n; ++k) s += m.restOffsets[b + k].dot(scaled[m.elemVerts[b + k]]);
+        for (uint32_t k = 0; k < n; ++k) s += restOffsets[b + k].dot(scaled[m.elemVerts[b + k]]);
         s *= m.volumeStiffness[e] * restScale[e] * restScale[e];
-        for (uint32_t k = 0; k < n; ++k) pairVolumeOut[b + k] = s * m.restOffsets[b + k];
+        for (uint32_t k = 0; k < n; ++k) pairVolumeOut[b + k] = s * restOffsets[b + k];
       }
     });
     const bool volume = !pairVolume.empty();

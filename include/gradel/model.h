@@ -94,7 +94,7 @@ struct RestModel {
   /// kernels and material.h take. Returns out.data().
   const Vec3* restOffsets(size_t e, std::vector<Vec3>& out) const;
   /// Every pair's rest offset [m], in pair order: for solvers that read them in every product
-  /// (the large step) and keep their own copy while they live.
+  /// (the large step, the estimate's reference operator) and keep their own copy while they live.
   std::vector<Vec3> pairRestOffsets() const;
   /// True if some element has a volumetric term (volumeStiffness is filled).
   bool hasVolumeTerm() const { return !volumeStiffness.empty(); }
