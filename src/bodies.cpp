@@ -25,7 +25,7 @@ RestModel combineRestModels(const std::vector<std::shared_ptr<const RestModel>>&
   auto reserve = [](auto& v, size_t n) { v.reserve(n); };
   reserve(c.restPositions, V), reserve(c.mass, V), reserve(c.invMass, V), reserve(c.onSurface, V);
   reserve(c.stiffness, E), reserve(c.size, E), reserve(c.level, E), reserve(c.elementMaterial, E), reserve(c.elemStart, E + 1);
-  reserve(c.elemVerts, P), reserve(c.restOffsets, P);
+  reserve(c.elemVerts, P), reserve(c.restCentroids, E);
   auto append = [](auto& to, const auto& from) { to.insert(to.end(), from.begin(), from.end()); };
   c.elemStart.push_back(0);
   c.smallestPeriod = std::numeric_limits<Real>::infinity();
@@ -48,7 +48,7 @@ RestModel combineRestModels(const std::vector<std::shared_ptr<const RestModel>>&
     }
     for (size_t e = 1; e < m.elemStart.size(); ++e) c.elemStart.push_back(p0 + m.elemStart[e]);
     for (uint32_t v : m.elemVerts) c.elemVerts.push_back(v0 + v);
-    append(c.restOffsets, m.restOffsets);
+    append(c.restCentroids, m.restCentroids);
     // Materials per region (model.h): each model's table appended, its element indices offset.
     if (c.materials.size() + m.materials.size() > 65535)
       throw std::invalid_argument("combineRestModels: more than 65535 materials");

@@ -125,13 +125,13 @@ CoarseSpace::CoarseSpace(const RestModel& m, Real h, const std::vector<char>& fr
     }
     std::sort(local.begin(), local.end());
     Vec3 mean = Vec3::Zero();
-    for (uint32_t p = b0; p < b0 + n; ++p) mean += m.restOffsets[p];
+    for (uint32_t p = b0; p < b0 + n; ++p) mean += m.restOffset(el, p);
     mean /= Real(n);
     Phi.setZero(n, Eigen::Index(4 * local.size()));
     std::vector<std::array<Vec3, 4>> mu(local.size(), {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()});
     for (uint32_t p = b0; p < b0 + n; ++p) {
       const uint32_t i = m.elemVerts[p];
-      const Vec3 r0 = m.restOffsets[p] - mean;
+      const Vec3 r0 = m.restOffset(el, p) - mean;
       for (uint32_t a = weightStart_[i]; a < weightStart_[i + 1]; ++a) {
         const Weight& w = weights_[a];
         const size_t c = size_t(std::lower_bound(local.begin(), local.end(), w.node) - local.begin());

@@ -71,17 +71,18 @@ ElementStageRest::ElementStageRest(const RestModel& m)
   // Each element's lattice is its body's (bodies.h): h per body; a model without bodies (made
   // by hand) is one body of m.voxelSize. Only this set-up reads h; the passes do not.
   size_t body = 0;
+  std::vector<Vec3> R0;
   for (size_t e = 0; e < E; ++e) {
     while (body < m.bodies.size() && e >= m.bodies[body].elementEnd) ++body;
     const Real h = body < m.bodies.size() ? m.bodies[body].voxelSize : m.voxelSize;
     const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
-    // The same summation order as the model's rest offsets (model.cpp), so X - C reproduces them.
-    Vec3 c = Vec3::Zero(), residue = Vec3::Zero();
+    // The model's rest centroid, so X - C reproduces its rest offsets (RestModel::restOffset).
+    const Vec3 c = m.restCentroids[e];
+    Vec3 residue = Vec3::Zero();
     Eigen::Vector3i sum = Eigen::Vector3i::Zero();
     const Vec3& first = m.restPositions[m.elemVerts[b]];
     for (uint32_t p = b; p < b + n; ++p) {
       const Vec3& X = m.restPositions[m.elemVerts[p]];
-      c += X;
       for (int a = 0; a < 3; ++a) {
         const Real d = (X[a] - first[a]) / h, r = std::round(d);
         // Rest positions are origin + lattice * h (model.h): d is an integer to rounding.
@@ -93,8 +94,7 @@ ElementStageRest::ElementStageRest(const RestModel& m)
       pairs[p].lattice[3] = 1;
       pairs[p].offset = uint32_t(m.elemVerts[p] * sizeof(Vec3));
     }
-    c /= Real(n);
-    for (uint32_t p = b; p < b + n; ++p) residue += m.restPositions[m.elemVerts[p]] - c;
+    for (uint32_t p = b; p < b + n; ++p) residue += m.restOffset(e, p);
     residue /= Real(n);
     ElementConstantGroup& k = groups[e / 4];
     const size_t l = e % 4;
@@ -110,11 +110,12 @@ ElementStageRest::ElementStageRest(const RestModel& m)
         volume.assign(groups.size(), none);
       }
       ElementVolumeGroup& vg = volume[e / 4];
-      const Real g = Real(m.dim == 2 ? 2 : 3) / restMomentTrace(&m.restOffsets[b], int(n));
+      m.restOffsets(e, R0);
+      const Real g = Real(m.dim == 2 ? 2 : 3) / restMomentTrace(R0.data(), int(n));
       vg.strainScale[l] = g * h;
       vg.stiffness[l] = m.volumeStiffness[e] * g;
       Mat3 V;
-      if (volumeStrainMatrix(m.dim, &m.restOffsets[b], int(n), V)) vg.anisotropic = 1;
+      if (volumeStrainMatrix(m.dim, R0.data(), int(n), V)) vg.anisotropic = 1;
       else V = g * Mat3::Identity();
       for (int k = 0; k < 9; ++k) vg.shape[k][l] = h * V(k / 3, k % 3);
       vg.kappaOverH[l] = m.volumeStiffness[e] / h;

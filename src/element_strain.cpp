@@ -49,7 +49,8 @@ Real elementPoissonRatio(const RestModel& m, size_t e) {
 
 Real elementVonMises(const RestModel& m, const Vec3* x, size_t e, Quat& q) {
   const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
-  const Mat3 eps = elementStrain(m.dim, x, &m.elemVerts[b], &m.restOffsets[b], int(n), q);
+  thread_local std::vector<Vec3> R0;  // (its storage reused from element to element on each thread)
+  const Mat3 eps = elementStrain(m.dim, x, &m.elemVerts[b], m.restOffsets(e, R0), int(n), q);
   return vonMisesStress(eps, elementYoungsModulus(m, e), elementPoissonRatio(m, e));
 }
 

@@ -90,6 +90,7 @@ LargeStepSolver::LargeStepSolver(const RestModel& model, Real dt, const std::vec
     coarse_ = std::make_unique<CoarseSpace>(model, 0.5 * dt, free, coarseNodes);
   }
   acceleration_.assign(model.numVertices(), Vec3::Zero());
+  restOffsets_ = model.pairRestOffsets();
   // Each vertex's element-vertex pairs in element order (a counting sort of the pairs by vertex).
   vertexPairStart_.assign(model.numVertices() + 1, 0);
   for (uint32_t v : model.elemVerts) ++vertexPairStart_[v + 1];
@@ -110,10 +111,10 @@ Real LargeStepSolver::energy(const std::vector<Vec3>& x, const std::vector<Vec3>
     const uint32_t b = m.elemStart[el], n = m.elemStart[el + 1] - b;
     f.resize(n);
     Quat r = q[el];
-    e += elementForces(m.dim, x.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[el], r, f.data(), 8)
+    e += elementForces(m.dim, x.data(), &m.elemVerts[b], &restOffsets_[b], int(n), m.stiffness[el], r, f.data(), 8)
              .energy;
     if (m.hasVolumeTerm() && m.volumeStiffness[el] > 0)
-      e += elementVolumeForces(m.dim, x.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), r, m.volumeStiffness[el],
+      e += elementVolumeForces(m.dim, x.data(), &m.elemVerts[b], &restOffsets_[b], int(n), r, m.volumeStiffness[el],
                                f.data());
   }
   for (size_t i = 0; i < x.size(); ++i) e += 0.5 * m.mass[i] * v[i].squaredNorm() - m.mass[i] * gravity.dot(x[i]);
@@ -134,10 +135,10 @@ void LargeStepSolver::forces(const std::vector<Vec3>& x, std::vector<Quat>& q, s
       [&](size_t begin, size_t end) {
         for (size_t el = begin; el < end; ++el) {
           const uint32_t b = m.elemStart[el], n = m.elemStart[el + 1] - b;
-          elementForces(m.dim, x.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[el], q[el], &pair[b],
+          elementForces(m.dim, x.data(), &m.elemVerts[b], &restOffsets_[b], int(n), m.stiffness[el], q[el], &pair[b],
                         iterations);
           if (m.hasVolumeTerm() && m.volumeStiffness[el] > 0)  // Poisson's ratio (element.h)
-            elementVolumeForces(m.dim, x.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), q[el],
+            elementVolumeForces(m.dim, x.data(), &m.elemVerts[b], &restOffsets_[b], int(n), q[el],
                                 m.volumeStiffness[el], &pair[b]);
         }
       },
@@ -179,14 +180,14 @@ int LargeStepSolver::minimise(const ProjectiveSolver& pre, Real h, const std::ve
         [&](size_t begin, size_t end) {
           for (size_t el = begin; el < end; ++el) {
             const uint32_t b = m.elemStart[el], n = m.elemStart[el + 1] - b;
-            const Mat3 A = elementCovariance(x.data(), &m.elemVerts[b], &m.restOffsets[b], int(n));
-            frames[el] = elementStiffnessFrame(m.dim, A, q[el], &m.restOffsets[b], int(n));
+            const Mat3 A = elementCovariance(x.data(), &m.elemVerts[b], &restOffsets_[b], int(n));
+            frames[el] = elementStiffnessFrame(m.dim, A, q[el], &restOffsets_[b], int(n));
             if (!volumeFrames.empty() && m.volumeStiffness[el] > 0) {
               Mat3 V;  // an anisotropic S: M_F V (element.h), else (D / tr S) M
-              if (volumeStrainMatrix(m.dim, &m.restOffsets[b], int(n), V))
+              if (volumeStrainMatrix(m.dim, &restOffsets_[b], int(n), V))
                 volumeFrames[el] = fitAffineRotation(m.dim, A * V, q[el]) * V;
               else
-                volumeFrames[el] = Real(m.dim == 2 ? 2 : 3) / restMomentTrace(&m.restOffsets[b], int(n)) *
+                volumeFrames[el] = Real(m.dim == 2 ? 2 : 3) / restMomentTrace(&restOffsets_[b], int(n)) *
                                    q[el].toRotationMatrix();
             }
           }
@@ -200,14 +201,14 @@ int LargeStepSolver::minimise(const ProjectiveSolver& pre, Real h, const std::ve
         [&](size_t begin, size_t end) {
           for (size_t el = begin; el < end; ++el) {
             const uint32_t b = m.elemStart[el], n = m.elemStart[el + 1] - b;
-            elementStiffnessProduct(frames[el], d.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[el],
+            elementStiffnessProduct(frames[el], d.data(), &m.elemVerts[b], &restOffsets_[b], int(n), m.stiffness[el],
                                     &pair[b]);
             if (!volumeFrames.empty() && m.volumeStiffness[el] > 0) {
               const Mat3& D = volumeFrames[el];
               Real s = 0;
-              for (uint32_t i = 0; i < n; ++i) s += (D * m.restOffsets[b + i]).dot(d[m.elemVerts[b + i]]);
+              for (uint32_t i = 0; i < n; ++i) s += (D * restOffsets_[b + i]).dot(d[m.elemVerts[b + i]]);
               s *= m.volumeStiffness[el];
-              for (uint32_t i = 0; i < n; ++i) pair[b + i] += s * (D * m.restOffsets[b + i]);
+              for (uint32_t i = 0; i < n; ++i) pair[b + i] += s * (D * restOffsets_[b + i]);
             }
           }
         },

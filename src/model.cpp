@@ -160,8 +160,9 @@ void buildElements(const Layout& layout, RestModel& m) {
   m.elemStart = layout.elemStart;
   m.elemVerts = layout.elemVerts;
   m.level = layout.level;
-  m.restOffsets.resize(layout.numPairs());
+  m.restCentroids.resize(E);
   m.stiffness.resize(E);
+  std::vector<Vec3> R0;
   m.size.resize(E);
   Real smallest = std::numeric_limits<Real>::infinity();
   for (size_t e = 0; e < E; ++e) {
@@ -169,16 +170,15 @@ void buildElements(const Layout& layout, RestModel& m) {
     Vec3 c = Vec3::Zero();
     for (uint32_t p = b; p < b + n; ++p) c += m.restPositions[m.elemVerts[p]];
     c /= Real(n);
+    m.restCentroids[e] = c;
     Real minMass = std::numeric_limits<Real>::infinity();
-    for (uint32_t p = b; p < b + n; ++p) {
-      m.restOffsets[p] = m.restPositions[m.elemVerts[p]] - c;
-      minMass = std::min(minMass, m.mass[m.elemVerts[p]]);
-    }
+    for (uint32_t p = b; p < b + n; ++p) minMass = std::min(minMass, m.mass[m.elemVerts[p]]);
+    m.restOffsets(e, R0);
     m.size[e] = (layout.kind == LayoutKind::Voxel ? 1 : 2) * layout.cellSize[e] * layout.voxelSize;
     m.stiffness[e] = elementStiffness(m.materials[m.elementMaterial[e]], layout.dim, layout.voxelSize,
-                                      layout.regionVoxels(e), m.size[e], &m.restOffsets[b], n);
+                                      layout.regionVoxels(e), m.size[e], R0.data(), n);
     const Real kappa = elementVolumeStiffness(m.materials[m.elementMaterial[e]], layout.dim, layout.voxelSize,
-                                              layout.regionVoxels(e), m.size[e], &m.restOffsets[b], n);
+                                              layout.regionVoxels(e), m.size[e], R0.data(), n);
     if (kappa > 0 && m.volumeStiffness.empty()) m.volumeStiffness.assign(E, 0);
     if (kappa > 0) m.volumeStiffness[e] = kappa;
     // The lightest vertex bounds the element's period from below.
@@ -294,21 +294,37 @@ size_t RestModel::memoryBytes() const {
   auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
   return sizeof(*this) + bytes(restPositions) + bytes(mass) + bytes(invMass) + bytes(onSurface) + bytes(stiffness) +
          bytes(size) + bytes(level) + bytes(elementMaterial) + bytes(elemStart) + bytes(elemVerts) +
-         bytes(restOffsets) + bytes(bodies) + bytes(materials) + bytes(materialLabel) + bytes(dampingOwn) +
+         bytes(restCentroids) + bytes(bodies) + bytes(materials) + bytes(materialLabel) + bytes(dampingOwn) +
          bytes(dampingDefaultShare) + bytes(volumeStiffness);
+}
+
+const Vec3* RestModel::restOffsets(size_t e, std::vector<Vec3>& out) const {
+  const uint32_t b = elemStart[e], n = elemStart[e + 1] - b;
+  out.resize(n);
+  for (uint32_t i = 0; i < n; ++i) out[i] = restOffset(e, b + i);
+  return out.data();
+}
+
+std::vector<Vec3> RestModel::pairRestOffsets() const {
+  std::vector<Vec3> R0(numPairs());
+  for (size_t e = 0; e < numElements(); ++e)
+    for (uint32_t p = elemStart[e]; p < elemStart[e + 1]; ++p) R0[p] = restOffset(e, p);
+  return R0;
 }
 
 Real RestModel::elementStiffnessBound(size_t e) const {
   if (volumeStiffness.empty() || volumeStiffness[e] == 0) return stiffness[e];
-  const uint32_t b = elemStart[e], n = elemStart[e + 1] - b;
+  const uint32_t n = elemStart[e + 1] - elemStart[e];
+  std::vector<Vec3> buffer;
+  const Vec3* R0 = restOffsets(e, buffer);
   Mat3 V;  // the volumetric Hessian kappa g g^T's eigenvalue kappa sum |g_i|^2, g_i = V R0_i (element.h)
-  if (volumeStrainMatrix(dim, &restOffsets[b], int(n), V)) {
+  if (volumeStrainMatrix(dim, R0, int(n), V)) {
     Real sum = 0;
-    for (uint32_t i = 0; i < n; ++i) sum += (V * restOffsets[b + i]).squaredNorm();
+    for (uint32_t i = 0; i < n; ++i) sum += (V * R0[i]).squaredNorm();
     return stiffness[e] + volumeStiffness[e] * sum;
   }
   const Real D = dim == 2 ? 2 : 3;  // isotropic: g_i = (D / tr S) R0_i, sum |g_i|^2 = D^2 / tr S
-  return stiffness[e] + volumeStiffness[e] * D * D / restMomentTrace(&restOffsets[b], int(n));
+  return stiffness[e] + volumeStiffness[e] * D * D / restMomentTrace(R0, int(n));
 }
 
 }  // namespace gradel

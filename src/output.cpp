@@ -274,14 +274,16 @@ void encodeVtu(VtuBytes& out, const RestModel& model, const State& state, const 
       for (uint32_t p = 0; p < pairs; ++p) store(dst, p, int32_t(model.elemVerts[p0 + p] - v0));
       return;
     }
-    // 2D: each element's vertices in angular order about its rest centroid (restOffsets are
+    // 2D: each element's vertices in angular order about its rest centroid (rest offsets are
     // relative to it), which traces the element's outline.
     std::vector<std::pair<double, uint32_t>> ring;
     for (size_t e = 0; e < ne; ++e) {
       const uint32_t b = model.elemStart[e0 + e], end = model.elemStart[e0 + e + 1];
       ring.clear();
-      for (uint32_t p = b; p < end; ++p)
-        ring.emplace_back(std::atan2(model.restOffsets[p].y(), model.restOffsets[p].x()), p);
+      for (uint32_t p = b; p < end; ++p) {
+        const Vec3 r = model.restOffset(e0 + e, p);
+        ring.emplace_back(std::atan2(r.y(), r.x()), p);
+      }
       std::stable_sort(ring.begin(), ring.end(), [](const auto& a, const auto& c) { return a.first < c.first; });
       for (size_t k = 0; k < ring.size(); ++k) store(dst, b - p0 + k, int32_t(model.elemVerts[ring[k].second] - v0));
     }

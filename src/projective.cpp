@@ -106,11 +106,11 @@ struct ProjectiveSolver::Impl {
   // pinned vertices' coupling k_e/n sum_{pinned b in e} x_b (the -A_fp x_p term), added into rhs.
   void addElementTerms(const std::vector<Vec3>& x, std::vector<Quat>& q, int rotationIterations) {
     const RestModel& m = *model;
-    std::vector<Vec3> p;
+    std::vector<Vec3> p, offsets;
     for (size_t e = 0; e < m.numElements(); ++e) {
       const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
       const uint32_t* verts = &m.elemVerts[b];
-      const Vec3* R0 = &m.restOffsets[b];
+      const Vec3* R0 = m.restOffsets(e, offsets);
       const Mat3 A = elementCovariance(x.data(), verts, R0, int(n));
       if (m.dim == 2)
         q[e] = Quat(Eigen::AngleAxisd(fitRotation2(A), Vec3::UnitZ()));
@@ -132,18 +132,17 @@ struct ProjectiveSolver::Impl {
         if (r < 0) continue;
         rhs.row(r) += (k * (p[i] - mean) + coupling).transpose();
       }
-      if (!volumeWeight.empty() && volumeWeight[e] > 0) addVolumeTerms(e, x, A);
+      if (!volumeWeight.empty() && volumeWeight[e] > 0) addVolumeTerms(e, x, A, R0);
     }
   }
 
   // The volume constraint of element e (projective.h): T = the matrix of determinant 1 nearest
   // F = A S^-1, and the right-hand side w T R0_i minus the pinned vertices' coupling
-  // w sum_{pinned k} (R0_i^T S^-1 R0_k) x_k.
-  void addVolumeTerms(size_t e, const std::vector<Vec3>& x, const Mat3& A) {
+  // w sum_{pinned k} (R0_i^T S^-1 R0_k) x_k. R0: the element's rest offsets.
+  void addVolumeTerms(size_t e, const std::vector<Vec3>& x, const Mat3& A, const Vec3* R0) {
     const RestModel& m = *model;
     const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
     const uint32_t* verts = &m.elemVerts[b];
-    const Vec3* R0 = &m.restOffsets[b];
     const Mat3& Sinv = restInverse[e];
     const Real w = volumeWeight[e];
     const Mat3 T = nearestUnitDeterminant(m.dim, elementDeformationGradient(m.dim, A, Sinv));
@@ -474,10 +473,12 @@ ProjectiveSolver::ProjectiveSolver(const RestModel& model, Real dt, const std::v
   // The volume constraints (projective.h): w_e B_e, B_e(i, k) = R0_i^T S^-1 R0_k, per coordinate.
   if (model.hasVolumeTerm()) {
     s.volumeWeight.assign(model.numElements(), 0), s.restInverse.resize(model.numElements());
+    std::vector<Vec3> offsets;
     for (size_t e = 0; e < model.numElements(); ++e) {
       if (!(model.volumeStiffness[e] > 0)) continue;
       const uint32_t b = model.elemStart[e], n = model.elemStart[e + 1] - b;
-      const Mat3 S = restSecondMoment(&model.restOffsets[b], n);
+      const Vec3* R0 = model.restOffsets(e, offsets);
+      const Mat3 S = restSecondMoment(R0, n);
       const Mat3 Sinv = restMomentInverse(model.dim, S);
       const int D = model.dim == 2 ? 2 : 3;
       const Real w = Real(D * D) * model.volumeStiffness[e] / S.topLeftCorner(D, D).trace();
@@ -487,7 +488,7 @@ ProjectiveSolver::ProjectiveSolver(const RestModel& model, Real dt, const std::v
         if (ri < 0) continue;
         for (uint32_t j = 0; j < n; ++j) {
           const int32_t rj = s.freeIndex[model.elemVerts[b + j]];
-          if (rj >= 0) t.emplace_back(ri, rj, w * model.restOffsets[b + i].dot(Sinv * model.restOffsets[b + j]));
+          if (rj >= 0) t.emplace_back(ri, rj, w * R0[i].dot(Sinv * R0[j]));
         }
       }
     }

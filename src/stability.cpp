@@ -35,6 +35,7 @@ struct RestOperator {
   };
   const RestModel& m;
   ThreadTeam* team;  ///< The products' team (null: this thread); lanczos may switch it.
+  std::vector<Vec3> restOffsets;  ///< R0 per pair (RestModel::restOffset), read in every product.
   std::vector<Mat3> tinv;    ///< T0^-1 per element (the frame at rest; 0 for a flat element).
   std::vector<Vec3> centre;  ///< mean R0 per element (0 to rounding).
   std::vector<Vec3> g;        ///< g_i per pair (empty without a volumetric term).
@@ -50,12 +51,13 @@ struct RestOperator {
   /// T0^-1 by elementRestStiffnessFrame (the general frame at the rest positions to rounding).
   RestOperator(const RestModel& model, ThreadTeam* t) : m(model), team(t) {
     const size_t E = m.numElements(), V = m.numVertices(), P = m.elemVerts.size();
-    tinv.resize(E), centre.resize(E), term.resize(E);
+    tinv.resize(E), centre.resize(E), term.resize(E), restOffsets.resize(P);
     for (size_t e = 0; e < E; ++e) {
       const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
-      tinv[e] = elementRestStiffnessFrame(m.dim, &m.restOffsets[b], int(n)).Tinv;
+      for (uint32_t p = b; p < b + n; ++p) restOffsets[p] = m.restOffset(e, p);
+      tinv[e] = elementRestStiffnessFrame(m.dim, &restOffsets[b], int(n)).Tinv;
       Vec3 c = Vec3::Zero();
-      for (uint32_t k = 0; k < n; ++k) c += m.restOffsets[b + k];
+      for (uint32_t k = 0; k < n; ++k) c += restOffsets[b + k];
       centre[e] = c / Real(n);
       term[e].k = m.stiffness[e];
     }
@@ -66,11 +68,11 @@ struct RestOperator {
         const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
         hasVolume[e] = 1;
         Mat3 Ve;
-        if (volumeStrainMatrix(m.dim, &m.restOffsets[b], int(n), Ve))
-          for (uint32_t k = 0; k < n; ++k) g[b + k] = Ve * m.restOffsets[b + k];
+        if (volumeStrainMatrix(m.dim, &restOffsets[b], int(n), Ve))
+          for (uint32_t k = 0; k < n; ++k) g[b + k] = Ve * restOffsets[b + k];
         else
           for (uint32_t k = 0; k < n; ++k)
-            g[b + k] = (Real(m.dim == 2 ? 2 : 3) / restMomentTrace(&m.restOffsets[b], int(n))) * m.restOffsets[b + k];
+            g[b + k] = (Real(m.dim == 2 ? 2 : 3) / restMomentTrace(&restOffsets[b], int(n))) * restOffsets[b + k];
       }
       volume.assign(E, 0), slotG.resize(P);
     }
@@ -86,7 +88,7 @@ struct RestOperator {
     for (uint32_t e = 0; e < E; ++e)
       for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) {
         const uint32_t slot = fill[m.elemVerts[p]]++;
-        slotElement[slot] = e, slotCentred[slot] = m.restOffsets[p] - centre[e];
+        slotElement[slot] = e, slotCentred[slot] = restOffsets[p] - centre[e];
         if (!g.empty()) slotG[slot] = g[p];
       }
   }
@@ -100,7 +102,7 @@ struct RestOperator {
         const uint32_t v = m.elemVerts[b + k];
         const Vec3 p = invSqrtMass[v] * x[v];
         sum += p;
-        bv += (m.restOffsets[b + k] - c0).cross(p);
+        bv += (restOffsets[b + k] - c0).cross(p);
       }
       term[e].meanP = sum / Real(n);
       term[e].w = tinv[e] * bv;
@@ -140,6 +142,7 @@ struct RestOperator {
 struct ReferenceOperator {
   const RestModel& m;
   ThreadTeam* team;
+  std::vector<Vec3> restOffsets;  ///< R0 per pair (RestModel::pairRestOffsets), read in every product.
   std::vector<StiffnessFrame> frames;
   std::vector<Real> restScale;  ///< D / tr S_e per element (empty without a volumetric term).
   /// Per element: whether S_e is anisotropic, and then V_e (g_i = V_e R0_i, element.h).
@@ -149,21 +152,21 @@ struct ReferenceOperator {
   std::vector<uint8_t> pairVolume;                     ///< Whether the pair's element adds a volumetric part.
   mutable std::vector<Vec3> scaled, pairOut, pairVolumeOut;
 
-  ReferenceOperator(const RestModel& model, ThreadTeam* t) : m(model), team(t) {
+  ReferenceOperator(const RestModel& model, ThreadTeam* t) : m(model), team(t), restOffsets(model.pairRestOffsets()) {
     const size_t E = m.numElements(), V = m.numVertices(), P = m.elemVerts.size();
     frames.resize(E);
     for (size_t e = 0; e < E; ++e) {
       const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
-      const Mat3 A = elementCovariance(m.restPositions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n));
-      frames[e] = elementStiffnessFrame(m.dim, A, Quat::Identity(), &m.restOffsets[b], int(n));
+      const Mat3 A = elementCovariance(m.restPositions.data(), &m.elemVerts[b], &restOffsets[b], int(n));
+      frames[e] = elementStiffnessFrame(m.dim, A, Quat::Identity(), &restOffsets[b], int(n));
     }
     if (m.hasVolumeTerm()) {
       restScale.resize(E), restStrain.resize(E);
       pairVolume.assign(P, 0);
       for (size_t e = 0; e < E; ++e) {
         const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
-        restScale[e] = Real(m.dim == 2 ? 2 : 3) / restMomentTrace(&m.restOffsets[b], int(n));
-        if (volumeStrainMatrix(m.dim, &m.restOffsets[b], int(n), restStrain[e].second)) restStrain[e].first = true;
+        restScale[e] = Real(m.dim == 2 ? 2 : 3) / restMomentTrace(&restOffsets[b], int(n));
+        if (volumeStrainMatrix(m.dim, &restOffsets[b], int(n), restStrain[e].second)) restStrain[e].first = true;
         if (m.volumeStiffness[e] > 0) std::fill(pairVolume.begin() + b, pairVolume.begin() + b + n, uint8_t(1));
       }
       pairVolumeOut.resize(P);
@@ -183,19 +186,19 @@ struct ReferenceOperator {
     forEachInChunks(team, m.numVertices(), kVertexChunk, [&](size_t i) { scaled[i] = invSqrtMass[i] * x[i]; });
     forEachInChunks(team, m.numElements(), kElementChunk, [&](size_t e) {
       const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
-      elementStiffnessProduct(frames[e], scaled.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[e],
+      elementStiffnessProduct(frames[e], scaled.data(), &m.elemVerts[b], &restOffsets[b], int(n), m.stiffness[e],
                               &pairOut[b]);
       if (!restScale.empty() && m.volumeStiffness[e] > 0 && restStrain[e].first) {
         const Mat3& Ve = restStrain[e].second;
         Real s = 0;
-        for (uint32_t k = 0; k < n; ++k) s += (Ve * m.restOffsets[b + k]).dot(scaled[m.elemVerts[b + k]]);
+        for (uint32_t k = 0; k < n; ++k) s += (Ve * restOffsets[b + k]).dot(scaled[m.elemVerts[b + k]]);
         s *= m.volumeStiffness[e];
-        for (uint32_t k = 0; k < n; ++k) pairVolumeOut[b + k] = s * (Ve * m.restOffsets[b + k]);
+        for (uint32_t k = 0; k < n; ++k) pairVolumeOut[b + k] = s * (Ve * restOffsets[b + k]);
       } else if (!restScale.empty() && m.volumeStiffness[e] > 0) {
         Real s = 0;
-        for (uint32_t k = 0; k < n; ++k) s += m.restOffsets[b + k].dot(scaled[m.elemVerts[b + k]]);
+        for (uint32_t k = 0; k < n; ++k) s += restOffsets[b + k].dot(scaled[m.elemVerts[b + k]]);
         s *= m.volumeStiffness[e] * restScale[e] * restScale[e];
-        for (uint32_t k = 0; k < n; ++k) pairVolumeOut[b + k] = s * m.restOffsets[b + k];
+        for (uint32_t k = 0; k < n; ++k) pairVolumeOut[b + k] = s * restOffsets[b + k];
       }
     });
     const bool volume = !pairVolume.empty();

@@ -52,17 +52,21 @@ struct StepContext {
   // The force ledger. Contact impulses (World::stepContactForces): per surface (the manipulators, then each of the kWalls walls)
   // the impulse the contact response gave the body [N s] and its moment [N m s] (about the
   // manipulator's centre, the walls' about the origin). The explicit step sums them per aligned
-  // block of kVertexBlock vertices (blockImpulse, blocks x surfaces; blockTouched marks the blocks
-  // the broad phase let through) and adds the blocks in block order after the step: the same
-  // sums at any thread count, and no work for the blocks no contact can reach.
+  // block of kVertexBlock vertices, kept only for the blocks the broad phase let through
+  // (TouchedBlocks, one list per team member), and adds the blocks in block order after the step:
+  // the same sums at any thread count, and neither work nor memory for the blocks no contact can
+  // reach (a dense array, blocks x surfaces, took 18 bytes a vertex with the walls alone).
   std::vector<ContactForce> impulse;
-  std::vector<ContactForce> blockImpulse;
-  std::vector<uint8_t> blockTouched;
+  /// One member's touched blocks of this step, in the order it handled them: block index, the
+  /// contacts' work in it (contact_work.h) and its impulses (surfaces entries per block).
+  struct TouchedBlocks {
+    std::vector<uint32_t> block;
+    std::vector<Real> work;
+    std::vector<ContactForce> impulse;
+  };
+  std::vector<TouchedBlocks> touched;  ///< Per team member (at least one).
   std::vector<int> contactSurface;  ///< Per vertex, implicit step: the surface that moved it last (-1: none).
-  // The energy the contacts gave the bodies this step (contact_work.h): per block of the explicit
-  // stage (added in block order by finishContactImpulses, with the impulses), and the step's sum.
-  std::vector<Real> blockWork;
-  Real work = 0;
+  Real work = 0;  ///< The energy the contacts gave the bodies this step (contact_work.h).
 };
 
 /// The vertices an implicit step holds in its second solve (projective.h): where, the direction

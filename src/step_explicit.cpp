@@ -68,8 +68,9 @@ World::ContactBounds World::contactBounds() const {
 // (eqs. 2-3), then resolve contacts. A vertex reads only its own position here, so the three
 // parts fuse into one pass over the vertices, in blocks of kBlock vertices: a block whose
 // vertices' steps (start and end positions) lie inside the walls and outside every
-// manipulator's swept bounds skips the contact tests. Returns the deepest contact [m].
-Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
+// manipulator's swept bounds skips the contact tests; the others keep their impulses in the
+// team member's list of touched blocks (scratch_->touched[member]). Returns the deepest contact [m].
+Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb, int member) {
   using namespace simd;
   constexpr size_t kBlock = kVertexBlock;
   const size_t surfaces = manipulators_.size() + kWalls;
@@ -125,11 +126,12 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb) {
         for (size_t k = 0; !touch && k < cb->lo.size(); ++k) touch = none(hi < cb->lo[k]) && none(lo > cb->hi[k]);
         touched = touch;
         if (touch) {
-          ContactForce* impulse = &scratch_->blockImpulse[b / kBlock * surfaces];
-          std::fill(impulse, impulse + surfaces, ContactForce{});
-          scratch_->blockTouched[b / kBlock] = 1;
-          Real& work = scratch_->blockWork[b / kBlock];
-          work = 0;
+          StepContext::TouchedBlocks& list = scratch_->touched[size_t(member)];
+          list.block.push_back(uint32_t(b / kBlock));
+          list.work.push_back(0);
+          list.impulse.resize(list.impulse.size() + surfaces, ContactForce{});
+          ContactForce* impulse = &list.impulse[list.impulse.size() - surfaces];
+          Real& work = list.work.back();
           for (size_t i = b; i < be; ++i) {
             Vec3 previous, previousVelocity;
             storeVec3(previous, start[i - b]), storeVec3(previousVelocity, startVelocity[i - b]);
@@ -262,9 +264,10 @@ void World::stepExplicit() {
   ContactBounds bounds;
   if (contacts) bounds = contactBounds();
   const ContactBounds* cb = contacts ? &bounds : nullptr;
+  if (scratch_->touched.size() < size_t(members)) scratch_->touched.resize(size_t(members));
   auto runOnThisThread = [&] {
     stageElementFrames(0, E);
-    scratch_->maxContactDepth = stageVertices(0, V, cb);
+    scratch_->maxContactDepth = stageVertices(0, V, cb, 0);
   };
   if (members == 1) {
     runOnThisThread();
@@ -278,7 +281,7 @@ void World::stepExplicit() {
                          splitPoint(model_->elemStart, kElementCost, t + 1, T, kRotationLanes));
 #pragma omp barrier
       depth = stageVertices(splitPoint(stageRest_->vertexStart, kVertexCost, t, T, kVertexBlock),
-                            splitPoint(stageRest_->vertexStart, kVertexCost, t + 1, T, kVertexBlock), cb);
+                            splitPoint(stageRest_->vertexStart, kVertexCost, t + 1, T, kVertexBlock), cb, t);
     }
     scratch_->maxContactDepth = depth;
 #endif
@@ -297,7 +300,7 @@ void World::stepExplicit() {
         team_->barrier();
         Real depth = 0;
         while (vertexQueue_->claim(t, &c))
-          depth = std::max(depth, stageVertices(c * kVertexChunk, std::min(V, (c + 1) * kVertexChunk), cb));
+          depth = std::max(depth, stageVertices(c * kVertexChunk, std::min(V, (c + 1) * kVertexChunk), cb, t));
         memberContactDepth_[size_t(t)] = depth;
       });
       scratch_->maxContactDepth = *std::max_element(memberContactDepth_.begin(), memberContactDepth_.end());

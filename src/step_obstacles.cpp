@@ -2,6 +2,7 @@
 // per vertex), the sweep of fast manipulators along their paths, the manipulators' poses, and
 // the step's force ledger (ContactForces, contact work).
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "gradel/contact_work.h"
@@ -82,12 +83,7 @@ void World::stageContacts(size_t begin, size_t end) {
 void World::beginContactImpulses() {
   const size_t surfaces = manipulators_.size() + kWalls;
   scratch_->impulse.assign(surfaces, ContactForce{});
-  const size_t blocks = (model_->numVertices() + kVertexBlock - 1) / kVertexBlock;
-  if (scratch_->blockImpulse.size() != blocks * surfaces) {
-    scratch_->blockImpulse.assign(blocks * surfaces, ContactForce{});
-    scratch_->blockTouched.assign(blocks, 0);
-    scratch_->blockWork.assign(blocks, 0.0);
-  }
+  for (StepContext::TouchedBlocks& list : scratch_->touched) list.block.clear(), list.work.clear(), list.impulse.clear();
   scratch_->work = 0;
 }
 
@@ -96,13 +92,17 @@ void World::beginContactImpulses() {
 void World::finishContactImpulses() {
   const size_t K = manipulators_.size(), surfaces = K + kWalls;
   std::vector<ContactForce>& J = scratch_->impulse;
-  for (size_t b = 0; b < scratch_->blockTouched.size(); ++b) {
-    if (!scratch_->blockTouched[b]) continue;
-    scratch_->blockTouched[b] = 0;
-    scratch_->work += scratch_->blockWork[b];
+  // The touched blocks of every member, in block order (each block was handled by one member).
+  std::vector<std::array<uint32_t, 3>> order;  // block, member, index in the member's list
+  for (size_t t = 0; t < scratch_->touched.size(); ++t)
+    for (size_t k = 0; k < scratch_->touched[t].block.size(); ++k)
+      order.push_back({scratch_->touched[t].block[k], uint32_t(t), uint32_t(k)});
+  std::sort(order.begin(), order.end());
+  for (const auto& [block, t, k] : order) {
+    const StepContext::TouchedBlocks& list = scratch_->touched[t];
+    scratch_->work += list.work[k];
     for (size_t s = 0; s < surfaces; ++s)
-      J[s].force += scratch_->blockImpulse[b * surfaces + s].force,
-          J[s].torque += scratch_->blockImpulse[b * surfaces + s].torque;
+      J[s].force += list.impulse[k * surfaces + s].force, J[s].torque += list.impulse[k * surfaces + s].torque;
   }
   stepForces_.manipulators.resize(K);
   averageImpulse_.manipulators.resize(K);

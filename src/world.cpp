@@ -111,7 +111,7 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   const RestModel& m = *model_;
   adviseHugePages(state_.positions), adviseHugePages(state_.velocities), adviseHugePages(m.restPositions);
   adviseHugePages(state_.rotations), adviseHugePages(scratch_->frames), adviseHugePages(m.invMass);
-  adviseHugePages(m.elemVerts), adviseHugePages(m.restOffsets), adviseHugePages(m.elemStart),
+  adviseHugePages(m.elemVerts), adviseHugePages(m.elemStart),
       adviseHugePages(m.stiffness);
   adviseHugePages(stageRest_->vertexFrames), adviseHugePages(stageRest_->vertexStart);
   adviseHugePages(stageRest_->groups), adviseHugePages(stageRest_->pairs);
@@ -276,8 +276,8 @@ size_t World::memoryBytes() const {
   size_t b = sizeof(*this) + model_->memoryBytes() + stageRest_->memoryBytes();
   b += bytes(state_.positions) + bytes(state_.velocities) + bytes(state_.rotations);
   b += bytes(scratch_->frames) + bytes(scratch_->previousPositions) + bytes(scratch_->previousVelocities) +
-       bytes(scratch_->contactDepth) + bytes(scratch_->impulse) + bytes(scratch_->blockImpulse) +
-       bytes(scratch_->blockTouched) + bytes(scratch_->contactSurface);
+       bytes(scratch_->contactDepth) + bytes(scratch_->impulse) + bytes(scratch_->contactSurface);
+  for (const StepContext::TouchedBlocks& t : scratch_->touched) b += bytes(t.block) + bytes(t.work) + bytes(t.impulse);
   b += (elementSplit_.capacity() + vertexSplit_.capacity()) * sizeof(size_t);
   for (const Manipulator& m : manipulators_) b += sizeof(m) + bytes(m.settings.path.keys);
   b += bytes(bodyContactStartX_) + bytes(bodyContactStartV_) + bytes(bodyContactInvMass_);

@@ -21,12 +21,12 @@ std::vector<Real> World::vertexStrain() const { return vertexStress(elementStrai
 std::vector<Real> World::elementStrain() const {
   const RestModel& m = *model_;
   std::vector<Real> s(m.numElements());
-  std::vector<Vec3> f;
+  std::vector<Vec3> f, offsets;
   for (size_t e = 0; e < m.numElements(); ++e) {
     const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
     f.resize(n);
     Quat q = state_.rotations[e];
-    const ElementResult r = elementForces(m.dim, state_.positions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n),
+    const ElementResult r = elementForces(m.dim, state_.positions.data(), &m.elemVerts[b], m.restOffsets(e, offsets), int(n),
                                           m.stiffness[e], q, f.data(), 20);
     s[e] = std::sqrt(r.sumSqDisp / n) / m.size[e];
   }
@@ -104,17 +104,19 @@ Metrics World::metricsOf(const BodyRange& body, std::vector<Real>* elementStress
     Vec3* f = &pairForce[b - p0];
     Quat q = state_.rotations[e];
     ElementFigures& fig = figures[k];
-    const ElementResult er = elementForces(m.dim, state_.positions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n),
+    thread_local std::vector<Vec3> offsets;  // (its storage reused from element to element on each thread)
+    const Vec3* R0 = m.restOffsets(e, offsets);
+    const ElementResult er = elementForces(m.dim, state_.positions.data(), &m.elemVerts[b], R0, int(n),
                                            m.stiffness[e], q, f, 20);
     if (m.hasVolumeTerm() && m.volumeStiffness[e] > 0)  // Poisson's ratio > 0 (element.h)
-      fig.volumeEnergy = elementVolumeForces(m.dim, state_.positions.data(), &m.elemVerts[b], &m.restOffsets[b],
+      fig.volumeEnergy = elementVolumeForces(m.dim, state_.positions.data(), &m.elemVerts[b], R0,
                                              int(n), q, m.volumeStiffness[e], f);
     fig.energy = er.energy;
     fig.strain = std::sqrt(er.sumSqDisp / n) / m.size[e];
     // The strain and the determinant from one covariance and one rest moment (elementVonMises and
     // elementDeterminant form each once more, and fit again to the same A: the same values).
-    const Mat3 A = elementCovariance(state_.positions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n));
-    const Mat3 S = restSecondMoment(&m.restOffsets[b], n);
+    const Mat3 A = elementCovariance(state_.positions.data(), &m.elemVerts[b], R0, int(n));
+    const Mat3 S = restSecondMoment(R0, n);
     fig.stress = vonMisesStress(elementStrainOfFit(m.dim, A, q, restMomentInverse(m.dim, S)),
                                 elementYoungsModulus(m, e), elementPoissonRatio(m, e));
     fig.det = deformationDeterminant(m.dim, A, S);

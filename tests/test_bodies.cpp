@@ -64,11 +64,12 @@ TEST(MultiBody, CombinedModelIsTheModelsSideBySide) {
     ASSERT_EQ(c.stiffness[e], m.stiffness[k]);
     ASSERT_EQ(c.size[e], m.size[k]);
     ASSERT_EQ(c.level[e], m.level[k]);
+    ASSERT_EQ(c.restCentroids[e], m.restCentroids[k]);
     ASSERT_EQ(c.elemStart[e + 1] - c.elemStart[e], m.elemStart[k + 1] - m.elemStart[k]);
     for (uint32_t p = 0; p < m.elemStart[k + 1] - m.elemStart[k]; ++p) {
       const uint32_t cp = c.elemStart[e] + p, mp = m.elemStart[k] + p;
       ASSERT_EQ(c.elemVerts[cp], m.elemVerts[mp] + (e < EA ? 0 : VA));
-      ASSERT_EQ(c.restOffsets[cp], m.restOffsets[mp]);
+      ASSERT_EQ(c.restOffset(e, cp), m.restOffset(k, mp));
     }
   }
   EXPECT_DOUBLE_EQ(c.totalMass, A.totalMass + B.totalMass);

@@ -25,6 +25,7 @@ struct Bent {
   // Bent and twisted about the y axis (rotations of tens of degrees), elements' rotations fitted.
   Bent() {
     const RestModel& m = *body.model;
+    const std::vector<Vec3> R0s = m.pairRestOffsets();
     for (const Vec3& p : m.restPositions) {
       const Real a = 8 * p.y(), b = 4 * p.x();
       x.push_back(Eigen::AngleAxisd(a, Vec3::UnitY()) * Eigen::AngleAxisd(b, Vec3::UnitZ()) * p * 1.05);
@@ -34,9 +35,9 @@ struct Bent {
     for (size_t el = 0; el < m.numElements(); ++el) {
       const uint32_t b0 = m.elemStart[el], n = m.elemStart[el + 1] - b0;
       f.resize(n);
-      elementForces(3, x.data(), &m.elemVerts[b0], &m.restOffsets[b0], int(n), m.stiffness[el], q[el], f.data(), 50);
-      const Mat3 A = elementCovariance(x.data(), &m.elemVerts[b0], &m.restOffsets[b0], int(n));
-      frames.push_back(elementStiffnessFrame(3, A, q[el], &m.restOffsets[b0], int(n)));
+      elementForces(3, x.data(), &m.elemVerts[b0], &R0s[b0], int(n), m.stiffness[el], q[el], f.data(), 50);
+      const Mat3 A = elementCovariance(x.data(), &m.elemVerts[b0], &R0s[b0], int(n));
+      frames.push_back(elementStiffnessFrame(3, A, q[el], &R0s[b0], int(n)));
     }
     free.assign(m.numVertices(), 1);
     Real yMin = 1e300;
@@ -47,10 +48,11 @@ struct Bent {
   // A d on the free vertices (zero on the pinned).
   std::vector<Vec3> apply(const std::vector<Vec3>& d) const {
     const RestModel& m = *body.model;
+    const std::vector<Vec3> R0s = m.pairRestOffsets();
     std::vector<Vec3> out(m.numVertices(), Vec3::Zero()), pair(m.numPairs());
     for (size_t el = 0; el < m.numElements(); ++el) {
       const uint32_t b0 = m.elemStart[el], n = m.elemStart[el + 1] - b0;
-      elementStiffnessProduct(frames[el], d.data(), &m.elemVerts[b0], &m.restOffsets[b0], int(n), m.stiffness[el],
+      elementStiffnessProduct(frames[el], d.data(), &m.elemVerts[b0], &R0s[b0], int(n), m.stiffness[el],
                               &pair[b0]);
       for (uint32_t k = 0; k < n; ++k) out[m.elemVerts[b0 + k]] += pair[b0 + k];
     }

@@ -19,11 +19,11 @@ namespace {
 // Reference forces: element.h's kernel per element, summed per vertex.
 std::vector<Vec3> referenceForces(const World& w, std::vector<Quat>& q) {
   const RestModel& m = w.model();
-  std::vector<Vec3> forces(m.numVertices(), Vec3::Zero()), f;
+  std::vector<Vec3> forces(m.numVertices(), Vec3::Zero()), f, R0;
   for (size_t e = 0; e < m.numElements(); ++e) {
     const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
     f.resize(n);
-    elementForces(m.dim, w.state().positions.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[e], q[e],
+    elementForces(m.dim, w.state().positions.data(), &m.elemVerts[b], m.restOffsets(e, R0), int(n), m.stiffness[e], q[e],
                   f.data(), 4);
     for (uint32_t i = 0; i < n; ++i) forces[m.elemVerts[b + i]] += f[i];
   }
@@ -129,12 +129,12 @@ TEST(ElementStageRest, RestCentroidsAndLatticeOffsetsReproduceTheRestOffsets) {
       const Vec3 meanP = Vec3(k.sumLattice[0], k.sumLattice[1], k.sumLattice[2]) * k.invCount;
       EXPECT_EQ(k.stiffness, m.stiffness[e]);
       for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) {
-        mismatches += (m.restPositions[m.elemVerts[p]] - C) != m.restOffsets[p];
+        mismatches += (m.restPositions[m.elemVerts[p]] - C) != m.restOffset(e, p);
         const int16_t* P = rest.pairs[p].lattice;
         ASSERT_EQ(P[3], 1);
         ASSERT_EQ(rest.pairs[p].offset, m.elemVerts[p] * sizeof(Vec3));
         const Vec3 R0 = m.voxelSize * (Vec3(P[0], P[1], P[2]) - meanP);
-        worst = std::max(worst, (R0 - m.restOffsets[p]).norm() / m.voxelSize);
+        worst = std::max(worst, (R0 - m.restOffset(e, p)).norm() / m.voxelSize);
       }
     }
     EXPECT_EQ(mismatches, 0u) << layoutKindName(kind);
@@ -161,11 +161,12 @@ TEST(ElementStageRotations, StayWithinTheStepToleranceOfTheTightFit) {
   preparePaperBench(w);
   const RestModel& m = w.model();
   std::vector<Quat> tight(m.numElements());
+  const std::vector<Vec3> R0 = m.pairRestOffsets();
   Real worst = 0, moved = 0;
   for (int s = 0; s < 200; ++s) {
     for (size_t e = 0; e < m.numElements(); ++e) {
       const uint32_t first = m.elemStart[e], n = m.elemStart[e + 1] - first;
-      const Mat3 A = elementCovariance(w.state().positions.data(), &m.elemVerts[first], &m.restOffsets[first], int(n));
+      const Mat3 A = elementCovariance(w.state().positions.data(), &m.elemVerts[first], &R0[first], int(n));
       tight[e] = w.state().rotations[e];
       fitRotation3(A, tight[e], 20, 1e-12);
       moved = std::max(moved, 2 * (w.state().rotations[e].conjugate() * tight[e]).vec().norm());

@@ -76,9 +76,7 @@ RestModel twoElements2d() {
   for (size_t e = 0; e < 2; ++e) {
     Vec3 c = Vec3::Zero();
     for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) c += m.restPositions[m.elemVerts[p]];
-    c /= Real(m.elemStart[e + 1] - m.elemStart[e]);
-    for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p)
-      m.restOffsets.push_back(m.restPositions[m.elemVerts[p]] - c);
+    m.restCentroids.push_back(c / Real(m.elemStart[e + 1] - m.elemStart[e]));
   }
   return m;
 }

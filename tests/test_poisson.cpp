@@ -204,14 +204,15 @@ TEST(PoissonStage, StageForcesMatchTheReferenceKernels) {
     deformSmoothly(w, 0.05);
     perturb(w, 0.2 * b.model->voxelSize, 0.0, 3);
     const RestModel& m = w.model();
+    const std::vector<Vec3> R0s = m.pairRestOffsets();
     std::vector<Vec3> ref(m.numVertices(), Vec3::Zero()), f;
     std::vector<Quat> q = w.state().rotations;
     for (size_t e = 0; e < m.numElements(); ++e) {
       const uint32_t bb = m.elemStart[e], n = m.elemStart[e + 1] - bb;
       f.assign(n, Vec3::Zero());
-      elementForces(m.dim, w.state().positions.data(), &m.elemVerts[bb], &m.restOffsets[bb], int(n), m.stiffness[e],
+      elementForces(m.dim, w.state().positions.data(), &m.elemVerts[bb], &R0s[bb], int(n), m.stiffness[e],
                     q[e], f.data(), 4);
-      elementVolumeForces(m.dim, w.state().positions.data(), &m.elemVerts[bb], &m.restOffsets[bb], int(n), q[e],
+      elementVolumeForces(m.dim, w.state().positions.data(), &m.elemVerts[bb], &R0s[bb], int(n), q[e],
                           m.volumeStiffness[e], f.data());
       for (uint32_t i = 0; i < n; ++i) ref[m.elemVerts[bb + i]] += f[i];
     }
@@ -257,6 +258,7 @@ TEST(PoissonDynamics, MomentaAndEnergyKeptAtTheDefaultStep) {
 TEST(PoissonStability, EstimateIncludesTheVolumetricStiffness) {
   const Body b = makeBody("box", 4, 3, LayoutKind::Gradational, withPoisson(0.45));
   const RestModel& m = *b.model;
+  const std::vector<Vec3> R0s = m.pairRestOffsets();
   const int V = int(m.numVertices()), N = 3 * V;
   std::vector<Vec3> x = m.restPositions;
   auto forces = [&](std::vector<Vec3>& out) {
@@ -266,8 +268,8 @@ TEST(PoissonStability, EstimateIncludesTheVolumetricStiffness) {
       const uint32_t bb = m.elemStart[e], n = m.elemStart[e + 1] - bb;
       fe.assign(n, Vec3::Zero());
       Quat q = Quat::Identity();
-      elementForces(3, x.data(), &m.elemVerts[bb], &m.restOffsets[bb], int(n), m.stiffness[e], q, fe.data(), 50);
-      elementVolumeForces(3, x.data(), &m.elemVerts[bb], &m.restOffsets[bb], int(n), q, m.volumeStiffness[e], fe.data());
+      elementForces(3, x.data(), &m.elemVerts[bb], &R0s[bb], int(n), m.stiffness[e], q, fe.data(), 50);
+      elementVolumeForces(3, x.data(), &m.elemVerts[bb], &R0s[bb], int(n), q, m.volumeStiffness[e], fe.data());
       for (uint32_t k = 0; k < n; ++k) out[m.elemVerts[bb + k]] += fe[k];
     }
   };

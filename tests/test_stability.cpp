@@ -17,6 +17,7 @@ namespace {
 // nonlinear kernel the explicit step uses, not element_stiffness.h): the dense reference.
 double denseLambdaMax(const RestModel& m) {
   const int D = m.dim, V = int(m.numVertices()), N = D * V;
+  const std::vector<Vec3> R0s = m.pairRestOffsets();
   Eigen::MatrixXd K(N, N);
   std::vector<Vec3> x = m.restPositions, f;
   auto forces = [&](std::vector<Vec3>& out) {
@@ -26,7 +27,7 @@ double denseLambdaMax(const RestModel& m) {
       const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
       fe.assign(n, Vec3::Zero());
       Quat q = Quat::Identity();
-      elementForces(D, x.data(), &m.elemVerts[b], &m.restOffsets[b], int(n), m.stiffness[e], q, fe.data(), 50);
+      elementForces(D, x.data(), &m.elemVerts[b], &R0s[b], int(n), m.stiffness[e], q, fe.data(), 50);
       for (uint32_t k = 0; k < n; ++k) out[m.elemVerts[b + k]] += fe[k];
     }
   };

@@ -104,6 +104,7 @@ class LargeStepSolver {
   const RestModel* model_;
   ThreadTeam* team_ = nullptr;
   std::vector<uint32_t> vertexPairStart_, vertexPairs_;  ///< Per vertex: its element-vertex pairs, in element order.
+  std::vector<Vec3> restOffsets_;  ///< R0 per pair (RestModel::pairRestOffsets): read in every product.
   Real dt_;
   std::vector<uint32_t> pinned_;
   ProjectiveSolver half_;  ///< Backward Euler at h = dt / 2.

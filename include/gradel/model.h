@@ -66,7 +66,13 @@ struct RestModel {
   // ---- element -> vertex (compressed rows) ----
   std::vector<uint32_t> elemStart;  ///< Size elements + 1.
   std::vector<uint32_t> elemVerts;  ///< Vertex id per pair.
-  std::vector<Vec3> restOffsets;    ///< R0 per pair [m]: rest position minus the element's rest centroid.
+
+  // ---- per element: rest centroids ----
+  /// C_e [m] per element: the mean of its vertices' rest positions (summed in pair order, then
+  /// divided by the count). An element's rest offsets R0_i = X_i - C_e are formed from these
+  /// on demand (restOffsets below), not kept per pair (24 bytes a pair, ~72 bytes a vertex on a
+  /// gradational sphere; docs/speed.md, "Fourth pass").
+  std::vector<Vec3> restCentroids;
 
   Real totalMass = 0;  ///< [kg]
   Real smallestPeriod =
@@ -80,6 +86,16 @@ struct RestModel {
   size_t memoryBytes() const;
   size_t numPairs() const { return elemVerts.size(); }
   size_t numBodies() const { return bodies.size(); }
+  /// Pair p's rest offset R0 [m]: its vertex's rest position minus element e's rest centroid
+  /// (p one of e's pairs).
+  Vec3 restOffset(size_t e, size_t p) const { return restPositions[elemVerts[p]] - restCentroids[e]; }
+  /// Element e's rest offsets R0_i [m] in its pair order, written into `out` (resized to its
+  /// vertex count; the caller keeps it across elements to reuse its storage): what element.h's
+  /// kernels and material.h take. Returns out.data().
+  const Vec3* restOffsets(size_t e, std::vector<Vec3>& out) const;
+  /// Every pair's rest offset [m], in pair order: for solvers that read them in every product
+  /// (the large step, the estimate's reference operator) and keep their own copy while they live.
+  std::vector<Vec3> pairRestOffsets() const;
   /// True if some element has a volumetric term (volumeStiffness is filled).
   bool hasVolumeTerm() const { return !volumeStiffness.empty(); }
   /// Element e's stiffness bound [N/m]: its rest Hessian is <= this times the identity on its

@@ -280,7 +280,7 @@ class World {
   void beginStep();
   void advanceIntegrator();
   void stageElementFrames(size_t begin, size_t end);
-  Real stageVertices(size_t begin, size_t end, const ContactBounds* contacts);
+  Real stageVertices(size_t begin, size_t end, const ContactBounds* contacts, int member);
   ContactBounds contactBounds() const;
   Metrics metricsOf(const BodyRange& body, std::vector<Real>* elementStress, std::vector<Real>* elementStrain) const;
   void prepareTeam(int members);

@@ -96,12 +96,12 @@ Real stretchModulus(const BarSpec& bar, Real strain) {
   ProjectiveSolver solver(m, 0, pins.vertices);
   solver.solveStatic(w.state().positions, w.state().rotations, Vec3::Zero(), targets, 20000, 1e-14 * L);
   // Elastic force on the moved face (pin index 1): the reaction pulling it back.
-  std::vector<Vec3> force(m.numVertices(), Vec3::Zero()), f;
+  std::vector<Vec3> force(m.numVertices(), Vec3::Zero()), f, offsets;
   for (size_t e = 0; e < m.numElements(); ++e) {
     const uint32_t s = m.elemStart[e], n = m.elemStart[e + 1] - s;
     f.resize(n);
     Quat q = w.state().rotations[e];
-    elementForces(3, w.state().positions.data(), &m.elemVerts[s], &m.restOffsets[s], int(n), m.stiffness[e], q,
+    elementForces(3, w.state().positions.data(), &m.elemVerts[s], m.restOffsets(e, offsets), int(n), m.stiffness[e], q,
                   f.data(), 20);
     for (uint32_t i = 0; i < n; ++i) force[m.elemVerts[s + i]] += f[i];
   }
