@@ -19,6 +19,32 @@ namespace gradel {
 
 namespace {
 
+// Each vertex's pairs in element order (a counting sort of the pairs by vertex, taken in order):
+// vertex i's slots are [start[i], start[i + 1]), pair p sits in slot[p]. Both operators' vertex
+// pass sums a vertex's slots in this order: the sums a serial scatter in element order makes.
+struct PairsByVertex {
+  std::vector<uint32_t> start, slot;
+};
+
+PairsByVertex pairsByVertex(const RestModel& m) {
+  const size_t V = m.numVertices(), P = m.elemVerts.size();
+  PairsByVertex out;
+  out.start.assign(V + 1, 0);
+  for (uint32_t v : m.elemVerts) ++out.start[v + 1];
+  for (size_t i = 0; i < V; ++i) out.start[i + 1] += out.start[i];
+  out.slot.resize(P);
+  std::vector<uint32_t> fill(out.start.begin(), out.start.end() - 1);
+  for (uint32_t p = 0; p < P; ++p) out.slot[p] = fill[m.elemVerts[p]]++;
+  return out;
+}
+
+// M^-1/2 per vertex.
+std::vector<Real> inverseSqrtMasses(const RestModel& m) {
+  std::vector<Real> s(m.numVertices());
+  for (size_t i = 0; i < s.size(); ++i) s[i] = 1 / std::sqrt(m.mass[i]);
+  return s;
+}
+
 // y = M^-1/2 K M^-1/2 x over every element (frames at rest, fixed), z zeroed in 2D: with the rest
 // rotation M = I (element_stiffness.h), per element e with centred offsets c_i = R0_i - mean R0,
 //   b = sum_i c_i x p_i,  w = T0^-1 b,  (K p)_i = k ((p_i - mean p) - w x c_i),
@@ -35,7 +61,7 @@ struct RestOperator {
   };
   const RestModel& m;
   ThreadTeam* team;  ///< The products' team (null: this thread); lanczos may switch it.
-  std::vector<Vec3> restOffsets;  ///< R0 per pair (RestModel::restOffset), read in every product.
+  std::vector<Vec3> restOffsets;  ///< R0 per pair (RestModel::pairRestOffsets), read in every product.
   std::vector<Mat3> tinv;    ///< T0^-1 per element (the frame at rest; 0 for a flat element).
   std::vector<Vec3> centre;  ///< mean R0 per element (0 to rounding).
   std::vector<Vec3> g;        ///< g_i per pair (empty without a volumetric term).
@@ -49,12 +75,12 @@ struct RestOperator {
   mutable std::vector<Real> volume;  ///< s_e at the last product.
 
   /// T0^-1 by elementRestStiffnessFrame (the general frame at the rest positions to rounding).
-  RestOperator(const RestModel& model, ThreadTeam* t) : m(model), team(t) {
-    const size_t E = m.numElements(), V = m.numVertices(), P = m.elemVerts.size();
-    tinv.resize(E), centre.resize(E), term.resize(E), restOffsets.resize(P);
+  RestOperator(const RestModel& model, ThreadTeam* t)
+      : m(model), team(t), restOffsets(model.pairRestOffsets()), invSqrtMass(inverseSqrtMasses(model)) {
+    const size_t E = m.numElements(), P = m.elemVerts.size();
+    tinv.resize(E), centre.resize(E), term.resize(E);
     for (size_t e = 0; e < E; ++e) {
       const uint32_t b = m.elemStart[e], n = m.elemStart[e + 1] - b;
-      for (uint32_t p = b; p < b + n; ++p) restOffsets[p] = m.restOffset(e, p);
       tinv[e] = elementRestStiffnessFrame(m.dim, &restOffsets[b], int(n)).Tinv;
       Vec3 c = Vec3::Zero();
       for (uint32_t k = 0; k < n; ++k) c += restOffsets[b + k];
@@ -76,18 +102,12 @@ struct RestOperator {
       }
       volume.assign(E, 0), slotG.resize(P);
     }
-    invSqrtMass.resize(V);
-    for (size_t i = 0; i < V; ++i) invSqrtMass[i] = 1 / std::sqrt(m.mass[i]);
-    // Counting sort of the pairs by vertex: pairs taken in order, so each vertex's run is in
-    // element order.
-    vertexPairStart.assign(V + 1, 0);
-    for (uint32_t v : m.elemVerts) ++vertexPairStart[v + 1];
-    for (size_t i = 0; i < V; ++i) vertexPairStart[i + 1] += vertexPairStart[i];
+    PairsByVertex byVertex = pairsByVertex(m);
+    vertexPairStart = std::move(byVertex.start);
     slotElement.resize(P), slotCentred.resize(P);
-    std::vector<uint32_t> fill(vertexPairStart.begin(), vertexPairStart.end() - 1);
     for (uint32_t e = 0; e < E; ++e)
       for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) {
-        const uint32_t slot = fill[m.elemVerts[p]]++;
+        const uint32_t slot = byVertex.slot[p];
         slotElement[slot] = e, slotCentred[slot] = restOffsets[p] - centre[e];
         if (!g.empty()) slotG[slot] = g[p];
       }
@@ -152,7 +172,8 @@ struct ReferenceOperator {
   std::vector<uint8_t> pairVolume;                     ///< Whether the pair's element adds a volumetric part.
   mutable std::vector<Vec3> scaled, pairOut, pairVolumeOut;
 
-  ReferenceOperator(const RestModel& model, ThreadTeam* t) : m(model), team(t), restOffsets(model.pairRestOffsets()) {
+  ReferenceOperator(const RestModel& model, ThreadTeam* t)
+      : m(model), team(t), restOffsets(model.pairRestOffsets()), invSqrtMass(inverseSqrtMasses(model)) {
     const size_t E = m.numElements(), V = m.numVertices(), P = m.elemVerts.size();
     frames.resize(E);
     for (size_t e = 0; e < E; ++e) {
@@ -171,14 +192,10 @@ struct ReferenceOperator {
       }
       pairVolumeOut.resize(P);
     }
-    invSqrtMass.resize(V);
-    for (size_t i = 0; i < V; ++i) invSqrtMass[i] = 1 / std::sqrt(m.mass[i]);
-    vertexPairStart.assign(V + 1, 0);
-    for (uint32_t v : m.elemVerts) ++vertexPairStart[v + 1];
-    for (size_t i = 0; i < V; ++i) vertexPairStart[i + 1] += vertexPairStart[i];
+    PairsByVertex byVertex = pairsByVertex(m);
+    vertexPairStart = std::move(byVertex.start);
     vertexPairs.resize(P);
-    std::vector<uint32_t> fill(vertexPairStart.begin(), vertexPairStart.end() - 1);
-    for (uint32_t p = 0; p < P; ++p) vertexPairs[fill[m.elemVerts[p]]++] = p;
+    for (uint32_t p = 0; p < P; ++p) vertexPairs[byVertex.slot[p]] = p;
     scaled.resize(V), pairOut.resize(P);
   }
 
