@@ -19,6 +19,7 @@ set(GRADEL_CORE_SOURCES
   src/body_contact_response.cpp     # projections, friction, restitution: impulses that add no energy
   src/body_contact_warm_start.cpp   # the last stage's contacts as round 0's
   src/body_contact_takeback.cpp     # last resort: unreachable findings dropped, bodies taken back
+  src/body_contact_energy.cpp       # the stage never adds energy: its excess out of the touched vertices' motion
   src/body_contact_proximity.cpp    # the frame-size integrators' broad phase and proximity list
   src/contact_surface.cpp           # a body's closed contact surface (contact_surface.h)
   src/triangle_queries.cpp          # closest point on a triangle, winding number

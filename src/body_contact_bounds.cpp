@@ -116,13 +116,14 @@ void BodyContacts::pickPairs(bool onlyMoved) {
 
 // A contact's vertices may move from now on (the only ones a correction moves): remember where
 // they were when the stage began (no correction has moved them yet).
-void BodyContacts::markTouched(const Contact& c, const Vec3* x) {
+void BodyContacts::markTouched(const Contact& c, const Vec3* x, const Vec3* v) {
   auto mark = [&](uint32_t u) {
     if (isTouched_[u]) return;
     isTouched_[u] = 1;
     touched_.push_back(u);
     touchedStart_.push_back(x[u]);
     touchedLast_.push_back(x[u]);
+    touchedStartV_.push_back(v[u]);
   };
   mark(c.vertex);
   for (uint32_t u : c.face) mark(u);

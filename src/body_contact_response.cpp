@@ -59,6 +59,7 @@ void BodyContacts::addContacts(const BodyContactState& s) {
 void BodyContacts::returnToStart(const BodyContactState& s) {
   Vec3* x = s.positions;
   const Real* im = s.invMass;
+  for (const Contact& c : round_) markTouched(c, x, s.velocities);
   for (int it = 0; it < kIterations; ++it)
     for (const Contact& c : round_) {
       const Real W = contactInvMass(c, im);
@@ -75,7 +76,7 @@ void BodyContacts::projectPositions(const BodyContactState& s) {
   const Real* im = s.invMass;
   const size_t first = contacts_.size();
   addContacts(s);
-  for (const Contact& c : round_) markTouched(c, x);
+  for (const Contact& c : round_) markTouched(c, x, s.velocities);
   // kIterations sweeps, then more (up to kMaxIterations) while a sweep still found a vertex
   // behind its contact point along the normal (gap < -skin: n . (p - c) < 0): where contacts
   // share vertices (a corner pushed by the vertices around it) each sweep undoes part of the

@@ -73,7 +73,7 @@ BodyContactStats BodyContacts::resolve(const BodyContactState& s) {
   contacts_.clear(), keep_.clear();
   if (empty()) return stats;
   for (uint32_t u : touched_) isTouched_[u] = 0, roundShift_[u] = 0;
-  touched_.clear(), touchedStart_.clear(), touchedLast_.clear();
+  touched_.clear(), touchedStart_.clear(), touchedLast_.clear(), touchedStartV_.clear();
   ++stage_;
   startWindings_ = 0;
   bool fellBack = false;

@@ -4,6 +4,7 @@
 // the frame-size integrators hand their solve (projective.h) with their warm start.
 #include <algorithm>
 
+#include "body_contact_energy.h"
 #include "step_context.h"
 
 namespace gradel {
@@ -54,6 +55,22 @@ void World::stageBodyContacts() {
   bodyContactStats_ = bodyContacts_->resolve(
       {x, v, bodyContactStartX_.data(), bodyContactStartV_.data(), bodyContactInvMass_.data(), motion, dt_,
        sim_.integrator == IntegratorKind::SymplecticEuler});
+  // The stage never adds energy (body_contact_energy.h): explicit steps the last resort left alone
+  // (it moves whole bodies, which the touched list does not hold).
+  if (sim_.integrator == IntegratorKind::SymplecticEuler && bodyContactStats_.takeBacks == 0 &&
+      !bodyContacts_->touched().empty()) {
+    if (!contactEnergy_) contactEnergy_ = std::make_unique<ContactEnergyLimiter>();
+    ContactEnergyInput in;
+    in.touched = &bodyContacts_->touched();
+    in.startPositions = &bodyContacts_->touchedStart();
+    in.startVelocities = &bodyContacts_->touchedStartVelocity();
+    in.rotations = state_.rotations.data();
+    in.movable = bodyContactInvMass_.data();
+    in.gravity = sim_.gravity;
+    in.dt = dt_;
+    const ContactEnergyCap cap = contactEnergy_->apply(*model_, in, x, v);
+    bodyContactStats_.energyExcess = cap.excess, bodyContactStats_.energyRemoved = cap.removed;
+  }
   scratch_->maxContactDepth = std::max(scratch_->maxContactDepth, bodyContactStats_.maxDepth);
   if (!domain_.enabled || bodyContacts_->contacts().empty()) return;
   std::vector<uint32_t> moved;

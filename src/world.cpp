@@ -14,6 +14,7 @@
 #include "gradel/stability.h"
 #include "huge_pages.h"
 #include "plane.h"
+#include "body_contact_energy.h"
 #include "step_context.h"
 #include "thread_team.h"
 

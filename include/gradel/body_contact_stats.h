@@ -31,6 +31,10 @@ struct BodyContactStats {
   /// Winding numbers of a closed surface evaluated (dropUnreachable, and allowedDepth's once per
   /// vertex and body at the step's start), each O(that surface's faces).
   size_t windingNumbers = 0;
+  /// The stage's change of kinetic + elastic energy where it touched, as the metrics measure it
+  /// (explicit steps; body_contact_energy.h), and what was taken out of the touched vertices'
+  /// relative motion when that change was positive [J].
+  Real energyExcess = 0, energyRemoved = 0;
   double seconds = 0;     ///< Wall time of the call (measurements; no result depends on it).
 };
 

@@ -115,6 +115,11 @@ class BodyContacts {
   };
   /// The contacts the last resolve() found (all rounds, in order).
   const std::vector<Contact>& contacts() const { return contacts_; }
+  /// The vertices the last resolve() may have moved (its contacts' vertices and face corners), and
+  /// where each was and how fast it moved when the stage began.
+  const std::vector<uint32_t>& touched() const { return touched_; }
+  const std::vector<Vec3>& touchedStart() const { return touchedStart_; }
+  const std::vector<Vec3>& touchedStartVelocity() const { return touchedStartV_; }
 
   /// What one step's body contacts leave for the next, in one place (Jolt and Bullet keep one
   /// contact cache): the explicit stage's warm start and the frame-size steps' multipliers.
@@ -231,7 +236,7 @@ class BodyContacts {
   Nearest nearestTriangle(const Grid& g, const ContactBody& faces, const Vec3& p, Real reach, const Vec3* x,
                           uint32_t hint = ContactBody::kNone) const;
   void updatePatches(const Vec3* x);
-  void markTouched(const Contact& c, const Vec3* x);
+  void markTouched(const Contact& c, const Vec3* x, const Vec3* v);
 
   std::vector<ContactBody> bodies_;
   BodyContactSettings settings_;
@@ -263,6 +268,7 @@ class BodyContacts {
   std::vector<uint8_t> isTouched_;   ///< Per world vertex.
   std::vector<Vec3> touchedStart_;   ///< Their positions when the stage began.
   std::vector<Vec3> touchedLast_;    ///< Their positions at the last round's detection.
+  std::vector<Vec3> touchedStartV_;  ///< Their velocities when the stage began.
   std::vector<Real> roundShift_;     ///< Per world vertex: how far it moved since the last round's detection [m].
   std::vector<Real> roundShiftMax_;  ///< Per body: the largest roundShift_ of its vertices [m].
   int round_index_ = 0;              ///< The round being detected (resolve).

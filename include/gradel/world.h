@@ -29,6 +29,7 @@
 namespace gradel {
 
 class ThreadTeam;
+class ContactEnergyLimiter;
 class ChunkQueue;
 class ThreadGovernor;
 struct ElementStageRest;
@@ -355,6 +356,7 @@ class World {
   // Soft-soft contact: the stage, its last result, the boundary vertices' start of the step
   // (full-size arrays, only the bodies' boundary vertices written) and the inverse masses it uses.
   std::unique_ptr<BodyContacts> bodyContacts_;
+  std::unique_ptr<ContactEnergyLimiter> contactEnergy_;  ///< The stage's energy cap (body_contact_energy.h), made on first use.
   BodyContactSettings bodyContactSettings_;  ///< WorldSettings::bodyContact (replaceModel: contacts switched on).
   BodyContactStats bodyContactStats_;
   std::vector<Vec3> bodyContactStartX_, bodyContactStartV_;
