@@ -13,8 +13,8 @@
 // Rest offsets are lattice vectors: R0_i = h (P_i - mean P), P_i the vertex's lattice offset from
 // the element's first vertex in voxels (h the voxel size of the element's body,
 // RestModel::bodies), and since sum (x_i - c) = 0,
-// A = h (sum x_i P_i^T - c sum P_i^T). Pass 1 streams a 12-byte record per pair (the vertex and
-// (P_i, 1) as four int16; the vertex id and R0 took 28 bytes) and forms the rows of
+// A = h (sum x_i P_i^T - c sum P_i^T). Pass 1 streams the model's vertex id and a 4-byte record
+// per pair ((P_i, 1) as four int8; int16 for blocks over 64 voxels) and forms the rows of
 // sum x_i (P_i, 1)^T, whose last lane is sum x_i; the factor h does not change the fitted
 // rotation, and sum P_i is an exact integer. Four
 // elements' rows are then transposed into the rotation fit's lanes (their constants are stored in
@@ -48,20 +48,21 @@ struct alignas(32) ElementFrame {
 
 /// Per element, read by pass 1 four at a time: (sum_i P_i, 1 / n), (C_e [m], k_e [N/m]) and
 /// (sum_i R0_i / n [m], 0), the mean rest offset as pass 2 forms it (R0_i = X_i - C_e in floating
-/// point: a rounding residue, ~1e-16 |X|).
+/// point: a rounding residue, ~1e-16 |X|). Of these the stage stores only sum P and mean R0
+/// (ElementConstantGroup); n, C_e and k_e are the model's (elemStart, restCentroids, stiffness),
+/// loaded into lanes by the pass.
 struct ElementConstants {
   Real sumLattice[3], invCount;
   Real restCentroid[3], stiffness;
   Real meanRestOffset[3];
 };
 
-/// ElementConstants of four consecutive elements 4g .. 4g + 3, stored as pass 1 uses them: one
-/// row of four lanes (one element each) per quantity, so a batch loads its lanes without
-/// transposing. Lanes past the last element are zero.
-struct alignas(32) ElementConstantGroup {
-  Real sumLattice[3][4], invCount[4];
-  Real restCentroid[3][4], stiffness[4];
+/// The stage's own constants of four consecutive elements 4g .. 4g + 3, stored as pass 1 uses
+/// them: one row of four lanes (one element each) per quantity, so a batch loads its lanes without
+/// transposing. sum P is an integer (exact in a float). Lanes past the last element are zero.
+struct alignas(16) ElementConstantGroup {
   Real meanRestOffset[3][4];
+  float sumLattice[3][4];
 };
 
 /// The volumetric term's constants of four consecutive elements, in lanes as ElementConstantGroup:
@@ -79,13 +80,9 @@ struct alignas(32) ElementVolumeGroup {
   int32_t anisotropic = 0;
 };
 
-/// Per element-vertex pair, in the model's pair order: the vertex (as the byte offset of its
-/// position, vertex * sizeof(Vec3), so the gather needs no index arithmetic) and (P_i, 1), P_i its
-/// lattice offset [voxels] from the element's first vertex. 12 bytes.
-struct StagePair {
-  int16_t lattice[4];
-  uint32_t offset;
-};
+/// Pass 2 finds a vertex's elements from its count (vertexCount) and the start of its block of
+/// kVertexStartStride vertices (vertexBlockStart).
+constexpr size_t kVertexStartStride = 16;
 
 /// The accuracy of the step's rotation fit [rad]: fitRotation3Batch's tolerance in pass 1 (warm
 /// started from the element's last rotation, State::rotations). Eq. 1 is the element's torque
@@ -107,15 +104,31 @@ struct ElementStageRest {
   std::vector<ElementConstantGroup> groups;  ///< Element e's constants: lane e % 4 of groups[e / 4].
   /// As groups, for the volumetric term; empty when the model has none (RestModel::hasVolumeTerm).
   std::vector<ElementVolumeGroup> volume;
-  /// The model's pairs, then kPrefetchPairs padding pairs (vertex 0) for the prefetch to read.
+  /// Per pair, in the model's pair order (its vertex: RestModel::elemVerts), (P_i, 1): P_i the
+  /// vertex's lattice offset [voxels] from the element's first vertex. Four bytes a pair when
+  /// every offset of the model is in [-128, 127] (blocks up to 64 voxels across: -32 to 64 on the
+  /// gradational sphere n = 256), else four int16 in lattice16; the other vector is empty.
   /// std::logic_error when a rest position is off the model's voxel lattice, or when the model
   /// is too large for 32-bit byte offsets (over ~178 M vertices or ~33 M elements).
-  std::vector<StagePair> pairs;
-  std::vector<uint32_t> vertexStart;   ///< Per vertex + 1: its range in vertexFrames.
+  std::vector<int8_t> lattice8;
+  std::vector<int16_t> lattice16;
+  /// Per vertex: how many elements it has (at most 255: a vertex of a layout is in at most 8
+  /// blocks; std::logic_error otherwise), their frames' offsets in vertexFrames.
+  std::vector<uint8_t> vertexCount;
+  /// Per kVertexStartStride vertices + 1: where the first vertex of the block starts in vertexFrames.
+  std::vector<uint32_t> vertexBlockStart;
   std::vector<uint32_t> vertexFrames;  ///< The elements of each vertex, ascending, as frame byte offsets (e * 128).
 
   explicit ElementStageRest(const RestModel& model);
-  ElementConstants constants(size_t e) const;  ///< Element e's lane, gathered (tests).
+  /// Element e's constants, gathered from its lane and the model (tests).
+  ElementConstants constants(const RestModel& model, size_t e) const;
+  void lattice(size_t pair, int out[4]) const;  ///< Pair p's (P, 1) (tests).
+  /// Where vertex v's frames start in vertexFrames (the prefix of vertexCount).
+  uint32_t vertexStart(size_t v) const {
+    uint32_t j = vertexBlockStart[v / kVertexStartStride];
+    for (size_t u = v / kVertexStartStride * kVertexStartStride; u < v; ++u) j += vertexCount[u];
+    return j;
+  }
   size_t memoryBytes() const;
 };
 
@@ -131,15 +144,14 @@ template <class Sink>
 inline void gatherVertexForces(const RestModel& model, const ElementStageRest& rest, const ElementFrame* frames,
                                const Vec3* positions, size_t begin, size_t end, Sink&& sink) {
   using namespace simd;
-  const uint32_t* start = rest.vertexStart.data();
-  const uint32_t* offsets = rest.vertexFrames.data();
+  const uint8_t* count = rest.vertexCount.data();
   const char* base = reinterpret_cast<const char*>(frames);
   const Vec3* X = model.restPositions.data();
-  const uint32_t* j = offsets + start[begin];
+  const uint32_t* j = rest.vertexFrames.data() + rest.vertexStart(begin);
   for (size_t v = begin; v < end; ++v) {
     // sum G, sum t; lane 3 of sum t is sum k, which multiplies -x_v. The first frame starts the
     // sums (a vertex of no element gets zero force).
-    const uint32_t* je = offsets + start[v + 1];
+    const uint32_t* je = j + count[v];
     d4 g0 = splat(0), g1 = g0, g2 = g0, t = g0;
     if (j != je) {
       const ElementFrame& f = *reinterpret_cast<const ElementFrame*>(base + *j++);

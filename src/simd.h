@@ -102,6 +102,28 @@ inline d4 loadInt16x4(const int16_t* p) {
 #endif
 }
 
+/// Four int8 converted to doubles (exact).
+inline d4 loadInt8x4(const int8_t* p) {
+#if defined(__AVX2__)
+  int32_t v;
+  __builtin_memcpy(&v, p, sizeof v);
+  return (d4)_mm256_cvtepi32_pd(_mm_cvtepi8_epi32(_mm_cvtsi32_si128(v)));
+#else
+  return d4{Real(p[0]), Real(p[1]), Real(p[2]), Real(p[3])};
+#endif
+}
+
+/// p[l + 1] - p[l] for l = 0..3 as doubles (exact below 2^31): the counts of four CSR rows.
+inline d4 loadCountDifference(const uint32_t* p) {
+#if defined(__AVX2__)
+  const __m128i a = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p));
+  const __m128i b = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 1));
+  return (d4)_mm256_cvtepi32_pd(_mm_sub_epi32(b, a));
+#else
+  return d4{Real(p[1] - p[0]), Real(p[2] - p[1]), Real(p[3] - p[2]), Real(p[4] - p[3])};
+#endif
+}
+
 /// 4x4 transpose in place: afterwards a holds the old lane 0 of a, b, c, d, and so on.
 inline void transpose(d4& a, d4& b, d4& c, d4& d) {
 #if defined(__AVX__)

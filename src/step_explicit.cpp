@@ -199,6 +199,7 @@ constexpr uint64_t kElementCost = 21, kVertexCost = 4;
 // rotation fit's lanes, kVertexChunk of stageVertices' blocks).
 constexpr size_t kElementChunk = 256, kVertexChunk = 512;
 static_assert(kVertexChunk % kVertexBlock == 0, "chunks hold whole blocks (the contact forces' partial sums)");
+static_assert(kVertexBlock % kVertexStartStride == 0, "the vertex splits are made on the stage's blocks");
 // Small bodies are not worth waking threads for.
 constexpr size_t kMinVerticesPerThread = 1024;
 
@@ -227,7 +228,9 @@ void World::prepareTeam(int members) {
   governor_ = std::make_unique<ThreadGovernor>();
   elementQueue_ = std::make_unique<ChunkQueue>(), vertexQueue_ = std::make_unique<ChunkQueue>();
   elementSplit_ = chunkSplit(model_->elemStart, kElementCost, members, kElementChunk);
-  vertexSplit_ = chunkSplit(stageRest_->vertexStart, kVertexCost, members, kVertexChunk);
+  // Vertices by blocks of kVertexStartStride (the stage keeps each block's start in its frame list).
+  vertexSplit_ = chunkSplit(stageRest_->vertexBlockStart, kVertexCost * kVertexStartStride, members,
+                            kVertexChunk / kVertexStartStride);
   memberContactDepth_.assign(size_t(members), 0.0);
   teamMembers_ = members;
 }
@@ -280,8 +283,11 @@ void World::stepExplicit() {
       stageElementFrames(splitPoint(model_->elemStart, kElementCost, t, T, kRotationLanes),
                          splitPoint(model_->elemStart, kElementCost, t + 1, T, kRotationLanes));
 #pragma omp barrier
-      depth = stageVertices(splitPoint(stageRest_->vertexStart, kVertexCost, t, T, kVertexBlock),
-                            splitPoint(stageRest_->vertexStart, kVertexCost, t + 1, T, kVertexBlock), cb, t);
+      auto vertexSplit = [&](int k) {  // by blocks of kVertexStartStride, as prepareTeam
+        return std::min(V, kVertexStartStride * splitPoint(stageRest_->vertexBlockStart, kVertexCost * kVertexStartStride,
+                                                           k, T, kVertexBlock / kVertexStartStride));
+      };
+      depth = stageVertices(vertexSplit(t), vertexSplit(t + 1), cb, t);
     }
     scratch_->maxContactDepth = depth;
 #endif

@@ -3,6 +3,7 @@
 // follows fitRotation3 lane by lane.
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <random>
 
 #include "element_stage.h"
@@ -124,21 +125,48 @@ TEST(ElementStageRest, RestCentroidsAndLatticeOffsetsReproduceTheRestOffsets) {
     size_t mismatches = 0;
     Real worst = 0;
     for (size_t e = 0; e < m.numElements(); ++e) {
-      const ElementConstants k = rest.constants(e);
+      const ElementConstants k = rest.constants(m, e);
       const Vec3 C(k.restCentroid[0], k.restCentroid[1], k.restCentroid[2]);
       const Vec3 meanP = Vec3(k.sumLattice[0], k.sumLattice[1], k.sumLattice[2]) * k.invCount;
       EXPECT_EQ(k.stiffness, m.stiffness[e]);
       for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) {
         mismatches += (m.restPositions[m.elemVerts[p]] - C) != m.restOffset(e, p);
-        const int16_t* P = rest.pairs[p].lattice;
+        int P[4];
+        rest.lattice(p, P);
         ASSERT_EQ(P[3], 1);
-        ASSERT_EQ(rest.pairs[p].offset, m.elemVerts[p] * sizeof(Vec3));
         const Vec3 R0 = m.voxelSize * (Vec3(P[0], P[1], P[2]) - meanP);
         worst = std::max(worst, (R0 - m.restOffset(e, p)).norm() / m.voxelSize);
       }
     }
     EXPECT_EQ(mismatches, 0u) << layoutKindName(kind);
     EXPECT_LT(worst, 1e-12) << layoutKindName(kind);
+  }
+}
+
+// The pair records are one byte a coordinate when every lattice offset fits, else int16: both
+// give the same frames and rotations bit for bit (here the narrow records of a sphere widened by
+// hand), over the whole model and over a range ending inside a batch of four.
+TEST(ElementStageRest, NarrowAndWidePairRecordsGiveTheSameFrames) {
+  Body b = makeBody("sphere", 14, 3, LayoutKind::Gradational);
+  World w(b.model, isolated(), {}, {});
+  deformSmoothly(w, 0.05);
+  perturb(w, 0.2 * b.model->voxelSize, 0.0, 5);
+  const RestModel& m = *b.model;
+  const ElementStageRest narrow(m);
+  ASSERT_FALSE(narrow.lattice8.empty());
+  ASSERT_TRUE(narrow.lattice16.empty());
+  ElementStageRest wide = narrow;
+  wide.lattice16.assign(narrow.lattice8.begin(), narrow.lattice8.end());
+  wide.lattice8.clear();
+  const size_t E = m.numElements();
+  ASSERT_NE(E % 4, 0u);  // the model's last batch is a partial one
+  for (size_t end : {E, size_t(E / 8 * 4 + 2)}) {
+    std::vector<Quat> q8(E, Quat::Identity()), q16 = q8;
+    std::vector<ElementFrame> f8(E), f16(E);
+    computeElementFrames(m, narrow, 0, end, w.state().positions.data(), q8.data(), f8.data(), 20);
+    computeElementFrames(m, wide, 0, end, w.state().positions.data(), q16.data(), f16.data(), 20);
+    EXPECT_EQ(std::memcmp(f8.data(), f16.data(), end * sizeof(ElementFrame)), 0) << end;
+    EXPECT_EQ(std::memcmp(q8.data(), q16.data(), E * sizeof(Quat)), 0) << end;
   }
 }
 
