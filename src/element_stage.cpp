@@ -69,7 +69,7 @@ inline ElementRows elementRows(const char* x, const uint32_t* vertex, const Latt
 
 ElementStageRest::ElementStageRest(const RestModel& m) : groups((m.numElements() + 3) / 4, ElementConstantGroup{}) {
   const size_t V = m.numVertices(), E = m.numElements(), P = m.numPairs();
-  // Pass 1 reads positions at vertex * 24 and the vertex gather frames at element * 128, 32-bit.
+  // Pass 1 reads positions at vertex * 24 and the vertex gather frames at element * 104, 32-bit.
   if (V > UINT32_MAX / sizeof(Vec3) || E > UINT32_MAX / sizeof(ElementFrame))
     throw std::logic_error("ElementStageRest: the model is too large for 32-bit offsets");
   // Each element's lattice is its body's (bodies.h): h per body; a model without bodies (made
@@ -297,26 +297,27 @@ void elementFrames(const RestModel& m, const ElementStageRest& rest, const Latti
     } else {
       fitRotation3Batch(batch, maxIterations, kFrameRotationTolerance);
     }
-    // 4. Frames, four at once: G = k M and t = (k (e - M C), k), e = c - M mean R0 (the
+    // 4. Frames, four at once: G = k M and t = k (e - M C), e = c - M mean R0 (the
     //    residue's share removed as in element.h: the forces then sum to zero to rounding),
     //    transposed back to one frame per element; the rotations likewise.
     d4 M[9];
     for (int k = 0; k < 9; ++k) M[k] = load4(batch.M[k]);
-    const d4 k = K[7], zero = splat(0);
-    d4 F[4][4];  // F[column][lane before the transpose]
-    for (int col = 0; col < 3; ++col)
-      F[col][0] = k * M[col], F[col][1] = k * M[3 + col], F[col][2] = k * M[6 + col], F[col][3] = zero;
+    const d4 k = K[7];
+    d4 F[4][4];  // F[column][lane before the transpose] (F[3][3] unused: k is stored apart)
+    for (int col = 0; col < 3; ++col) F[col][0] = k * M[col], F[col][1] = k * M[3 + col], F[col][2] = k * M[6 + col];
     for (int r = 0; r < 3; ++r)
       F[3][r] = k * (c[r] - (M[3 * r] * K[8] + M[3 * r + 1] * K[9] + M[3 * r + 2] * K[10]) -
                      (M[3 * r] * K[4] + M[3 * r + 1] * K[5] + M[3 * r + 2] * K[6]));
-    F[3][3] = k;
     if (!rest.volume.empty()) addVolumeTerm(rest.volume[e0 / L], m.dim, batch, maxIterations, M, K, F);
-    for (int col = 0; col < 4; ++col) transpose(F[col][0], F[col][1], F[col][2], F[col][3]);
+    for (int col = 0; col < 3; ++col) {  // t's components into lane 3 of G's columns (ElementFrame)
+      F[col][3] = F[3][col];
+      transpose(F[col][0], F[col][1], F[col][2], F[col][3]);
+    }
     d4 q[4] = {load4(batch.q[1]), load4(batch.q[2]), load4(batch.q[3]), load4(batch.q[0])};
     transpose(q[0], q[1], q[2], q[3]);
     for (int l = 0; l < lanes; ++l) {
       ElementFrame& f = frames[e0 + l];
-      store4(f.c0, F[0][l]), store4(f.c1, F[1][l]), store4(f.c2, F[2][l]), store4(f.t, F[3][l]);
+      store4(f.c0, F[0][l]), store4(f.c1, F[1][l]), store4(f.c2, F[2][l]), f.k = k[l];
       store4(rotations[e0 + l].coeffs().data(), q[l]);
     }
   }

@@ -40,11 +40,15 @@
 
 namespace gradel {
 
-/// Per element, written by pass 1 and read by pass 2: the columns of k_e M (lane 3 zero) and
-/// (k_e (e - M C_e), k_e). 128 bytes, aligned for 4-wide loads.
-struct alignas(32) ElementFrame {
-  Real c0[4], c1[4], c2[4], t[4];
+/// Per element, written by pass 1 and read by pass 2: the columns of G = k_e M, each with one
+/// component of t = k_e (e - M C_e) in lane 3 (c_j = (G_0j, G_1j, G_2j, t_j)), and k_e. 104 bytes,
+/// packed (the vertex gather's loads need no alignment; a zero lane per column and padding to
+/// 128 took 3.6 bytes per vertex on a gradational sphere).
+struct ElementFrame {
+  Real c0[4], c1[4], c2[4];
+  Real k;
 };
+static_assert(sizeof(ElementFrame) == 104, "the frame is packed");
 
 /// Per element, read by pass 1 four at a time: (sum_i P_i, 1 / n), (C_e [m], k_e [N/m]) and
 /// (sum_i R0_i / n [m], 0), the mean rest offset as pass 2 forms it (R0_i = X_i - C_e in floating
@@ -117,7 +121,7 @@ struct ElementStageRest {
   std::vector<uint8_t> vertexCount;
   /// Per kVertexStartStride vertices + 1: where the first vertex of the block starts in vertexFrames.
   std::vector<uint32_t> vertexBlockStart;
-  std::vector<uint32_t> vertexFrames;  ///< The elements of each vertex, ascending, as frame byte offsets (e * 128).
+  std::vector<uint32_t> vertexFrames;  ///< The elements of each vertex, ascending, as frame byte offsets (e * 104).
 
   explicit ElementStageRest(const RestModel& model);
   /// Element e's constants, gathered from its lane and the model (tests).
@@ -149,21 +153,23 @@ inline void gatherVertexForces(const RestModel& model, const ElementStageRest& r
   const Vec3* X = model.restPositions.data();
   const uint32_t* j = rest.vertexFrames.data() + rest.vertexStart(begin);
   for (size_t v = begin; v < end; ++v) {
-    // sum G, sum t; lane 3 of sum t is sum k, which multiplies -x_v. The first frame starts the
-    // sums (a vertex of no element gets zero force).
+    // sum G with sum t in lane 3 of its columns, and sum k, which multiplies -x_v. The first
+    // frame starts the sums (a vertex of no element gets zero force).
     const uint32_t* je = j + count[v];
-    d4 g0 = splat(0), g1 = g0, g2 = g0, t = g0;
+    d4 g0 = splat(0), g1 = g0, g2 = g0;
+    Real k = 0;
     if (j != je) {
       const ElementFrame& f = *reinterpret_cast<const ElementFrame*>(base + *j++);
-      g0 = load4(f.c0), g1 = load4(f.c1), g2 = load4(f.c2), t = load4(f.t);
+      g0 = load4(f.c0), g1 = load4(f.c1), g2 = load4(f.c2), k = f.k;
     }
     for (; j != je; ++j) {
       const ElementFrame& f = *reinterpret_cast<const ElementFrame*>(base + *j);
-      g0 += load4(f.c0), g1 += load4(f.c1), g2 += load4(f.c2), t += load4(f.t);
+      g0 += load4(f.c0), g1 += load4(f.c1), g2 += load4(f.c2), k += f.k;
     }
     j = je;  // (it is: said here, the compiler takes je instead of recomputing j from the loop counter)
     const Real* r = X[v].data();
-    sink(v, g0 * r[0] + g1 * r[1] + g2 * r[2] + t - t[3] * loadVec3(positions[v]));
+    // Lane 3 of the force is not a component (the caller ignores it): here t_0 r_0 + t_1 r_1 + t_2 r_2.
+    sink(v, g0 * r[0] + g1 * r[1] + g2 * r[2] + laneThrees(g0, g1, g2) - k * loadVec3(positions[v]));
   }
 }
 

@@ -124,6 +124,17 @@ inline d4 loadCountDifference(const uint32_t* p) {
 #endif
 }
 
+/// (a[3], b[3], c[3], 0).
+inline d4 laneThrees(d4 a, d4 b, d4 c) {
+#if defined(__AVX__)
+  const __m256d ab = _mm256_unpackhi_pd((__m256d)a, (__m256d)b);              // a1 b1 a3 b3
+  const __m256d c0 = _mm256_unpackhi_pd((__m256d)c, _mm256_setzero_pd());     // c1 0 c3 0
+  return (d4)_mm256_permute2f128_pd(ab, c0, 0x31);
+#else
+  return d4{a[3], b[3], c[3], 0};
+#endif
+}
+
 /// 4x4 transpose in place: afterwards a holds the old lane 0 of a, b, c, d, and so on.
 inline void transpose(d4& a, d4& b, d4& c, d4& d) {
 #if defined(__AVX__)
