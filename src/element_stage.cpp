@@ -28,10 +28,10 @@ inline d4 loadLattice(const int8_t* p) { return loadInt8x4(p); }
 inline d4 loadLattice(const int16_t* p) { return loadInt16x4(p); }
 
 template <bool Prefetch, class Lattice>
-inline ElementRows elementRows(const char* x, const uint32_t* vertex, const Lattice* lattice, uint32_t n) {
+inline ElementRows elementRows(const char* x, const uint32_t* vertex, const Lattice* lattice, size_t n) {
   constexpr size_t S = sizeof(Vec3);
   d4 a0 = splat(0), a1 = a0, a2 = a0, b0 = a0, b1 = a0, b2 = a0;
-  uint32_t i = 0;
+  size_t i = 0;
   if (n >= 2) {  // the first two pairs start the sums (instead of six zeroed registers)
     if constexpr (Prefetch) {
       __builtin_prefetch(x + vertex[kPrefetchPairs] * S);
@@ -242,6 +242,7 @@ void elementFrames(const RestModel& m, const ElementStageRest& rest, const Latti
     //    kPrefetchPairs pairs ahead: not in the model's last batches.
     const bool prefetch = Prefetch && elemStart[e0 + size_t(lanes)] + kPrefetchPairs <= P;
     d4 S[3][4], Q[4];
+#pragma GCC unroll 4
     for (int l = 0; l < L; ++l) {
       if (l >= lanes) {
         S[0][l] = d4{1, 0, 0, 0}, S[1][l] = d4{0, 1, 0, 0}, S[2][l] = d4{0, 0, 1, 0};
@@ -258,24 +259,17 @@ void elementFrames(const RestModel& m, const ElementStageRest& rest, const Latti
     for (int j = 0; j < 3; ++j) transpose(S[j][0], S[j][1], S[j][2], S[j][3]);
     transpose(Q[0], Q[1], Q[2], Q[3]);  // x, y, z, w
     // The stage's constants are stored in lanes already (a padding lane's are zero); 1 / n, C and
-    // k are the model's, loaded into lanes (zero past the model's last element).
+    // k are the model's, loaded into lanes (zero past the model's last element). Those used after
+    // the fit are loaded after it (a call: no vector register survives it).
     const ElementConstantGroup& g = rest.groups[e0 / L];
+    const bool full = e0 + L <= E;
     d4 K[11];  // sum P (3), 1 / n, C (3), k, mean R0 (3)
-    for (int j = 0; j < 3; ++j) K[j] = loadFloat4(g.sumLattice[j]), K[8 + j] = load4(g.meanRestOffset[j]);
-    if (e0 + L <= E) {
+    for (int j = 0; j < 3; ++j) K[j] = loadFloat4(g.sumLattice[j]);
+    if (full) {
       K[3] = 1.0 / loadCountDifference(elemStart + e0);
-      K[7] = load4(m.stiffness.data() + e0);
-      const Vec3* C = m.restCentroids.data() + e0;
-      d4 c0 = loadVec3(C[0]), c1 = loadVec3(C[1]), c2 = loadVec3(C[2]), c3 = loadVec3(C[3]);
-      transpose(c0, c1, c2, c3);
-      K[4] = c0, K[5] = c1, K[6] = c2;
     } else {
-      for (int j = 3; j < 8; ++j) K[j] = splat(0);
-      for (size_t e = e0; e < E; ++e) {
-        const size_t l = e - e0;
-        K[3][l] = 1.0 / Real(elemStart[e + 1] - elemStart[e]), K[7][l] = m.stiffness[e];
-        for (int a = 0; a < 3; ++a) K[4 + a][l] = m.restCentroids[e][a];
-      }
+      K[3] = splat(0);
+      for (size_t e = e0; e < E; ++e) K[3][e - e0] = 1.0 / Real(elemStart[e + 1] - elemStart[e]);
     }
     // 2. Centroid c = sum x / n and A / h = sum x P^T - c (sum P)^T.
     d4 c[3];
@@ -296,6 +290,20 @@ void elementFrames(const RestModel& m, const ElementStageRest& rest, const Latti
       }
     } else {
       fitRotation3Batch(batch, maxIterations, kFrameRotationTolerance);
+    }
+    for (int j = 0; j < 3; ++j) K[8 + j] = load4(g.meanRestOffset[j]);
+    if (full) {
+      K[7] = load4(m.stiffness.data() + e0);
+      const Vec3* C = m.restCentroids.data() + e0;
+      d4 c0 = loadVec3(C[0]), c1 = loadVec3(C[1]), c2 = loadVec3(C[2]), c3 = loadVec3(C[3]);
+      transpose(c0, c1, c2, c3);
+      K[4] = c0, K[5] = c1, K[6] = c2;
+    } else {
+      for (int j = 4; j < 8; ++j) K[j] = splat(0);
+      for (size_t e = e0; e < E; ++e) {
+        K[7][e - e0] = m.stiffness[e];
+        for (int a = 0; a < 3; ++a) K[4 + a][e - e0] = m.restCentroids[e][a];
+      }
     }
     // 4. Frames, four at once: G = k M and t = k (e - M C), e = c - M mean R0 (the
     //    residue's share removed as in element.h: the forces then sum to zero to rounding),
