@@ -32,7 +32,9 @@
 // ElementVolumeGroup and does none of this work.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 #include "gradel/model.h"
@@ -142,17 +144,20 @@ struct ElementStageRest {
 void computeElementFrames(const RestModel& model, const ElementStageRest& rest, size_t begin, size_t end,
                           const Vec3* positions, Quat* rotations, ElementFrame* frames, int maxIterations);
 
-/// Pass 2 for vertices [begin, end): calls sink(v, f) with each vertex's elastic force f [N] as
-/// (fx, fy, fz, 0). Inline, so that the caller's integration fuses with the gather.
+/// Pass 2 for vertices [begin, end): calls sink(v, f, wide) with each vertex's elastic force f [N]
+/// as (fx, fy, fz, junk): lane 3 is not a component. Inline, so that the caller's integration
+/// fuses with the gather. wide is std::true_type for v < wideEnd, else std::false_type: the caller
+/// says which vertices may read and write 32 bytes at their Vec3 (the next vertex's x in lane 3,
+/// written back unchanged: all but the last vertex of the range a thread owns).
 template <class Sink>
 inline void gatherVertexForces(const RestModel& model, const ElementStageRest& rest, const ElementFrame* frames,
-                               const Vec3* positions, size_t begin, size_t end, Sink&& sink) {
+                               size_t begin, size_t end, size_t wideEnd, Sink&& sink) {
   using namespace simd;
   const uint8_t* count = rest.vertexCount.data();
   const char* base = reinterpret_cast<const char*>(frames);
   const Vec3* X = model.restPositions.data();
   const uint32_t* j = rest.vertexFrames.data() + rest.vertexStart(begin);
-  for (size_t v = begin; v < end; ++v) {
+  auto vertex = [&](size_t v, auto wide) {
     // sum G with sum t in lane 3 of its columns, and sum k, which multiplies -x_v. The first
     // frame starts the sums (a vertex of no element gets zero force).
     const uint32_t* je = j + count[v];
@@ -168,9 +173,12 @@ inline void gatherVertexForces(const RestModel& model, const ElementStageRest& r
     }
     j = je;  // (it is: said here, the compiler takes je instead of recomputing j from the loop counter)
     const Real* r = X[v].data();
-    // Lane 3 of the force is not a component (the caller ignores it): here t_0 r_0 + t_1 r_1 + t_2 r_2.
-    sink(v, g0 * r[0] + g1 * r[1] + g2 * r[2] + laneThrees(g0, g1, g2) - k * loadVec3(positions[v]));
-  }
+    // (g0 r0 + g1 r1 + g2 r2 + t) - k x, summed as sink does: sink gets the first part and k.
+    sink(v, g0 * r[0] + g1 * r[1] + g2 * r[2] + laneThrees(g0, g1, g2), k, wide);
+  };
+  const size_t w = std::max(begin, std::min(end, wideEnd));
+  for (size_t v = begin; v < w; ++v) vertex(v, std::true_type{});
+  for (size_t v = w; v < end; ++v) vertex(v, std::false_type{});
 }
 
 }  // namespace gradel

@@ -93,24 +93,44 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb, int
   // One loop per integrator, per "contacts possible" and per "soft-soft contact on": none of
   // these tests is made per vertex, and without contacts nothing is kept for them.
   auto run = [&](auto forward, auto contacts, auto perVertexDamping, auto soft) {
+    // The loop's values as locals of this function (the captures are references: a store of a
+    // position could alias them, and they were reloaded per vertex).
+    Vec3* const xs = positions;
+    Vec3* const vs = velocities;
+    const Real* const im = invMass;
+    const Real* const vdamp = vertexDamp;
+    const Real h = dt, c = damp;
+    const d4 gravity = g;
     d4 start[kBlock], startVelocity[kBlock];
     for (size_t b = begin, be; b < end; b = be) {
       be = std::min(end, (b / kBlock + 1) * kBlock);  // blocks aligned to kBlock (the contact forces' partial sums)
       d4 lo = splat(std::numeric_limits<Real>::infinity()), hi = -lo;
       d4 moved2 = splat(0), since2 = splat(0);  // (addMotion, lane per axis, from the values at hand)
       bool touched = false;
-      gatherVertexForces(m, *stageRest_, scratch_->frames.data(), positions, b, be, [&](size_t i, d4 force) {
-        const d4 a = force * invMass[i] + g;
-        const d4 x0 = loadVec3(positions[i]), v0 = loadVec3(velocities[i]);
+      // All but the range's last vertex read and write their position and velocity as 32 bytes
+      // (lane 3 the next vertex's x, loaded and written back unchanged): one load and store
+      // instead of a masked load and three stores. The range's last vertex does not: the next
+      // one may be another thread's.
+      gatherVertexForces(m, *stageRest_, scratch_->frames.data(), b, be, end - 1, [&](size_t i, d4 partial, Real k, auto wide) {
+        d4 x0, v0;
+        if constexpr (wide())
+          x0 = load4(xs[i].data()), v0 = load4(vs[i].data());
+        else
+          x0 = loadVec3(xs[i]), v0 = loadVec3(vs[i]);
+        const d4 force = partial - k * x0;
+        const d4 a = force * im[i] + gravity;
         if constexpr (soft()) storeVec3(startX[i], x0), storeVec3(startV[i], v0);
         d4 x = x0, v = v0;
-        Real vd = damp;
-        if constexpr (perVertexDamping()) vd = vertexDamp[i];
+        Real vd = c;
+        if constexpr (perVertexDamping()) vd = vdamp[i];
         if constexpr (forward())
-          forwardEulerStep(x, v, a, dt, vd);  // integration.h
+          forwardEulerStep(x, v, a, h, vd);  // integration.h
         else
-          symplecticEulerStep(x, v, a, dt, vd);
-        storeVec3(positions[i], x), storeVec3(velocities[i], v);
+          symplecticEulerStep(x, v, a, h, vd);
+        if constexpr (wide())
+          store4(xs[i].data(), keepLane3(x, x0)), store4(vs[i].data(), keepLane3(v, v0));
+        else
+          storeVec3(xs[i], x), storeVec3(vs[i], v);
         if constexpr (soft()) {
           const d4 d = x - x0, e = x - loadFloat4(reference[i].data());
           moved2 = max(d * d, moved2), since2 = max(e * e, since2);  // (a NaN lane keeps the maximum)
