@@ -136,6 +136,7 @@ ElementStageRest::ElementStageRest(const RestModel& m) : groups((m.numElements()
   for (size_t v = 0; v < V; ++v) {
     if (start[v + 1] > 255) throw std::logic_error("ElementStageRest: a vertex in more than 255 elements");
     vertexCount[v] = uint8_t(start[v + 1]);
+    everyVertexInAnElement = everyVertexInAnElement && start[v + 1] > 0;
     start[v + 1] += start[v];
   }
   vertexBlockStart.resize((V + kVertexStartStride - 1) / kVertexStartStride + 1);

@@ -121,6 +121,9 @@ struct ElementStageRest {
   /// Per vertex: how many elements it has (at most 255: a vertex of a layout is in at most 8
   /// blocks; std::logic_error otherwise), their frames' offsets in vertexFrames.
   std::vector<uint8_t> vertexCount;
+  /// No vertex count is 0 (a built model's vertices are its elements' corners): the gather then
+  /// does not test for a vertex without frames.
+  bool everyVertexInAnElement = true;
   /// Per kVertexStartStride vertices + 1: where the first vertex of the block starts in vertexFrames.
   std::vector<uint32_t> vertexBlockStart;
   std::vector<uint32_t> vertexFrames;  ///< The elements of each vertex, ascending, as frame byte offsets (e * 104).
@@ -157,13 +160,13 @@ inline void gatherVertexForces(const RestModel& model, const ElementStageRest& r
   const char* base = reinterpret_cast<const char*>(frames);
   const Vec3* X = model.restPositions.data();
   const uint32_t* j = rest.vertexFrames.data() + rest.vertexStart(begin);
-  auto vertex = [&](size_t v, auto wide) {
+  auto vertex = [&](size_t v, auto wide, auto everyVertexInAnElement) {
     // sum G with sum t in lane 3 of its columns, and sum k, which multiplies -x_v. The first
     // frame starts the sums (a vertex of no element gets zero force).
     const uint32_t* je = j + count[v];
     d4 g0 = splat(0), g1 = g0, g2 = g0;
     Real k = 0;
-    if (j != je) {
+    if (everyVertexInAnElement() || j != je) {
       const ElementFrame& f = *reinterpret_cast<const ElementFrame*>(base + *j++);
       g0 = load4(f.c0), g1 = load4(f.c1), g2 = load4(f.c2), k = f.k;
     }
@@ -177,8 +180,11 @@ inline void gatherVertexForces(const RestModel& model, const ElementStageRest& r
     sink(v, g0 * r[0] + g1 * r[1] + g2 * r[2] + laneThrees(g0, g1, g2), k, wide);
   };
   const size_t w = std::max(begin, std::min(end, wideEnd));
-  for (size_t v = begin; v < w; ++v) vertex(v, std::true_type{});
-  for (size_t v = w; v < end; ++v) vertex(v, std::false_type{});
+  auto loops = [&](auto everyVertexInAnElement) {
+    for (size_t v = begin; v < w; ++v) vertex(v, std::true_type{}, everyVertexInAnElement);
+    for (size_t v = w; v < end; ++v) vertex(v, std::false_type{}, everyVertexInAnElement);
+  };
+  rest.everyVertexInAnElement ? loops(std::true_type{}) : loops(std::false_type{});
 }
 
 }  // namespace gradel

@@ -170,6 +170,41 @@ TEST(ElementStageRest, NarrowAndWidePairRecordsGiveTheSameFrames) {
   }
 }
 
+// A vertex of no element (not made by buildRestModel, but a RestModel may hold one) gets zero
+// force, and the other vertices' forces are those of the model without it, bit for bit.
+TEST(ElementStageRest, AVertexOfNoElementGetsNoForce) {
+  Body b = makeBody("sphere", 10, 3, LayoutKind::Gradational);
+  World w(b.model, isolated(), {}, {});
+  deformSmoothly(w, 0.05);
+  const RestModel& m = *b.model;
+  const size_t lone = m.numVertices() / 2, V = m.numVertices(), E = m.numElements();
+  RestModel withLone = m;
+  withLone.restPositions.insert(withLone.restPositions.begin() + long(lone), m.restPositions[lone]);
+  for (uint32_t& v : withLone.elemVerts) v += v >= lone ? 1 : 0;
+  for (BodyRange& r : withLone.bodies) r.vertexEnd += 1;
+  std::vector<Vec3> x = w.state().positions;
+  x.insert(x.begin() + long(lone), Vec3(1, 2, 3));
+  const ElementStageRest rest(m), restLone(withLone);
+  ASSERT_TRUE(rest.everyVertexInAnElement);
+  ASSERT_FALSE(restLone.everyVertexInAnElement);
+  auto forces = [&](const RestModel& model, const ElementStageRest& r, const std::vector<Vec3>& pos) {
+    std::vector<Quat> q(E, Quat::Identity());
+    std::vector<ElementFrame> frames(E);
+    computeElementFrames(model, r, 0, E, pos.data(), q.data(), frames.data(), 20);
+    std::vector<Vec3> f(model.numVertices());
+    gatherVertexForces(model, r, frames.data(), 0, model.numVertices(), 0, [&](size_t v, simd::d4 partial, Real k, auto) {
+      const simd::d4 force = partial - k * simd::loadVec3(pos[v]);
+      f[v] = Vec3(force[0], force[1], force[2]);
+    });
+    return f;
+  };
+  const std::vector<Vec3> f = forces(m, rest, w.state().positions), g = forces(withLone, restLone, x);
+  EXPECT_EQ(g[lone], Vec3::Zero());
+  size_t differ = 0;
+  for (size_t v = 0; v < V; ++v) differ += f[v] != g[v + (v >= lone ? 1 : 0)];
+  EXPECT_EQ(differ, 0u);
+}
+
 // A rest position off the voxel lattice cannot be streamed as lattice offsets: refused loudly.
 TEST(ElementStageRest, RefusesRestPositionsOffTheLattice) {
   Body b = makeBody("sphere", 6, 3, LayoutKind::Gradational);
