@@ -324,10 +324,15 @@ void elementFrames(const RestModel& m, const ElementStageRest& rest, const Latti
     }
     d4 q[4] = {load4(batch.q[1]), load4(batch.q[2]), load4(batch.q[3]), load4(batch.q[0])};
     transpose(q[0], q[1], q[2], q[3]);
-    for (int l = 0; l < lanes; ++l) {
+    auto store = [&](int l) {
       ElementFrame& f = frames[e0 + l];
       store4(f.c0, F[0][l]), store4(f.c1, F[1][l]), store4(f.c2, F[2][l]), f.k = k[l];
       store4(rotations[e0 + l].coeffs().data(), q[l]);
+    };
+    if (lanes == L) {  // (lanes known: the frames stay in registers)
+      store(0), store(1), store(2), store(3);
+    } else {
+      for (int l = 0; l < lanes; ++l) store(l);
     }
   }
 }
