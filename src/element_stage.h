@@ -147,20 +147,18 @@ struct ElementStageRest {
 void computeElementFrames(const RestModel& model, const ElementStageRest& rest, size_t begin, size_t end,
                           const Vec3* positions, Quat* rotations, ElementFrame* frames, int maxIterations);
 
-/// Pass 2 for vertices [begin, end): calls sink(v, f, wide) with each vertex's elastic force f [N]
-/// as (fx, fy, fz, junk): lane 3 is not a component. Inline, so that the caller's integration
-/// fuses with the gather. wide is std::true_type for v < wideEnd, else std::false_type: the caller
-/// says which vertices may read and write 32 bytes at their Vec3 (the next vertex's x in lane 3,
-/// written back unchanged: all but the last vertex of the range a thread owns).
+/// Pass 2 for vertices [begin, end): calls sink(v, p, k) with p = G X_v + t (lane 3 not a
+/// component) and k = sum k_e, each vertex's elastic force [N] being p - k x_v (the sink loads x_v
+/// anyway). Inline, so that the caller's integration fuses with the gather.
 template <class Sink>
 inline void gatherVertexForces(const RestModel& model, const ElementStageRest& rest, const ElementFrame* frames,
-                               size_t begin, size_t end, size_t wideEnd, Sink&& sink) {
+                               size_t begin, size_t end, Sink&& sink) {
   using namespace simd;
   const uint8_t* count = rest.vertexCount.data();
   const char* base = reinterpret_cast<const char*>(frames);
   const Vec3* X = model.restPositions.data();
   const uint32_t* j = rest.vertexFrames.data() + rest.vertexStart(begin);
-  auto vertex = [&](size_t v, auto wide, auto everyVertexInAnElement) {
+  auto vertex = [&](size_t v, auto everyVertexInAnElement) {
     // sum G with sum t in lane 3 of its columns, and sum k, which multiplies -x_v. The first
     // frame starts the sums (a vertex of no element gets zero force).
     const uint32_t* je = j + count[v];
@@ -177,12 +175,10 @@ inline void gatherVertexForces(const RestModel& model, const ElementStageRest& r
     j = je;  // (it is: said here, the compiler takes je instead of recomputing j from the loop counter)
     const Real* r = X[v].data();
     // (g0 r0 + g1 r1 + g2 r2 + t) - k x, summed as sink does: sink gets the first part and k.
-    sink(v, g0 * r[0] + g1 * r[1] + g2 * r[2] + laneThrees(g0, g1, g2), k, wide);
+    sink(v, g0 * r[0] + g1 * r[1] + g2 * r[2] + laneThrees(g0, g1, g2), k);
   };
-  const size_t w = std::max(begin, std::min(end, wideEnd));
   auto loops = [&](auto everyVertexInAnElement) {
-    for (size_t v = begin; v < w; ++v) vertex(v, std::true_type{}, everyVertexInAnElement);
-    for (size_t v = w; v < end; ++v) vertex(v, std::false_type{}, everyVertexInAnElement);
+    for (size_t v = begin; v < end; ++v) vertex(v, everyVertexInAnElement);
   };
   rest.everyVertexInAnElement ? loops(std::true_type{}) : loops(std::false_type{});
 }

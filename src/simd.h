@@ -51,15 +51,6 @@ inline void storeVec3(Vec3& v, d4 a) {
 #endif
 }
 
-/// Lanes 0-2 of a, lane 3 of b.
-inline d4 keepLane3(d4 a, d4 b) {
-#if defined(__AVX__)
-  return (d4)_mm256_blend_pd((__m256d)a, (__m256d)b, 0x8);
-#else
-  return d4{a[0], a[1], a[2], b[3]};
-#endif
-}
-
 /// a where m is set, else b (one vblendvpd with AVX; the masks' lanes are all ones or zero).
 inline d4 select(m4 m, d4 a, d4 b) {
 #if defined(__AVX__)

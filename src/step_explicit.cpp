@@ -107,16 +107,8 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb, int
       d4 lo = splat(std::numeric_limits<Real>::infinity()), hi = -lo;
       d4 moved2 = splat(0), since2 = splat(0);  // (addMotion, lane per axis, from the values at hand)
       bool touched = false;
-      // All but the range's last vertex read and write their position and velocity as 32 bytes
-      // (lane 3 the next vertex's x, loaded and written back unchanged): one load and store
-      // instead of a masked load and three stores. The range's last vertex does not: the next
-      // one may be another thread's.
-      gatherVertexForces(m, *stageRest_, scratch_->frames.data(), b, be, end - 1, [&](size_t i, d4 partial, Real k, auto wide) {
-        d4 x0, v0;
-        if constexpr (wide())
-          x0 = load4(xs[i].data()), v0 = load4(vs[i].data());
-        else
-          x0 = loadVec3(xs[i]), v0 = loadVec3(vs[i]);
+      gatherVertexForces(m, *stageRest_, scratch_->frames.data(), b, be, [&](size_t i, d4 partial, Real k) {
+        const d4 x0 = loadVec3(xs[i]), v0 = loadVec3(vs[i]);
         const d4 force = partial - k * x0;
         const d4 a = force * im[i] + gravity;
         if constexpr (soft()) storeVec3(startX[i], x0), storeVec3(startV[i], v0);
@@ -127,10 +119,7 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb, int
           forwardEulerStep(x, v, a, h, vd);  // integration.h
         else
           symplecticEulerStep(x, v, a, h, vd);
-        if constexpr (wide())
-          store4(xs[i].data(), keepLane3(x, x0)), store4(vs[i].data(), keepLane3(v, v0));
-        else
-          storeVec3(xs[i], x), storeVec3(vs[i], v);
+        storeVec3(xs[i], x), storeVec3(vs[i], v);
         if constexpr (soft()) {
           const d4 d = x - x0, e = x - loadFloat4(reference[i].data());
           moved2 = max(d * d, moved2), since2 = max(e * e, since2);  // (a NaN lane keeps the maximum)
