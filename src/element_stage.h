@@ -5,11 +5,12 @@
 // f_i = k_e (M R0_i - x_i + e) with e = c - M sum R0 / n), split in two passes that need no locks
 // and no colouring:
 //  1. per element (computeElementFrames): moments, the rotation fitted four elements at a time
-//     (fitRotation3Batch), and the element's "frame": the columns of G = k_e M and
-//     t = (k_e (e - M C_e), k_e), C_e the rest centroid;
+//     (fitRotation3Batch), and the element's "frame": the columns of G = k_e M,
+//     t = k_e (e - M C_e) (C_e the rest centroid) and k_e, 104 bytes (ElementFrame);
 //  2. per vertex (gatherVertexForces): with R0 = X_v - C_e (X_v the rest position),
 //     f_v = sum_e k_e (M R0 + e - x_v) = (sum_e G_e) X_v + sum_e t_e - (sum_e k_e) x_v:
-//     four 4-wide additions per pair, in a fixed order (the vertex's elements in id order).
+//     three 4-wide additions and one scalar per pair, in a fixed order (the vertex's elements in
+//     id order).
 // Rest offsets are lattice vectors: R0_i = h (P_i - mean P), P_i the vertex's lattice offset from
 // the element's first vertex in voxels (h the voxel size of the element's body,
 // RestModel::bodies), and since sum (x_i - c) = 0,
@@ -17,8 +18,9 @@
 // per pair ((P_i, 1) as four int8; int16 for blocks over 64 voxels) and forms the rows of
 // sum x_i (P_i, 1)^T, whose last lane is sum x_i; the factor h does not change the fitted
 // rotation, and sum P_i is an exact integer. Four
-// elements' rows are then transposed into the rotation fit's lanes (their constants are stored in
-// those lanes already, ElementConstantGroup), and the frames computed four at a time and
+// elements' rows are then transposed into the rotation fit's lanes (the stage's constants are
+// stored in those lanes already, ElementConstantGroup; the model's are loaded into them), and the
+// frames computed four at a time and
 // transposed back. Each vertex is one 4-wide register (x, y, z, 0); above kPrefetchAboveBytes of
 // positions pass 1 prefetches the vertex of the pair kPrefetchPairs ahead, since large bodies are
 // bound by these indirect gathers. Every sum is formed in an order that does not depend on how ranges are
