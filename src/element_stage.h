@@ -149,57 +149,38 @@ struct ElementStageRest {
 void computeElementFrames(const RestModel& model, const ElementStageRest& rest, size_t begin, size_t end,
                           const Vec3* positions, Quat* rotations, ElementFrame* frames, int maxIterations);
 
-/// One vertex's sums in pass 2: p = G X_v + t (lane 3 not a component) and k = sum k_e, its
-/// elastic force [N] being p - k x_v.
-struct VertexSums {
-  simd::d4 p;
-  Real k;
-};
-
-/// The frame sums of vertex v, whose frame offsets start at j (advanced past them). The first
-/// frame starts the sums (a vertex of no element gets zero force; Every: the model has none).
-template <bool Every>
-inline VertexSums vertexSums(const uint32_t*& j, uint32_t count, const char* base, const Real* r) {
-  using namespace simd;
-  const uint32_t* je = j + count;
-  d4 g0 = splat(0), g1 = g0, g2 = g0;
-  Real k = 0;
-  if (Every || j != je) {
-    const ElementFrame& f = *reinterpret_cast<const ElementFrame*>(base + *j++);
-    g0 = load4(f.c0), g1 = load4(f.c1), g2 = load4(f.c2), k = f.k;
-  }
-  for (; j != je; ++j) {
-    const ElementFrame& f = *reinterpret_cast<const ElementFrame*>(base + *j);
-    g0 += load4(f.c0), g1 += load4(f.c1), g2 += load4(f.c2), k += f.k;
-  }
-  j = je;  // (it is: said here, the compiler takes je instead of recomputing j from the loop counter)
-  return {g0 * r[0] + g1 * r[1] + g2 * r[2] + laneThrees(g0, g1, g2), k};
-}
-
-/// Pass 2 for vertices [begin, end): calls sink(v, sums) with each vertex's VertexSums, in vertex
-/// order (the sink loads x_v anyway and forms p - k x_v). Inline, so that the caller's integration
-/// fuses with the gather. With ByFour, (end - begin) must be a multiple of 4 and the sink is called
-/// once per four vertices, sink(v, sums of v, v + 1, v + 2, v + 3).
-template <bool ByFour = false, class Sink>
+/// Pass 2 for vertices [begin, end): calls sink(v, p, k) with p = G X_v + t (lane 3 not a
+/// component) and k = sum k_e, each vertex's elastic force [N] being p - k x_v (the sink loads x_v
+/// anyway). Inline, so that the caller's integration fuses with the gather.
+template <class Sink>
 inline void gatherVertexForces(const RestModel& model, const ElementStageRest& rest, const ElementFrame* frames,
                                size_t begin, size_t end, Sink&& sink) {
+  using namespace simd;
   const uint8_t* count = rest.vertexCount.data();
   const char* base = reinterpret_cast<const char*>(frames);
   const Vec3* X = model.restPositions.data();
   const uint32_t* j = rest.vertexFrames.data() + rest.vertexStart(begin);
-  auto loops = [&](auto every) {
-    constexpr bool E = decltype(every)::value;
-    if constexpr (ByFour) {
-      for (size_t v = begin; v + 4 <= end; v += 4) {
-        const VertexSums a = vertexSums<E>(j, count[v], base, X[v].data());
-        const VertexSums b = vertexSums<E>(j, count[v + 1], base, X[v + 1].data());
-        const VertexSums c = vertexSums<E>(j, count[v + 2], base, X[v + 2].data());
-        const VertexSums d = vertexSums<E>(j, count[v + 3], base, X[v + 3].data());
-        sink(v, a, b, c, d);
-      }
-    } else {
-      for (size_t v = begin; v < end; ++v) sink(v, vertexSums<E>(j, count[v], base, X[v].data()));
+  auto vertex = [&](size_t v, auto everyVertexInAnElement) {
+    // sum G with sum t in lane 3 of its columns, and sum k, which multiplies -x_v. The first
+    // frame starts the sums (a vertex of no element gets zero force).
+    const uint32_t* je = j + count[v];
+    d4 g0 = splat(0), g1 = g0, g2 = g0;
+    Real k = 0;
+    if (everyVertexInAnElement() || j != je) {
+      const ElementFrame& f = *reinterpret_cast<const ElementFrame*>(base + *j++);
+      g0 = load4(f.c0), g1 = load4(f.c1), g2 = load4(f.c2), k = f.k;
     }
+    for (; j != je; ++j) {
+      const ElementFrame& f = *reinterpret_cast<const ElementFrame*>(base + *j);
+      g0 += load4(f.c0), g1 += load4(f.c1), g2 += load4(f.c2), k += f.k;
+    }
+    j = je;  // (it is: said here, the compiler takes je instead of recomputing j from the loop counter)
+    const Real* r = X[v].data();
+    // (g0 r0 + g1 r1 + g2 r2 + t) - k x, summed as sink does: sink gets the first part and k.
+    sink(v, g0 * r[0] + g1 * r[1] + g2 * r[2] + laneThrees(g0, g1, g2), k);
+  };
+  auto loops = [&](auto everyVertexInAnElement) {
+    for (size_t v = begin; v < end; ++v) vertex(v, everyVertexInAnElement);
   };
   rest.everyVertexInAnElement ? loops(std::true_type{}) : loops(std::false_type{});
 }

@@ -135,31 +135,6 @@ inline d4 laneThrees(d4 a, d4 b, d4 c) {
 #endif
 }
 
-/// Four Vec3 as (x, y, z, junk) packed into their 12 consecutive coordinates: out[0] = (a0, a1,
-/// a2, b0), out[1] = (b1, b2, c0, c1), out[2] = (c2, d0, d1, d2).
-inline void packVec3x4(d4 a, d4 b, d4 c, d4 d, d4* out) {
-#if defined(__AVX2__)
-  const __m256d A = (__m256d)a, B = (__m256d)b, C = (__m256d)c, D = (__m256d)d;
-  out[0] = (d4)_mm256_blend_pd(A, _mm256_permute4x64_pd(B, 0x00), 0x8);
-  out[1] = (d4)_mm256_insertf128_pd(_mm256_permute4x64_pd(B, 0x09), _mm256_castpd256_pd128(C), 1);
-  out[2] = (d4)_mm256_blend_pd(_mm256_permute4x64_pd(D, 0x90), _mm256_permute4x64_pd(C, 0x02), 0x1);
-#else
-  out[0] = d4{a[0], a[1], a[2], b[0]}, out[1] = d4{b[1], b[2], c[0], c[1]}, out[2] = d4{c[2], d[0], d[1], d[2]};
-#endif
-}
-
-/// The four lanes of s spread over four vertices' 12 coordinates (as packVec3x4): out[0] =
-/// (s0, s0, s0, s1), out[1] = (s1, s1, s2, s2), out[2] = (s2, s3, s3, s3).
-inline void spreadLanes(d4 s, d4* out) {
-#if defined(__AVX2__)
-  const __m256d S = (__m256d)s;
-  out[0] = (d4)_mm256_permute4x64_pd(S, 0x40), out[1] = (d4)_mm256_permute4x64_pd(S, 0xA5);
-  out[2] = (d4)_mm256_permute4x64_pd(S, 0xFE);
-#else
-  out[0] = d4{s[0], s[0], s[0], s[1]}, out[1] = d4{s[1], s[1], s[2], s[2]}, out[2] = d4{s[2], s[3], s[3], s[3]};
-#endif
-}
-
 /// 4x4 transpose in place: afterwards a holds the old lane 0 of a, b, c, d, and so on.
 inline void transpose(d4& a, d4& b, d4& c, d4& d) {
 #if defined(__AVX__)

@@ -101,44 +101,15 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb, int
     const Real* const vdamp = vertexDamp;
     const Real h = dt, c = damp;
     const d4 gravity = g;
-    const d4 gravity3[3] = {d4{g[0], g[1], g[2], g[0]}, d4{g[1], g[2], g[0], g[1]}, d4{g[2], g[0], g[1], g[2]}};
     d4 start[kBlock], startVelocity[kBlock];
     for (size_t b = begin, be; b < end; b = be) {
       be = std::min(end, (b / kBlock + 1) * kBlock);  // blocks aligned to kBlock (the contact forces' partial sums)
       d4 lo = splat(std::numeric_limits<Real>::infinity()), hi = -lo;
       d4 moved2 = splat(0), since2 = splat(0);  // (addMotion, lane per axis, from the values at hand)
       bool touched = false;
-      // Without contacts, soft-soft contact or per-vertex damping, four vertices integrate at once
-      // as three registers of their 12 consecutive coordinates (the same operations on each
-      // coordinate as one vertex at a time: the same bits).
-      if constexpr (!contacts() && !soft() && !perVertexDamping()) {
-        if ((be - b) % 4 == 0) {
-          gatherVertexForces<true>(m, *stageRest_, scratch_->frames.data(), b, be,
-                                   [&](size_t i, VertexSums s0, VertexSums s1, VertexSums s2, VertexSums s3) {
-            Real* xp = xs[i].data();
-            Real* vp = vs[i].data();
-            d4 x[3] = {load4(xp), load4(xp + 4), load4(xp + 8)};
-            d4 v[3] = {load4(vp), load4(vp + 4), load4(vp + 8)};
-            d4 p[3], k[3], w[3];
-            packVec3x4(s0.p, s1.p, s2.p, s3.p, p);
-            spreadLanes(d4{s0.k, s1.k, s2.k, s3.k}, k);
-            spreadLanes(load4(im + i), w);
-            for (int r = 0; r < 3; ++r) {
-              const d4 a = (p[r] - k[r] * x[r]) * w[r] + gravity3[r];
-              if constexpr (forward())
-                forwardEulerStep(x[r], v[r], a, h, c);  // integration.h
-              else
-                symplecticEulerStep(x[r], v[r], a, h, c);
-            }
-            store4(xp, x[0]), store4(xp + 4, x[1]), store4(xp + 8, x[2]);
-            store4(vp, v[0]), store4(vp + 4, v[1]), store4(vp + 8, v[2]);
-          });
-          continue;
-        }
-      }
-      gatherVertexForces(m, *stageRest_, scratch_->frames.data(), b, be, [&](size_t i, VertexSums sums) {
+      gatherVertexForces(m, *stageRest_, scratch_->frames.data(), b, be, [&](size_t i, d4 partial, Real k) {
         const d4 x0 = loadVec3(xs[i]), v0 = loadVec3(vs[i]);
-        const d4 force = sums.p - sums.k * x0;
+        const d4 force = partial - k * x0;
         const d4 a = force * im[i] + gravity;
         if constexpr (soft()) storeVec3(startX[i], x0), storeVec3(startV[i], v0);
         d4 x = x0, v = v0;

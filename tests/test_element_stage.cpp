@@ -192,8 +192,8 @@ TEST(ElementStageRest, AVertexOfNoElementGetsNoForce) {
     std::vector<ElementFrame> frames(E);
     computeElementFrames(model, r, 0, E, pos.data(), q.data(), frames.data(), 20);
     std::vector<Vec3> f(model.numVertices());
-    gatherVertexForces(model, r, frames.data(), 0, model.numVertices(), [&](size_t v, VertexSums sums) {
-      const simd::d4 force = sums.p - sums.k * simd::loadVec3(pos[v]);
+    gatherVertexForces(model, r, frames.data(), 0, model.numVertices(), [&](size_t v, simd::d4 partial, Real k) {
+      const simd::d4 force = partial - k * simd::loadVec3(pos[v]);
       f[v] = Vec3(force[0], force[1], force[2]);
     });
     return f;
