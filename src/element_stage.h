@@ -5,20 +5,22 @@
 // f_i = k_e (M R0_i - x_i + e) with e = c - M sum R0 / n), split in two passes that need no locks
 // and no colouring:
 //  1. per element (computeElementFrames): moments, the rotation fitted four elements at a time
-//     (fitRotation3Batch), and the element's "frame": the columns of G = k_e M and
-//     t = (k_e (e - M C_e), k_e), C_e the rest centroid;
+//     (fitRotation3Batch), and the element's "frame": the columns of G = k_e M,
+//     t = k_e (e - M C_e) (C_e the rest centroid) and k_e, 104 bytes (ElementFrame);
 //  2. per vertex (gatherVertexForces): with R0 = X_v - C_e (X_v the rest position),
 //     f_v = sum_e k_e (M R0 + e - x_v) = (sum_e G_e) X_v + sum_e t_e - (sum_e k_e) x_v:
-//     four 4-wide additions per pair, in a fixed order (the vertex's elements in id order).
+//     three 4-wide additions and one scalar per pair, in a fixed order (the vertex's elements in
+//     id order).
 // Rest offsets are lattice vectors: R0_i = h (P_i - mean P), P_i the vertex's lattice offset from
 // the element's first vertex in voxels (h the voxel size of the element's body,
 // RestModel::bodies), and since sum (x_i - c) = 0,
-// A = h (sum x_i P_i^T - c sum P_i^T). Pass 1 streams a 12-byte record per pair (the vertex and
-// (P_i, 1) as four int16; the vertex id and R0 took 28 bytes) and forms the rows of
+// A = h (sum x_i P_i^T - c sum P_i^T). Pass 1 streams the model's vertex id and a 4-byte record
+// per pair ((P_i, 1) as four int8; int16 for blocks over 64 voxels) and forms the rows of
 // sum x_i (P_i, 1)^T, whose last lane is sum x_i; the factor h does not change the fitted
 // rotation, and sum P_i is an exact integer. Four
-// elements' rows are then transposed into the rotation fit's lanes (their constants are stored in
-// those lanes already, ElementConstantGroup), and the frames computed four at a time and
+// elements' rows are then transposed into the rotation fit's lanes (the stage's constants are
+// stored in those lanes already, ElementConstantGroup; the model's are loaded into them), and the
+// frames computed four at a time and
 // transposed back. Each vertex is one 4-wide register (x, y, z, 0); above kPrefetchAboveBytes of
 // positions pass 1 prefetches the vertex of the pair kPrefetchPairs ahead, since large bodies are
 // bound by these indirect gathers. Every sum is formed in an order that does not depend on how ranges are
@@ -32,7 +34,9 @@
 // ElementVolumeGroup and does none of this work.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 #include "gradel/model.h"
@@ -40,28 +44,33 @@
 
 namespace gradel {
 
-/// Per element, written by pass 1 and read by pass 2: the columns of k_e M (lane 3 zero) and
-/// (k_e (e - M C_e), k_e). 128 bytes, aligned for 4-wide loads.
-struct alignas(32) ElementFrame {
-  Real c0[4], c1[4], c2[4], t[4];
+/// Per element, written by pass 1 and read by pass 2: the columns of G = k_e M, each with one
+/// component of t = k_e (e - M C_e) in lane 3 (c_j = (G_0j, G_1j, G_2j, t_j)), and k_e. 104 bytes,
+/// packed (the vertex gather's loads need no alignment; a zero lane per column and padding to
+/// 128 took 3.6 bytes per vertex on a gradational sphere).
+struct ElementFrame {
+  Real c0[4], c1[4], c2[4];
+  Real k;
 };
+static_assert(sizeof(ElementFrame) == 104, "the frame is packed");
 
 /// Per element, read by pass 1 four at a time: (sum_i P_i, 1 / n), (C_e [m], k_e [N/m]) and
 /// (sum_i R0_i / n [m], 0), the mean rest offset as pass 2 forms it (R0_i = X_i - C_e in floating
-/// point: a rounding residue, ~1e-16 |X|).
+/// point: a rounding residue, ~1e-16 |X|). Of these the stage stores only sum P and mean R0
+/// (ElementConstantGroup); n, C_e and k_e are the model's (elemStart, restCentroids, stiffness),
+/// loaded into lanes by the pass.
 struct ElementConstants {
   Real sumLattice[3], invCount;
   Real restCentroid[3], stiffness;
   Real meanRestOffset[3];
 };
 
-/// ElementConstants of four consecutive elements 4g .. 4g + 3, stored as pass 1 uses them: one
-/// row of four lanes (one element each) per quantity, so a batch loads its lanes without
-/// transposing. Lanes past the last element are zero.
-struct alignas(32) ElementConstantGroup {
-  Real sumLattice[3][4], invCount[4];
-  Real restCentroid[3][4], stiffness[4];
+/// The stage's own constants of four consecutive elements 4g .. 4g + 3, stored as pass 1 uses
+/// them: one row of four lanes (one element each) per quantity, so a batch loads its lanes without
+/// transposing. sum P is an integer (exact in a float). Lanes past the last element are zero.
+struct alignas(16) ElementConstantGroup {
   Real meanRestOffset[3][4];
+  float sumLattice[3][4];
 };
 
 /// The volumetric term's constants of four consecutive elements, in lanes as ElementConstantGroup:
@@ -79,13 +88,9 @@ struct alignas(32) ElementVolumeGroup {
   int32_t anisotropic = 0;
 };
 
-/// Per element-vertex pair, in the model's pair order: the vertex (as the byte offset of its
-/// position, vertex * sizeof(Vec3), so the gather needs no index arithmetic) and (P_i, 1), P_i its
-/// lattice offset [voxels] from the element's first vertex. 12 bytes.
-struct StagePair {
-  int16_t lattice[4];
-  uint32_t offset;
-};
+/// Pass 2 finds a vertex's elements from its count (vertexCount) and the start of its block of
+/// kVertexStartStride vertices (vertexBlockStart).
+constexpr size_t kVertexStartStride = 16;
 
 /// The accuracy of the step's rotation fit [rad]: fitRotation3Batch's tolerance in pass 1 (warm
 /// started from the element's last rotation, State::rotations). Eq. 1 is the element's torque
@@ -107,15 +112,34 @@ struct ElementStageRest {
   std::vector<ElementConstantGroup> groups;  ///< Element e's constants: lane e % 4 of groups[e / 4].
   /// As groups, for the volumetric term; empty when the model has none (RestModel::hasVolumeTerm).
   std::vector<ElementVolumeGroup> volume;
-  /// The model's pairs, then kPrefetchPairs padding pairs (vertex 0) for the prefetch to read.
+  /// Per pair, in the model's pair order (its vertex: RestModel::elemVerts), (P_i, 1): P_i the
+  /// vertex's lattice offset [voxels] from the element's first vertex. Four bytes a pair when
+  /// every offset of the model is in [-128, 127] (blocks up to 64 voxels across: -32 to 64 on the
+  /// gradational sphere n = 256), else four int16 in lattice16; the other vector is empty.
   /// std::logic_error when a rest position is off the model's voxel lattice, or when the model
   /// is too large for 32-bit byte offsets (over ~178 M vertices or ~33 M elements).
-  std::vector<StagePair> pairs;
-  std::vector<uint32_t> vertexStart;   ///< Per vertex + 1: its range in vertexFrames.
-  std::vector<uint32_t> vertexFrames;  ///< The elements of each vertex, ascending, as frame byte offsets (e * 128).
+  std::vector<int8_t> lattice8;
+  std::vector<int16_t> lattice16;
+  /// Per vertex: how many elements it has (at most 255: a vertex of a layout is in at most 8
+  /// blocks; std::logic_error otherwise), their frames' offsets in vertexFrames.
+  std::vector<uint8_t> vertexCount;
+  /// No vertex count is 0 (a built model's vertices are its elements' corners): the gather then
+  /// does not test for a vertex without frames.
+  bool everyVertexInAnElement = true;
+  /// Per kVertexStartStride vertices + 1: where the first vertex of the block starts in vertexFrames.
+  std::vector<uint32_t> vertexBlockStart;
+  std::vector<uint32_t> vertexFrames;  ///< The elements of each vertex, ascending, as frame byte offsets (e * 104).
 
   explicit ElementStageRest(const RestModel& model);
-  ElementConstants constants(size_t e) const;  ///< Element e's lane, gathered (tests).
+  /// Element e's constants, gathered from its lane and the model (tests).
+  ElementConstants constants(const RestModel& model, size_t e) const;
+  void lattice(size_t pair, int out[4]) const;  ///< Pair p's (P, 1) (tests).
+  /// Where vertex v's frames start in vertexFrames (the prefix of vertexCount).
+  uint32_t vertexStart(size_t v) const {
+    uint32_t j = vertexBlockStart[v / kVertexStartStride];
+    for (size_t u = v / kVertexStartStride * kVertexStartStride; u < v; ++u) j += vertexCount[u];
+    return j;
+  }
   size_t memoryBytes() const;
 };
 
@@ -125,34 +149,40 @@ struct ElementStageRest {
 void computeElementFrames(const RestModel& model, const ElementStageRest& rest, size_t begin, size_t end,
                           const Vec3* positions, Quat* rotations, ElementFrame* frames, int maxIterations);
 
-/// Pass 2 for vertices [begin, end): calls sink(v, f) with each vertex's elastic force f [N] as
-/// (fx, fy, fz, 0). Inline, so that the caller's integration fuses with the gather.
+/// Pass 2 for vertices [begin, end): calls sink(v, p, k) with p = G X_v + t (lane 3 not a
+/// component) and k = sum k_e, each vertex's elastic force [N] being p - k x_v (the sink loads x_v
+/// anyway). Inline, so that the caller's integration fuses with the gather.
 template <class Sink>
 inline void gatherVertexForces(const RestModel& model, const ElementStageRest& rest, const ElementFrame* frames,
-                               const Vec3* positions, size_t begin, size_t end, Sink&& sink) {
+                               size_t begin, size_t end, Sink&& sink) {
   using namespace simd;
-  const uint32_t* start = rest.vertexStart.data();
-  const uint32_t* offsets = rest.vertexFrames.data();
+  const uint8_t* count = rest.vertexCount.data();
   const char* base = reinterpret_cast<const char*>(frames);
   const Vec3* X = model.restPositions.data();
-  const uint32_t* j = offsets + start[begin];
-  for (size_t v = begin; v < end; ++v) {
-    // sum G, sum t; lane 3 of sum t is sum k, which multiplies -x_v. The first frame starts the
-    // sums (a vertex of no element gets zero force).
-    const uint32_t* je = offsets + start[v + 1];
-    d4 g0 = splat(0), g1 = g0, g2 = g0, t = g0;
-    if (j != je) {
+  const uint32_t* j = rest.vertexFrames.data() + rest.vertexStart(begin);
+  auto vertex = [&](size_t v, auto everyVertexInAnElement) {
+    // sum G with sum t in lane 3 of its columns, and sum k, which multiplies -x_v. The first
+    // frame starts the sums (a vertex of no element gets zero force).
+    const uint32_t* je = j + count[v];
+    d4 g0 = splat(0), g1 = g0, g2 = g0;
+    Real k = 0;
+    if (everyVertexInAnElement() || j != je) {
       const ElementFrame& f = *reinterpret_cast<const ElementFrame*>(base + *j++);
-      g0 = load4(f.c0), g1 = load4(f.c1), g2 = load4(f.c2), t = load4(f.t);
+      g0 = load4(f.c0), g1 = load4(f.c1), g2 = load4(f.c2), k = f.k;
     }
     for (; j != je; ++j) {
       const ElementFrame& f = *reinterpret_cast<const ElementFrame*>(base + *j);
-      g0 += load4(f.c0), g1 += load4(f.c1), g2 += load4(f.c2), t += load4(f.t);
+      g0 += load4(f.c0), g1 += load4(f.c1), g2 += load4(f.c2), k += f.k;
     }
     j = je;  // (it is: said here, the compiler takes je instead of recomputing j from the loop counter)
     const Real* r = X[v].data();
-    sink(v, g0 * r[0] + g1 * r[1] + g2 * r[2] + t - t[3] * loadVec3(positions[v]));
-  }
+    // (g0 r0 + g1 r1 + g2 r2 + t) - k x, summed as sink does: sink gets the first part and k.
+    sink(v, g0 * r[0] + g1 * r[1] + g2 * r[2] + laneThrees(g0, g1, g2), k);
+  };
+  auto loops = [&](auto everyVertexInAnElement) {
+    for (size_t v = begin; v < end; ++v) vertex(v, everyVertexInAnElement);
+  };
+  rest.everyVertexInAnElement ? loops(std::true_type{}) : loops(std::false_type{});
 }
 
 }  // namespace gradel

@@ -102,6 +102,39 @@ inline d4 loadInt16x4(const int16_t* p) {
 #endif
 }
 
+/// Four int8 converted to doubles (exact).
+inline d4 loadInt8x4(const int8_t* p) {
+#if defined(__AVX2__)
+  int32_t v;
+  __builtin_memcpy(&v, p, sizeof v);
+  return (d4)_mm256_cvtepi32_pd(_mm_cvtepi8_epi32(_mm_cvtsi32_si128(v)));
+#else
+  return d4{Real(p[0]), Real(p[1]), Real(p[2]), Real(p[3])};
+#endif
+}
+
+/// p[l + 1] - p[l] for l = 0..3 as doubles (exact below 2^31): the counts of four CSR rows.
+inline d4 loadCountDifference(const uint32_t* p) {
+#if defined(__AVX2__)
+  const __m128i a = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p));
+  const __m128i b = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 1));
+  return (d4)_mm256_cvtepi32_pd(_mm_sub_epi32(b, a));
+#else
+  return d4{Real(p[1] - p[0]), Real(p[2] - p[1]), Real(p[3] - p[2]), Real(p[4] - p[3])};
+#endif
+}
+
+/// (a[3], b[3], c[3], 0).
+inline d4 laneThrees(d4 a, d4 b, d4 c) {
+#if defined(__AVX__)
+  const __m256d ab = _mm256_unpackhi_pd((__m256d)a, (__m256d)b);              // a1 b1 a3 b3
+  const __m256d c0 = _mm256_unpackhi_pd((__m256d)c, _mm256_setzero_pd());     // c1 0 c3 0
+  return (d4)_mm256_permute2f128_pd(ab, c0, 0x31);
+#else
+  return d4{a[3], b[3], c[3], 0};
+#endif
+}
+
 /// 4x4 transpose in place: afterwards a holds the old lane 0 of a, b, c, d, and so on.
 inline void transpose(d4& a, d4& b, d4& c, d4& d) {
 #if defined(__AVX__)

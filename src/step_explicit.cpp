@@ -93,24 +93,33 @@ Real World::stageVertices(size_t begin, size_t end, const ContactBounds* cb, int
   // One loop per integrator, per "contacts possible" and per "soft-soft contact on": none of
   // these tests is made per vertex, and without contacts nothing is kept for them.
   auto run = [&](auto forward, auto contacts, auto perVertexDamping, auto soft) {
+    // The loop's values as locals of this function (the captures are references: a store of a
+    // position could alias them, and they were reloaded per vertex).
+    Vec3* const xs = positions;
+    Vec3* const vs = velocities;
+    const Real* const im = invMass;
+    const Real* const vdamp = vertexDamp;
+    const Real h = dt, c = damp;
+    const d4 gravity = g;
     d4 start[kBlock], startVelocity[kBlock];
     for (size_t b = begin, be; b < end; b = be) {
       be = std::min(end, (b / kBlock + 1) * kBlock);  // blocks aligned to kBlock (the contact forces' partial sums)
       d4 lo = splat(std::numeric_limits<Real>::infinity()), hi = -lo;
       d4 moved2 = splat(0), since2 = splat(0);  // (addMotion, lane per axis, from the values at hand)
       bool touched = false;
-      gatherVertexForces(m, *stageRest_, scratch_->frames.data(), positions, b, be, [&](size_t i, d4 force) {
-        const d4 a = force * invMass[i] + g;
-        const d4 x0 = loadVec3(positions[i]), v0 = loadVec3(velocities[i]);
+      gatherVertexForces(m, *stageRest_, scratch_->frames.data(), b, be, [&](size_t i, d4 partial, Real k) {
+        const d4 x0 = loadVec3(xs[i]), v0 = loadVec3(vs[i]);
+        const d4 force = partial - k * x0;
+        const d4 a = force * im[i] + gravity;
         if constexpr (soft()) storeVec3(startX[i], x0), storeVec3(startV[i], v0);
         d4 x = x0, v = v0;
-        Real vd = damp;
-        if constexpr (perVertexDamping()) vd = vertexDamp[i];
+        Real vd = c;
+        if constexpr (perVertexDamping()) vd = vdamp[i];
         if constexpr (forward())
-          forwardEulerStep(x, v, a, dt, vd);  // integration.h
+          forwardEulerStep(x, v, a, h, vd);  // integration.h
         else
-          symplecticEulerStep(x, v, a, dt, vd);
-        storeVec3(positions[i], x), storeVec3(velocities[i], v);
+          symplecticEulerStep(x, v, a, h, vd);
+        storeVec3(xs[i], x), storeVec3(vs[i], v);
         if constexpr (soft()) {
           const d4 d = x - x0, e = x - loadFloat4(reference[i].data());
           moved2 = max(d * d, moved2), since2 = max(e * e, since2);  // (a NaN lane keeps the maximum)
@@ -199,6 +208,7 @@ constexpr uint64_t kElementCost = 21, kVertexCost = 4;
 // rotation fit's lanes, kVertexChunk of stageVertices' blocks).
 constexpr size_t kElementChunk = 256, kVertexChunk = 512;
 static_assert(kVertexChunk % kVertexBlock == 0, "chunks hold whole blocks (the contact forces' partial sums)");
+static_assert(kVertexBlock % kVertexStartStride == 0, "the vertex splits are made on the stage's blocks");
 // Small bodies are not worth waking threads for.
 constexpr size_t kMinVerticesPerThread = 1024;
 
@@ -227,7 +237,9 @@ void World::prepareTeam(int members) {
   governor_ = std::make_unique<ThreadGovernor>();
   elementQueue_ = std::make_unique<ChunkQueue>(), vertexQueue_ = std::make_unique<ChunkQueue>();
   elementSplit_ = chunkSplit(model_->elemStart, kElementCost, members, kElementChunk);
-  vertexSplit_ = chunkSplit(stageRest_->vertexStart, kVertexCost, members, kVertexChunk);
+  // Vertices by blocks of kVertexStartStride (the stage keeps each block's start in its frame list).
+  vertexSplit_ = chunkSplit(stageRest_->vertexBlockStart, kVertexCost * kVertexStartStride, members,
+                            kVertexChunk / kVertexStartStride);
   memberContactDepth_.assign(size_t(members), 0.0);
   teamMembers_ = members;
 }
@@ -280,8 +292,11 @@ void World::stepExplicit() {
       stageElementFrames(splitPoint(model_->elemStart, kElementCost, t, T, kRotationLanes),
                          splitPoint(model_->elemStart, kElementCost, t + 1, T, kRotationLanes));
 #pragma omp barrier
-      depth = stageVertices(splitPoint(stageRest_->vertexStart, kVertexCost, t, T, kVertexBlock),
-                            splitPoint(stageRest_->vertexStart, kVertexCost, t + 1, T, kVertexBlock), cb, t);
+      auto vertexSplit = [&](int k) {  // by blocks of kVertexStartStride, as prepareTeam
+        return std::min(V, kVertexStartStride * splitPoint(stageRest_->vertexBlockStart, kVertexCost * kVertexStartStride,
+                                                           k, T, kVertexBlock / kVertexStartStride));
+      };
+      depth = stageVertices(vertexSplit(t), vertexSplit(t + 1), cb, t);
     }
     scratch_->maxContactDepth = depth;
 #endif

@@ -112,10 +112,10 @@ World::World(std::shared_ptr<const RestModel> model, const SimulationSettings& s
   const RestModel& m = *model_;
   adviseHugePages(state_.positions), adviseHugePages(state_.velocities), adviseHugePages(m.restPositions);
   adviseHugePages(state_.rotations), adviseHugePages(scratch_->frames), adviseHugePages(m.invMass);
-  adviseHugePages(m.elemVerts), adviseHugePages(m.elemStart),
-      adviseHugePages(m.stiffness);
-  adviseHugePages(stageRest_->vertexFrames), adviseHugePages(stageRest_->vertexStart);
-  adviseHugePages(stageRest_->groups), adviseHugePages(stageRest_->pairs);
+  adviseHugePages(m.elemVerts), adviseHugePages(m.elemStart), adviseHugePages(m.stiffness),
+      adviseHugePages(m.restCentroids);
+  adviseHugePages(stageRest_->vertexFrames), adviseHugePages(stageRest_->vertexCount);
+  adviseHugePages(stageRest_->groups), adviseHugePages(stageRest_->lattice8), adviseHugePages(stageRest_->lattice16);
 
   vertexStiffness_ = vertexStiffness(m);  // the contacts' work (contact_work.h)
   for (ManipulatorSettings& s : manipulators) addManipulator(std::move(s));

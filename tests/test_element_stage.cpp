@@ -3,6 +3,7 @@
 // follows fitRotation3 lane by lane.
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <random>
 
 #include "element_stage.h"
@@ -124,15 +125,15 @@ TEST(ElementStageRest, RestCentroidsAndLatticeOffsetsReproduceTheRestOffsets) {
     size_t mismatches = 0;
     Real worst = 0;
     for (size_t e = 0; e < m.numElements(); ++e) {
-      const ElementConstants k = rest.constants(e);
+      const ElementConstants k = rest.constants(m, e);
       const Vec3 C(k.restCentroid[0], k.restCentroid[1], k.restCentroid[2]);
       const Vec3 meanP = Vec3(k.sumLattice[0], k.sumLattice[1], k.sumLattice[2]) * k.invCount;
       EXPECT_EQ(k.stiffness, m.stiffness[e]);
       for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) {
         mismatches += (m.restPositions[m.elemVerts[p]] - C) != m.restOffset(e, p);
-        const int16_t* P = rest.pairs[p].lattice;
+        int P[4];
+        rest.lattice(p, P);
         ASSERT_EQ(P[3], 1);
-        ASSERT_EQ(rest.pairs[p].offset, m.elemVerts[p] * sizeof(Vec3));
         const Vec3 R0 = m.voxelSize * (Vec3(P[0], P[1], P[2]) - meanP);
         worst = std::max(worst, (R0 - m.restOffset(e, p)).norm() / m.voxelSize);
       }
@@ -140,6 +141,68 @@ TEST(ElementStageRest, RestCentroidsAndLatticeOffsetsReproduceTheRestOffsets) {
     EXPECT_EQ(mismatches, 0u) << layoutKindName(kind);
     EXPECT_LT(worst, 1e-12) << layoutKindName(kind);
   }
+}
+
+// The pair records are one byte a coordinate when every lattice offset fits, else int16: both
+// give the same frames and rotations bit for bit (here the narrow records of a sphere widened by
+// hand), over the whole model and over a range ending inside a batch of four.
+TEST(ElementStageRest, NarrowAndWidePairRecordsGiveTheSameFrames) {
+  Body b = makeBody("sphere", 14, 3, LayoutKind::Gradational);
+  World w(b.model, isolated(), {}, {});
+  deformSmoothly(w, 0.05);
+  perturb(w, 0.2 * b.model->voxelSize, 0.0, 5);
+  const RestModel& m = *b.model;
+  const ElementStageRest narrow(m);
+  ASSERT_FALSE(narrow.lattice8.empty());
+  ASSERT_TRUE(narrow.lattice16.empty());
+  ElementStageRest wide = narrow;
+  wide.lattice16.assign(narrow.lattice8.begin(), narrow.lattice8.end());
+  wide.lattice8.clear();
+  const size_t E = m.numElements();
+  ASSERT_NE(E % 4, 0u);  // the model's last batch is a partial one
+  for (size_t end : {E, size_t(E / 8 * 4 + 2)}) {
+    std::vector<Quat> q8(E, Quat::Identity()), q16 = q8;
+    std::vector<ElementFrame> f8(E), f16(E);
+    computeElementFrames(m, narrow, 0, end, w.state().positions.data(), q8.data(), f8.data(), 20);
+    computeElementFrames(m, wide, 0, end, w.state().positions.data(), q16.data(), f16.data(), 20);
+    EXPECT_EQ(std::memcmp(f8.data(), f16.data(), end * sizeof(ElementFrame)), 0) << end;
+    EXPECT_EQ(std::memcmp(q8.data(), q16.data(), E * sizeof(Quat)), 0) << end;
+  }
+}
+
+// A vertex of no element (not made by buildRestModel, but a RestModel may hold one) gets zero
+// force, and the other vertices' forces are those of the model without it, bit for bit.
+TEST(ElementStageRest, AVertexOfNoElementGetsNoForce) {
+  Body b = makeBody("sphere", 10, 3, LayoutKind::Gradational);
+  World w(b.model, isolated(), {}, {});
+  deformSmoothly(w, 0.05);
+  const RestModel& m = *b.model;
+  const size_t lone = m.numVertices() / 2, V = m.numVertices(), E = m.numElements();
+  RestModel withLone = m;
+  withLone.restPositions.insert(withLone.restPositions.begin() + long(lone), m.restPositions[lone]);
+  for (uint32_t& v : withLone.elemVerts) v += v >= lone ? 1 : 0;
+  for (BodyRange& r : withLone.bodies) r.vertexEnd += 1;
+  std::vector<Vec3> x = w.state().positions;
+  x.insert(x.begin() + long(lone), Vec3(1, 2, 3));
+  const ElementStageRest rest(m), restLone(withLone);
+  ASSERT_TRUE(rest.everyVertexInAnElement);
+  ASSERT_FALSE(restLone.everyVertexInAnElement);
+  auto forces = [&](const RestModel& model, const ElementStageRest& r, const std::vector<Vec3>& pos) {
+    std::vector<Quat> q(E, Quat::Identity());
+    std::vector<ElementFrame> frames(E);
+    computeElementFrames(model, r, 0, E, pos.data(), q.data(), frames.data(), 20);
+    std::vector<Vec3> f(model.numVertices());
+    gatherVertexForces(model, r, frames.data(), 0, model.numVertices(), [&](size_t v, simd::d4 partial, Real k) {
+      const simd::d4 force = partial - k * simd::loadVec3(pos[v]);
+      f[v] = Vec3(force[0], force[1], force[2]);
+    });
+    return f;
+  };
+  const std::vector<Vec3> f = forces(m, rest, w.state().positions), g = forces(withLone, restLone, x);
+  EXPECT_EQ(g[lone], Vec3::Zero());
+  size_t differ = 0;
+  for (size_t v = 0; v < V; ++v) differ += f[v] != g[v + (v >= lone ? 1 : 0)];
+  EXPECT_EQ(differ, 0u);
 }
 
 // A rest position off the voxel lattice cannot be streamed as lattice offsets: refused loudly.
