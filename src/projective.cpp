@@ -184,18 +184,23 @@ struct ProjectiveSolver::Impl {
     char slides;      ///< Held along its normal only.
     uint32_t source;  ///< Its index in step()'s `held`.
     char active;      ///< In place in this pass (updateHolds).
+    Real friction;    ///< A sticking hold's Coulomb coefficient (0: no limit on its tangential force).
+    Vec3 anchor;      ///< Where it sticks (its target before any slip).
   };
   std::vector<Hold> holds;
 
   void prepareHeld(const std::vector<uint32_t>& held, const std::vector<Vec3>& targets,
-                   const std::vector<Vec3>& normals, const std::vector<Real>& friction) {
+                   const std::vector<Vec3>& normals, const std::vector<Real>& friction,
+                   const std::vector<char>& letGo) {
     holds.clear();
     for (size_t j = 0; j < held.size(); ++j) {
       if (freeIndex.at(held[j]) < 0) continue;
       // A frictionless surface holds its vertex along the normal only: it slides.
       const bool slides = !normals.empty() && !friction.empty() && !(friction.at(j) > 0);
+      const Real mu = !normals.empty() && !friction.empty() && !slides ? friction.at(j) : Real(0);
       holds.push_back({freeIndex[held[j]], targets[j], normals.empty() ? Vec3::Zero() : normals.at(j), char(slides),
-                       uint32_t(j), 1});
+                       uint32_t(j), char(normals.empty() || letGo.empty() || !letGo.at(j)),
+                       std::isfinite(mu) ? mu : Real(0), targets[j]});
     }
     twoSided = normals.empty();
     gatherHeld();
@@ -323,9 +328,29 @@ struct ProjectiveSolver::Impl {
     const Rhs Asol = appliedWithPairs();
     bool changed = false;
     for (Hold& h : holds) {
-      const bool flip = h.active ? heldReaction(h.row, Asol).dot(h.normal) < 0
-                                 : (Vec3(sol.row(h.row).transpose()) - h.target).dot(h.normal) < 0;
-      if (flip) h.active = !h.active, changed = true;
+      if (!h.active) {
+        if ((Vec3(sol.row(h.row).transpose()) - h.target).dot(h.normal) < 0) h.active = 1, changed = true;
+        continue;
+      }
+      const Vec3 f = heldReaction(h.row, Asol);
+      const Real fn = f.dot(h.normal);
+      if (fn < 0) {
+        h.active = 0, changed = true;
+        continue;
+      }
+      if (h.slides || !(h.friction > 0)) continue;
+      // Coulomb's cone, a return mapping: z = f_t - k s is the tangential reaction the hold would
+      // have at its anchor (s: its slip from there, k: the row's diagonal, its stiffness with every
+      // other vertex fixed, which overestimates the reaction's change and so never overshoots).
+      // Inside the cone (|z| <= mu f_n) it sticks at its anchor; outside, it slips against z by
+      // (|z| - mu f_n) / k, where its reaction is mu f_n against its slip. A slip an early pass's
+      // inexact reaction asked for is taken back once the reactions say so.
+      const Vec3 slip = h.target - h.anchor;
+      const Real k = diagonal[vertexOfRow[size_t(h.row)]];
+      const Vec3 z = f - fn * h.normal - k * slip;
+      const Real len = z.norm(), excess = len - h.friction * fn;
+      const Vec3 target = excess > 0 && len > 0 ? Vec3(h.anchor - (excess / (k * len)) * z) : h.anchor;
+      if (target != h.target) h.target = target, changed = true;
     }
     if (changed) gatherHeld();
   }
@@ -517,9 +542,10 @@ void ProjectiveSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vec
                             Real damping, int iterations, const std::vector<Vec3>& pinTargets, int rotationIterations,
                             const std::vector<uint32_t>& held, const std::vector<Vec3>& heldTargets,
                             const std::vector<Vec3>& heldNormals, std::vector<Vec3>* heldForces,
-                            std::vector<PairConstraint>* pairs, const std::vector<Real>& heldFriction) {
+                            std::vector<PairConstraint>* pairs, const std::vector<Real>& heldFriction,
+                            const std::vector<char>& heldLetGo) {
   Impl& s = *impl_;
-  s.prepareHeld(held, heldTargets, heldNormals, heldFriction);
+  s.prepareHeld(held, heldTargets, heldNormals, heldFriction, heldLetGo);
   s.preparePairs(pairs);
   const RestModel& m = *s.model;
   const Real dt = s.dt, invDt2 = 1.0 / (dt * dt);

@@ -102,7 +102,8 @@ class ProjectiveSolver {
             int iterations, const std::vector<Vec3>& pinTargets, int rotationIterations = 4,
             const std::vector<uint32_t>& held = {}, const std::vector<Vec3>& heldTargets = {},
             const std::vector<Vec3>& heldNormals = {}, std::vector<Vec3>* heldForces = nullptr,
-            std::vector<PairConstraint>* pairs = nullptr, const std::vector<Real>& heldFriction = {});
+            std::vector<PairConstraint>* pairs = nullptr, const std::vector<Real>& heldFriction = {},
+            const std::vector<char>& heldLetGo = {});
 
   /// Static equilibrium under gravity with the pins at `pinTargets`: the same local/global
   /// iteration with the inertia term dropped (needs at least one pin per body). Runs until the
