@@ -191,16 +191,20 @@ struct ProjectiveSolver::Impl {
 
   void prepareHeld(const std::vector<uint32_t>& held, const std::vector<Vec3>& targets,
                    const std::vector<Vec3>& normals, const std::vector<Real>& friction,
-                   const std::vector<char>& letGo) {
+                   const std::vector<char>& letGo, const std::vector<Vec3>& slip) {
     holds.clear();
     for (size_t j = 0; j < held.size(); ++j) {
       if (freeIndex.at(held[j]) < 0) continue;
       // A frictionless surface holds its vertex along the normal only: it slides.
       const bool slides = !normals.empty() && !friction.empty() && !(friction.at(j) > 0);
-      const Real mu = !normals.empty() && !friction.empty() && !slides ? friction.at(j) : Real(0);
-      holds.push_back({freeIndex[held[j]], targets[j], normals.empty() ? Vec3::Zero() : normals.at(j), char(slides),
-                       uint32_t(j), char(normals.empty() || letGo.empty() || !letGo.at(j)),
-                       std::isfinite(mu) ? mu : Real(0), targets[j]});
+      // Coulomb's cone (updateHolds) on a sticking hold with friction and a normal.
+      const Real mu = !normals.empty() && !friction.empty() && !slides && std::isfinite(friction.at(j))
+                          ? friction.at(j)
+                          : Real(0);
+      const Vec3 n = normals.empty() ? Vec3::Zero() : normals.at(j);
+      const Vec3 guess = mu > 0 && !slip.empty() ? Vec3(slip.at(j) - slip.at(j).dot(n) * n) : Vec3::Zero();
+      holds.push_back({freeIndex[held[j]], targets[j] + guess, n, char(slides), uint32_t(j),
+                       char(normals.empty() || letGo.empty() || !letGo.at(j)), mu, targets[j]});
     }
     twoSided = normals.empty();
     gatherHeld();
@@ -543,9 +547,9 @@ void ProjectiveSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vec
                             const std::vector<uint32_t>& held, const std::vector<Vec3>& heldTargets,
                             const std::vector<Vec3>& heldNormals, std::vector<Vec3>* heldForces,
                             std::vector<PairConstraint>* pairs, const std::vector<Real>& heldFriction,
-                            const std::vector<char>& heldLetGo) {
+                            const std::vector<char>& heldLetGo, const std::vector<Vec3>& heldSlip) {
   Impl& s = *impl_;
-  s.prepareHeld(held, heldTargets, heldNormals, heldFriction, heldLetGo);
+  s.prepareHeld(held, heldTargets, heldNormals, heldFriction, heldLetGo, heldSlip);
   s.preparePairs(pairs);
   const RestModel& m = *s.model;
   const Real dt = s.dt, invDt2 = 1.0 / (dt * dt);

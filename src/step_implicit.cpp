@@ -71,6 +71,7 @@ World::HeldContacts World::heldObstacleContacts(const std::vector<Vec3>& freeEnd
   // Every held vertex was moved by a surface (a wall: K + its kWalls index), with its friction:
   // a hold on a frictionless surface slides (projective.h).
   const size_t K = manipulators_.size();
+  held.slip.assign(held.vertices.size(), Vec3::Zero());
   for (size_t j = 0; j < held.vertices.size(); ++j) {
     const uint32_t i = held.vertices[j];
     held.surface.push_back(c.contactSurface[i]);
@@ -80,19 +81,23 @@ World::HeldContacts World::heldObstacleContacts(const std::vector<Vec3>& freeEnd
     // A hold with friction sticks where the vertex was at the step's start, carried with its
     // surface (the anchor), put on the surface along the surface's normal there.
     const Vec3 x0 = c.previousPositions[i];
-    Vec3 n = Vec3::Zero();
+    Vec3 n = Vec3::Zero(), carry = Vec3::Zero();
     if (k < K) {
       const Manipulator& mp = manipulators_[k];
-      const Vec3 anchor = x0 + (mp.position - mp.previousPosition);
-      const Real d = mp.signedDistance(anchor, &n);
-      held.at[j] = anchor - (d - 1e-9 * mp.settings.radius) * n;
+      carry = mp.position - mp.previousPosition;
+      const Real d = mp.signedDistance(x0 + carry, &n);
+      held.at[j] = x0 + carry - (d - 1e-9 * mp.settings.radius) * n;
     } else {
       const int wall = int(k - K), a = wall / 2;
       n[a] = wall % 2 ? -1 : 1;
-      held.at[j] = x0 + wallVelocity_[size_t(wall)] * dt_;
+      carry = wallVelocity_[size_t(wall)] * dt_;
+      held.at[j] = x0 + carry;
       held.at[j][a] = wall % 2 ? domain_.max[a] : domain_.min[a];
     }
     held.normal[j] = n;
+    // Its first guess of slip: its sliding over the surface at the step's start velocity (a body
+    // sliding on the floor goes on sliding from the first pass; the cone takes back what it must).
+    held.slip[j] = c.previousVelocities[i] * dt_ - carry;
   }
   held.letGo.assign(held.vertices.size(), 0);
   touchingAtStart(held);
@@ -142,6 +147,10 @@ void World::touchingAtStart(HeldContacts& held) const {
     held.surface.push_back(surface);
     held.friction.push_back(size_t(surface) < K ? manipulators_[size_t(surface)].settings.friction : domain_.friction);
     held.letGo.push_back(1);
+    const Vec3 carry = size_t(surface) < K ? Vec3(manipulators_[size_t(surface)].position -
+                                                  manipulators_[size_t(surface)].previousPosition)
+                                           : Vec3(wallVelocity_[size_t(surface) - K] * dt_);
+    held.slip.push_back(c.previousVelocities[i] * dt_ - carry);
   }
 }
 
@@ -179,7 +188,7 @@ void World::solveHeld(const State& start, const std::vector<Vec3>& targets, cons
   std::vector<Vec3> heldForces;
   projective_->step(state_.positions, state_.velocities, state_.rotations, c.gravity, sim_.damping,
                     sim_.implicitIterations, targets, sim_.rotationIterations, held.vertices, held.at, held.normal,
-                    &heldForces, &pairs, held.friction, held.letGo);
+                    &heldForces, &pairs, held.friction, held.letGo, held.slip);
   for (size_t j = 0; j < held.vertices.size(); ++j) {
     const size_t k = size_t(std::max(0, held.surface[j]));
     const Vec3 centre = k < manipulators_.size() ? manipulators_[k].position : Vec3::Zero();

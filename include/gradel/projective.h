@@ -98,12 +98,17 @@ class ProjectiveSolver {
   /// (see above), their multipliers updated. `heldFriction` (empty, or one per held vertex, with
   /// the normals): the Coulomb coefficient of the surface holding each; a hold on a frictionless
   /// surface holds its vertex along the normal only (it slides; see above). Empty: every hold sticks.
+  /// A hold with friction sticks at its target (its anchor) until its tangential reaction leaves
+  /// Coulomb's cone, then slips (see above). `heldLetGo` (empty, or one per held vertex): the holds
+  /// that start let go (held once their vertex goes behind their plane). `heldSlip` (empty, or one
+  /// per held vertex): a first guess of each hold's slip from its anchor (e.g. its sliding over
+  /// the last step), in its surface's tangent plane.
   void step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vector<Quat>& q, const Vec3& gravity, Real damping,
             int iterations, const std::vector<Vec3>& pinTargets, int rotationIterations = 4,
             const std::vector<uint32_t>& held = {}, const std::vector<Vec3>& heldTargets = {},
             const std::vector<Vec3>& heldNormals = {}, std::vector<Vec3>* heldForces = nullptr,
             std::vector<PairConstraint>* pairs = nullptr, const std::vector<Real>& heldFriction = {},
-            const std::vector<char>& heldLetGo = {});
+            const std::vector<char>& heldLetGo = {}, const std::vector<Vec3>& heldSlip = {});
 
   /// Static equilibrium under gravity with the pins at `pinTargets`: the same local/global
   /// iteration with the inertia term dropped (needs at least one pin per body). Runs until the
