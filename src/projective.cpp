@@ -323,10 +323,10 @@ struct ProjectiveSolver::Impl {
   // of its floor holds let go in the first two passes); let go for good, the body fell through the
   // floor for the rest of the step and the last contact pass put its bottom back up a whole
   // step's fall (dt^2 g = 1.1 cm), 2.16 J of elastic energy in one step, 11x the explicit run's
-  // peak (issue 26). Put back, the next pass holds it again. (A sticking hold on a surface with
-  // friction was also tried as sliding once its reaction left the friction cone: grasp-wall at
-  // E x1 kept the explicit run's squeeze energy, 0.188 J against 0.245 J, but at E x100 /
-  // dt = 1/60 s the ball slipped and inverted elements.)
+  // peak (issue 26). Put back, the next pass holds it again. A sticking hold with friction slips
+  // by Coulomb's cone (projective.h; a hold made to slide freely with the kinetic friction force
+  // as a known force once its reaction left the cone let the ball of a stiff grasp slip out and
+  // invert elements, issue 26).
   void updateHolds() {
     if (twoSided || holds.empty()) return;
     const Rhs Asol = appliedWithPairs();

@@ -79,7 +79,16 @@ World::HeldContacts World::heldObstacleContacts(const std::vector<Vec3>& freeEnd
     held.friction.push_back(k < K ? manipulators_[k].settings.friction : domain_.friction);
     if (!(held.friction.back() > 0) || (!swept.empty() && swept[i] > 0) || held.surface.back() < 0) continue;
     // A hold with friction sticks where the vertex was at the step's start, carried with its
-    // surface (the anchor), put on the surface along the surface's normal there.
+    // surface (the anchor), put on the surface along the surface's normal there; it slips only by
+    // Coulomb's cone in the held solve (projective.h). Held where the contact pass put it (before),
+    // its target came from the first solve, which lets the body fall a whole step unsupported
+    // (dt^2 g = 1.1 cm at 1/30 s), and the contact pass takes back a slip only up to friction x
+    // the depth it pushed (contacts.cpp, made for the explicit step's small steps): the side holds
+    // of a grasp were set lower every step and dragged the ball down into the floor (grasp-wall at
+    // E x1, 1/30 s: its centre 0.8 cm down, 2.5x the explicit run's elastic energy; with gravity
+    // off, 0.16 J against the explicit 0.18 J). On the contact's plane instead of the surface, a
+    // grasping sphere's holds sat up to 0.9 mm inside the ball (the free solve moves a squeezed
+    // rim vertex ~7 mm along the sphere, whose tangent plane there is outside it): 7 % more energy.
     const Vec3 x0 = c.previousPositions[i];
     Vec3 n = Vec3::Zero(), carry = Vec3::Zero();
     if (k < K) {
