@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "gradel/scene.h"
 #include "gradel/world.h"
@@ -113,38 +114,39 @@ struct GraspCase {
   IntegratorKind integrator;
   Real dt, factor, explicitPeak;
 };
-
-TEST(FrameHolds, GraspWallWithinFivePercentOfTheExplicitPeak) {
-  const GraspCase cases[] = {{IntegratorKind::LargeStep, 1.0 / 60, 1, 0.208306},
-                             {IntegratorKind::LargeStep, 1.0 / 30, 1, 0.208306},
-                             {IntegratorKind::Implicit, 1.0 / 60, 10, 1.64163},
-                             {IntegratorKind::LargeStep, 1.0 / 30, 10, 1.64163}};
+// Each case's peak within 5 % of the explicit run's, every element upright at the end, and the
+// ball's centre at least `rise` [m] higher at the end than at the start.
+void expectGrasps(const char* scene, const std::vector<GraspCase>& cases, Real rise) {
   for (const GraspCase& c : cases) {
-    const GraspRun r = runGrasp("grasp-wall", c.integrator, c.dt, c.factor);
-    EXPECT_LT(r.peak, 1.05 * c.explicitPeak) << "E x" << c.factor << ", dt " << c.dt;
+    const GraspRun r = runGrasp(scene, c.integrator, c.dt, c.factor);
+    EXPECT_LT(r.peak, 1.05 * c.explicitPeak) << scene << ", E x" << c.factor << ", dt " << c.dt;
     EXPECT_GT(r.endMinDet, 0);
-    // The ball stays up on the floor (before, the side holds dragged it down into it, 0.8 cm at 1/30 s).
-    EXPECT_GT(r.endHeight, r.startHeight - 3e-3) << "E x" << c.factor << ", dt " << c.dt;
-    std::printf("[ measured ] E x%g, dt 1/%.0f s: peak %.4g J, %.3g x the explicit run's; height %.4f -> %.4f m\n",
-                c.factor, 1 / c.dt, r.peak, r.peak / c.explicitPeak, r.startHeight, r.endHeight);
+    EXPECT_GT(r.endHeight, r.startHeight + rise) << scene << ", E x" << c.factor << ", dt " << c.dt;
+    std::printf("[ measured ] %s, E x%g, dt 1/%.0f s: peak %.4g J, %.3g x the explicit run's; height %.4f -> %.4f m\n",
+                scene, c.factor, 1 / c.dt, r.peak, r.peak / c.explicitPeak, r.startHeight, r.endHeight);
   }
 }
 
+// The ball stays up on the floor: its centre 2.7 mm down at the end, its sag (before, the side
+// holds dragged it down into the floor: 6 mm at 1/60 s, 11 mm at 1/30 s; the explicit run 2 mm).
+TEST(FrameHolds, GraspWallWithinFivePercentOfTheExplicitPeak) {
+  expectGrasps("grasp-wall",
+               {{IntegratorKind::LargeStep, 1.0 / 60, 1, 0.208306},
+                {IntegratorKind::LargeStep, 1.0 / 30, 1, 0.208306},
+                {IntegratorKind::Implicit, 1.0 / 60, 10, 1.64163},
+                {IntegratorKind::LargeStep, 1.0 / 30, 10, 1.64163}},
+               -4.5e-3);
+}
+
+// The spheres lift the ball 2 cm (the explicit run: its centre 1.7 cm up; before, at 1/30 s, it
+// slid down between them and ended lower than it started).
 TEST(FrameHolds, GraspTwoWithinFivePercentOfTheExplicitPeakAndLifts) {
-  const GraspCase cases[] = {{IntegratorKind::LargeStep, 1.0 / 60, 1, 0.390817},
-                             {IntegratorKind::Implicit, 1.0 / 30, 1, 0.390817},
-                             {IntegratorKind::LargeStep, 1.0 / 60, 10, 3.66899},
-                             {IntegratorKind::LargeStep, 1.0 / 30, 10, 3.66899}};
-  for (const GraspCase& c : cases) {
-    const GraspRun r = runGrasp("grasp-two", c.integrator, c.dt, c.factor);
-    EXPECT_LT(r.peak, 1.05 * c.explicitPeak) << "E x" << c.factor << ", dt " << c.dt;
-    EXPECT_GT(r.endMinDet, 0);
-    // The spheres lift it 2 cm (the explicit run: its centre 1.7 cm up; before, at 1/30 s, it
-    // slid down between them and ended lower than it started).
-    EXPECT_GT(r.endHeight, r.startHeight + 0.012) << "E x" << c.factor << ", dt " << c.dt;
-    std::printf("[ measured ] E x%g, dt 1/%.0f s: peak %.4g J, %.3g x the explicit run's; height %.4f -> %.4f m\n",
-                c.factor, 1 / c.dt, r.peak, r.peak / c.explicitPeak, r.startHeight, r.endHeight);
-  }
+  expectGrasps("grasp-two",
+               {{IntegratorKind::LargeStep, 1.0 / 60, 1, 0.390817},
+                {IntegratorKind::Implicit, 1.0 / 30, 1, 0.390817},
+                {IntegratorKind::LargeStep, 1.0 / 60, 10, 3.66899},
+                {IntegratorKind::LargeStep, 1.0 / 30, 10, 3.66899}},
+               0.012);
 }
 
 // A box resting on a floor with friction 0.5, gravity tilted: below its friction angle (tan 0.3)
