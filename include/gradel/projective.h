@@ -110,8 +110,8 @@ class ProjectiveSolver {
   /// (see above), their multipliers updated. `heldFriction` (empty, or one per held vertex, with
   /// the normals): the Coulomb coefficient of the surface holding each; a hold on a frictionless
   /// surface holds its vertex along the normal only (it slides; see above). Empty: every hold sticks.
-  /// A hold with friction sticks at its target (its anchor) until its tangential reaction leaves
-  /// Coulomb's cone, then slips (see above). `heldLetGo` (empty, or one per held vertex): the holds
+  /// A hold with (finite) friction sticks at its target (its anchor) until its tangential reaction
+  /// leaves Coulomb's cone, then slips (see above); with an infinite one it sticks without limit. `heldLetGo` (empty, or one per held vertex): the holds
   /// that start let go (held once their vertex goes behind their plane). `heldSlip` (empty, or one
   /// per held vertex): a first guess of each hold's slip from its anchor (e.g. its sliding over
   /// the last step), in its surface's tangent plane.
