@@ -151,8 +151,11 @@ TEST(FrameHolds, GraspTwoWithinFivePercentOfTheExplicitPeakAndLifts) {
 }
 
 // A box resting on a floor with friction 0.5, gravity tilted: below its friction angle (tan 0.3)
-// it stays, above it (tan 0.8) it slides (Coulomb: 0.287 m in 0.5 s; the explicit run 0.057 m).
-// The holds' cone is what lets it go: stuck at the step's start without it, a hold never slips.
+// it stays, above it (tan 0.8) it slides as Coulomb's block does, 0.287 m in 0.5 s, within 15 %
+// (0.297 / 0.306 m at dt = 1/60 / 1/30 s; main 0.294 / 0.306 m; the explicit run 0.057 m). The
+// cone is what lets it go (stuck at the step's start without it, a hold never slips), the body's
+// common slip what lets it go fast enough: with the holds' own return mapping alone, whose k is
+// ~1000x the stiffness of the body's slide, 0.077 / 0.026 m.
 TEST(FrameHolds, BoxOnATiltedFloorSticksBelowItsFrictionAngleAndSlidesAbove) {
   for (Real dt : {1.0 / 60, 1.0 / 30})
     for (Real slope : {0.3, 0.8}) {
@@ -179,8 +182,8 @@ TEST(FrameHolds, BoxOnATiltedFloorSticksBelowItsFrictionAngleAndSlidesAbove) {
       if (slope < 0.5) {
         EXPECT_LT(std::abs(moved), 1e-3) << "dt " << dt;
       } else {
-        EXPECT_GT(moved, 0.015) << "dt " << dt;
-        EXPECT_LT(moved, 0.287 * 1.1) << "dt " << dt;  // never faster than Coulomb lets it
+        EXPECT_GT(moved, 0.287 * 0.85) << "dt " << dt;
+        EXPECT_LT(moved, 0.287 * 1.15) << "dt " << dt;
       }
       EXPECT_GT(w.metrics().minElementDet, 0);
       std::printf("[ measured ] dt 1/%.0f s, slope %.1f: moved %.4f m\n", 1 / dt, slope, moved);

@@ -47,9 +47,11 @@
 // reactions asked for is taken back (kept, the side holds of a ball grasped against a wall at
 // dt = 1/30 s slipped down a little every step and the ball sank 2 mm into the floor). Without the
 // cone the squeezed ball of a grasp could not spread along the surfaces as the explicit run's
-// friction lets it. With a few passes per step the slip of a whole body (a box sliding down a
-// floor tilted past its friction angle, where k is ~1000x the stiffness of that motion) is
-// slow to come: the first guess (heldSlip) carries the last step's sliding over.
+// friction lets it. The slip of a whole body (a box sliding down a floor tilted past its
+// friction angle, where k is ~1000x the stiffness of that motion) would take ~1000 passes: a body
+// whose holds all lie on one plane first slips as a whole, the same return mapping on the sums of
+// its holds' reactions with k = its mass / dt^2 (its common slip carries the holds' anchors), and
+// the first guess (heldSlip) carries the last step's sliding over.
 // Velocities are (x_{n+1} - x_n) / dt. The scheme is unconditionally stable and dissipative
 // (numerical damping grows with omega dt); it is what lets a stiff body run at dt = 1/60 s.
 // Contacts between bodies (pair constraints): a vertex p near a face of another body, the face's
