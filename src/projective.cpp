@@ -365,13 +365,15 @@ struct ProjectiveSolver::Impl {
     std::vector<Vec3> F(B, Vec3::Zero()), plane(B, Vec3::Zero());
     std::vector<Real> N(B, 0), mu(B, 0);
     std::vector<char> one(B, 1);
-    for (const Hold& h : holds) {
+    std::vector<Vec3> reaction(holds.size(), Vec3::Zero());  // of the holds in place
+    for (size_t j = 0; j < holds.size(); ++j) {
+      const Hold& h = holds[j];
       if (!h.active) continue;
       const size_t b = h.body;
       if (h.slides || !(h.friction > 0) || (plane[b] != Vec3::Zero() && (plane[b] != h.normal || mu[b] != h.friction)))
         one[b] = 0;
       plane[b] = h.normal, mu[b] = h.friction;
-      const Vec3 f = heldReaction(h.row, Asol);
+      const Vec3 f = reaction[j] = heldReaction(h.row, Asol);
       const Real fn = f.dot(h.normal);
       F[b] += f - fn * h.normal, N[b] += fn;
     }
@@ -383,12 +385,13 @@ struct ProjectiveSolver::Impl {
       const Real len = z.norm(), excess = len - mu[b] * N[b];
       bodySlip[b] = excess > 0 && len > 0 ? Vec3(-(excess / (k * len)) * z) : Vec3::Zero();
     }
-    for (Hold& h : holds) {
+    for (size_t j = 0; j < holds.size(); ++j) {
+      Hold& h = holds[j];
       if (!h.active) {
         if ((Vec3(sol.row(h.row).transpose()) - h.target).dot(h.normal) < 0) h.active = 1, changed = true;
         continue;
       }
-      const Vec3 f = heldReaction(h.row, Asol);
+      const Vec3& f = reaction[j];
       const Real fn = f.dot(h.normal);
       if (fn < 0) {
         h.active = 0, changed = true;
