@@ -13,7 +13,10 @@ CSV on stdout: scene, E factor, integrator, dt, peak, explicit peak, ratio, end 
 Usage: bench/large_energy.py [--gradel build/gradel] [--scenes strike,grasp-wall,...]
        [--factors 1,10,100,1000] [--integrators large_step,implicit] [--dts 1/60,1/30] [--threads 1]
        [--explicit-from OLD.csv]  (the explicit peaks and ends of an earlier table: the explicit
-       runs at E x1000 take most of the time, and a change to the frame-size steps leaves them)
+       runs at E x1000 take most of the time, and a change to the frame-size steps leaves them;
+       lines of OLD.csv starting with '#' are skipped)
+       [--friction MU]  (every manipulator's and the walls' friction set to MU, in the frame-size
+       runs and the explicit reference alike: e.g. 0 to see what the surfaces' friction costs)
 """
 import argparse
 import copy
@@ -45,6 +48,16 @@ def scaled(scene, factor):
             scale(b.setdefault("material", {}))
     else:
         scale(s.setdefault("material", {}))
+    return s
+
+
+def with_friction(scene, mu):
+    """The scene with every manipulator's and the domain's friction set to mu."""
+    s = copy.deepcopy(scene)
+    for m in s.get("manipulators", []):
+        m["friction"] = mu
+    if "domain" in s:
+        s["domain"]["friction"] = mu
     return s
 
 
@@ -81,12 +94,13 @@ def main():
     p.add_argument("--dts", default="1/60,1/30")
     p.add_argument("--threads", type=int, default=1)
     p.add_argument("--explicit-from", default="")
+    p.add_argument("--friction", type=float, default=None)
     a = p.parse_args()
     dts = [float(Fraction(d)) for d in a.dts.split(",")]
     known = {}
     if a.explicit_from:
         with open(a.explicit_from) as f:
-            for row in csv.DictReader(f):
+            for row in csv.DictReader(line for line in f if not line.startswith("#")):
                 known[(row["scene"], float(row["e_factor"]))] = (float(row["explicit_peak_j"]),
                                                                  float(row["explicit_end_j"]), 0)
     w = csv.writer(sys.stdout, lineterminator="\n")
@@ -98,6 +112,8 @@ def main():
                 base = json.load(f)
             for factor in [float(x) for x in a.factors.split(",")]:
                 scene = scaled(base, factor)
+                if a.friction is not None:
+                    scene = with_friction(scene, a.friction)
                 ref = copy.deepcopy(scene)
                 ref["simulation"]["dt"] = "auto"
                 ref["simulation"]["frame_interval"] = 0.005

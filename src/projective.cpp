@@ -184,19 +184,47 @@ struct ProjectiveSolver::Impl {
     char slides;      ///< Held along its normal only.
     uint32_t source;  ///< Its index in step()'s `held`.
     char active;      ///< In place in this pass (updateHolds).
+    Real friction;    ///< A sticking hold's Coulomb coefficient (0: no limit on its tangential force).
+    Vec3 anchor;      ///< Where it sticks (its target before any slip).
+    uint32_t body;    ///< Its vertex's body.
+    Vec3 carried;     ///< Its body's slip (bodySlip) on its tangent plane, in its target.
   };
   std::vector<Hold> holds;
+  // Per body: the common slip of its holds with a cone (updateHolds), the mass of its free
+  // vertices, and whether it has pinned ones (then no common slip).
+  std::vector<Vec3> bodySlip;
+  std::vector<Real> bodyMass;
+  std::vector<char> bodyPinned;
 
   void prepareHeld(const std::vector<uint32_t>& held, const std::vector<Vec3>& targets,
-                   const std::vector<Vec3>& normals, const std::vector<Real>& friction) {
+                   const std::vector<Vec3>& normals, const std::vector<Real>& friction,
+                   const std::vector<char>& letGo, const std::vector<Vec3>& slip) {
     holds.clear();
     for (size_t j = 0; j < held.size(); ++j) {
       if (freeIndex.at(held[j]) < 0) continue;
       // A frictionless surface holds its vertex along the normal only: it slides.
       const bool slides = !normals.empty() && !friction.empty() && !(friction.at(j) > 0);
-      holds.push_back({freeIndex[held[j]], targets[j], normals.empty() ? Vec3::Zero() : normals.at(j), char(slides),
-                       uint32_t(j), 1});
+      // Coulomb's cone (updateHolds) on a sticking hold with friction and a normal.
+      const Real mu = !normals.empty() && !friction.empty() && !slides && std::isfinite(friction.at(j))
+                          ? friction.at(j)
+                          : Real(0);
+      const Vec3 n = normals.empty() ? Vec3::Zero() : normals.at(j);
+      const Vec3 guess = mu > 0 && !slip.empty() ? Vec3(slip.at(j) - slip.at(j).dot(n) * n) : Vec3::Zero();
+      holds.push_back({freeIndex[held[j]], targets[j] + guess, n, char(slides), uint32_t(j),
+                       char(normals.empty() || letGo.empty() || !letGo.at(j)), mu, targets[j],
+                       uint32_t(model->bodyOfVertex(held[j])), Vec3::Zero()});
     }
+    const RestModel& m = *model;
+    bodySlip.assign(m.numBodies(), Vec3::Zero()), bodyMass.assign(m.numBodies(), 0);
+    bodyPinned.assign(m.numBodies(), 0);
+    if (!holds.empty())
+      for (size_t i = 0; i < m.numVertices(); ++i) {
+        const size_t b = m.bodyOfVertex(i);
+        if (freeIndex[i] >= 0)
+          bodyMass[b] += m.mass[i];
+        else
+          bodyPinned[b] = 1;
+      }
     twoSided = normals.empty();
     gatherHeld();
   }
@@ -314,18 +342,78 @@ struct ProjectiveSolver::Impl {
   // of its floor holds let go in the first two passes); let go for good, the body fell through the
   // floor for the rest of the step and the last contact pass put its bottom back up a whole
   // step's fall (dt^2 g = 1.1 cm), 2.16 J of elastic energy in one step, 11x the explicit run's
-  // peak (issue 26). Put back, the next pass holds it again. (A sticking hold on a surface with
-  // friction was also tried as sliding once its reaction left the friction cone: grasp-wall at
-  // E x1 kept the explicit run's squeeze energy, 0.188 J against 0.245 J, but at E x100 /
-  // dt = 1/60 s the ball slipped and inverted elements.)
+  // peak (issue 26). Put back, the next pass holds it again. A sticking hold with friction slips
+  // by Coulomb's cone (projective.h; a hold made to slide freely with the kinetic friction force
+  // as a known force once its reaction left the cone let the ball of a stiff grasp slip out and
+  // invert elements, issue 26).
   void updateHolds() {
     if (twoSided || holds.empty()) return;
     const Rhs Asol = appliedWithPairs();
     bool changed = false;
-    for (Hold& h : holds) {
-      const bool flip = h.active ? heldReaction(h.row, Asol).dot(h.normal) < 0
-                                 : (Vec3(sol.row(h.row).transpose()) - h.target).dot(h.normal) < 0;
-      if (flip) h.active = !h.active, changed = true;
+    // A whole body sliding (a box on a floor tilted past its friction angle): the return mapping
+    // below, with k the row's diagonal, ~1000x the stiffness of that motion, moved it a few per
+    // cent of Coulomb's slide per step (0.026 m in 0.5 s at dt = 1/30 s, Coulomb 0.287 m). So a
+    // body whose holds in place all share one plane (one flat surface; its holds all have a cone)
+    // first slips as a whole by the same return mapping on the sums of its holds' reactions,
+    // tangential F and normal N, with k = M / dt^2 (M: its free mass; the stiffness of its
+    // common slip S, which only its inertia resists; a pinned body is not moved so): sticks where
+    // |F - k S| <= mu N, else slips against it by the excess / k. The return mapping per hold then
+    // works about its anchor carried by S. (A body held by several surfaces, a grasped ball, is
+    // left out: there its holds' surpluses beyond their cones do not move it as a whole; moved
+    // with their sum, the grasps at E x10 blew up.)
+    const size_t B = bodySlip.size();
+    std::vector<Vec3> F(B, Vec3::Zero()), plane(B, Vec3::Zero());
+    std::vector<Real> N(B, 0), mu(B, 0);
+    std::vector<char> one(B, 1);
+    std::vector<Vec3> reaction(holds.size(), Vec3::Zero());  // of the holds in place
+    for (size_t j = 0; j < holds.size(); ++j) {
+      const Hold& h = holds[j];
+      if (!h.active) continue;
+      const size_t b = h.body;
+      if (h.slides || !(h.friction > 0) || (plane[b] != Vec3::Zero() && (plane[b] != h.normal || mu[b] != h.friction)))
+        one[b] = 0;
+      plane[b] = h.normal, mu[b] = h.friction;
+      const Vec3 f = reaction[j] = heldReaction(h.row, Asol);
+      const Real fn = f.dot(h.normal);
+      F[b] += f - fn * h.normal, N[b] += fn;
+    }
+    for (size_t b = 0; b < B; ++b) {
+      if (!one[b] || plane[b] == Vec3::Zero() || bodyPinned[b] || !(bodyMass[b] > 0) || !(N[b] > 0)) continue;
+      const Real k = bodyMass[b] / (dt * dt);
+      const Vec3 S = bodySlip[b] - bodySlip[b].dot(plane[b]) * plane[b];
+      const Vec3 z = F[b] - k * S;
+      const Real len = z.norm(), excess = len - mu[b] * N[b];
+      bodySlip[b] = excess > 0 && len > 0 ? Vec3(-(excess / (k * len)) * z) : Vec3::Zero();
+    }
+    for (size_t j = 0; j < holds.size(); ++j) {
+      Hold& h = holds[j];
+      if (!h.active) {
+        if ((Vec3(sol.row(h.row).transpose()) - h.target).dot(h.normal) < 0) h.active = 1, changed = true;
+        continue;
+      }
+      const Vec3& f = reaction[j];
+      const Real fn = f.dot(h.normal);
+      if (fn < 0) {
+        h.active = 0, changed = true;
+        continue;
+      }
+      if (h.slides || !(h.friction > 0)) continue;
+      // Coulomb's cone, a return mapping: z = f_t - k s is the tangential reaction the hold would
+      // have at its anchor (s: its slip from there, k: the row's diagonal, its stiffness with every
+      // other vertex fixed, which overestimates the reaction's change and so never overshoots).
+      // Inside the cone (|z| <= mu f_n) it sticks at its anchor; outside, it slips against z by
+      // (|z| - mu f_n) / k, where its reaction is mu f_n against its slip. A slip an early pass's
+      // inexact reaction asked for is taken back once the reactions say so.
+      // Both about the anchor carried by its body's slip.
+      const Vec3 slip = h.target - h.anchor - h.carried;
+      const Vec3 carried = bodySlip[h.body] - bodySlip[h.body].dot(h.normal) * h.normal;
+      const Real k = diagonal[vertexOfRow[size_t(h.row)]];
+      const Vec3 z = f - fn * h.normal - k * slip;
+      const Real len = z.norm(), excess = len - h.friction * fn;
+      const Vec3 anchor = h.anchor + carried;
+      const Vec3 target = excess > 0 && len > 0 ? Vec3(anchor - (excess / (k * len)) * z) : anchor;
+      h.carried = carried;
+      if (target != h.target) h.target = target, changed = true;
     }
     if (changed) gatherHeld();
   }
@@ -517,9 +605,10 @@ void ProjectiveSolver::step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vec
                             Real damping, int iterations, const std::vector<Vec3>& pinTargets, int rotationIterations,
                             const std::vector<uint32_t>& held, const std::vector<Vec3>& heldTargets,
                             const std::vector<Vec3>& heldNormals, std::vector<Vec3>* heldForces,
-                            std::vector<PairConstraint>* pairs, const std::vector<Real>& heldFriction) {
+                            std::vector<PairConstraint>* pairs, const std::vector<Real>& heldFriction,
+                            const std::vector<char>& heldLetGo, const std::vector<Vec3>& heldSlip) {
   Impl& s = *impl_;
-  s.prepareHeld(held, heldTargets, heldNormals, heldFriction);
+  s.prepareHeld(held, heldTargets, heldNormals, heldFriction, heldLetGo, heldSlip);
   s.preparePairs(pairs);
   const RestModel& m = *s.model;
   const Real dt = s.dt, invDt2 = 1.0 / (dt * dt);

@@ -77,6 +77,8 @@ struct World::HeldContacts {
   std::vector<Vec3> at, normal;
   std::vector<int> surface;
   std::vector<Real> friction;
+  std::vector<char> letGo;  ///< Per hold: starts let go (a vertex touching a surface at the step's start).
+  std::vector<Vec3> slip;   ///< Per hold: its vertex's sliding on its surface over the last step (a first guess).
 };
 
 }  // namespace gradel

@@ -2,6 +2,7 @@
 // contacts: a solve, the obstacle contacts found on it, a second solve with those vertices held
 // and the body contacts as pair constraints, the contact rules on the result.
 #include <algorithm>
+#include <limits>
 
 #include "step_context.h"
 
@@ -32,11 +33,11 @@ void World::stepImplicit(bool largeStep) {
   moveManipulators(c.tNext);
   if (c.obstacles || c.bodyContacts) {
     const std::vector<Vec3> freeEnd = state_.positions;
-    HeldContacts held;
-    if (c.obstacles) held = heldObstacleContacts(freeEnd, largeStep);
     std::vector<uint64_t> pairKeys;
     std::vector<PairConstraint> pairs;
     if (c.bodyContacts) pairs = stepBodyPairs(start.positions, freeEnd, pairKeys);
+    HeldContacts held;
+    if (c.obstacles) held = heldObstacleContacts(freeEnd, largeStep, pairs);
     if (!held.vertices.empty() || !pairs.empty()) {
       solveHeld(start, targets, held, pairs);
       keepBodyPairLambdas(pairs, pairKeys);
@@ -57,7 +58,8 @@ void World::stepImplicit(bool largeStep) {
 // pass pushed out (left free, the second solve restarted without them, or without a second
 // solve they kept their flight alone: at dt = 1/30 s the struck ball's E x1000 step ended with
 // 7,770 J of elastic energy, the explicit run's peak 2.8 J).
-World::HeldContacts World::heldObstacleContacts(const std::vector<Vec3>& freeEnd, bool largeStep) {
+World::HeldContacts World::heldObstacleContacts(const std::vector<Vec3>& freeEnd, bool largeStep,
+                                                const std::vector<PairConstraint>& pairs) {
   StepContext& c = *scratch_;
   std::vector<Real> swept;
   if (largeStep) sweepManipulatorPaths(c.tNext - dt_), swept = c.contactDepth;
@@ -70,12 +72,112 @@ World::HeldContacts World::heldObstacleContacts(const std::vector<Vec3>& freeEnd
   }
   // Every held vertex was moved by a surface (a wall: K + its kWalls index), with its friction:
   // a hold on a frictionless surface slides (projective.h).
-  for (uint32_t i : held.vertices) {
+  const size_t K = manipulators_.size();
+  // The bodies in a pair constraint of this step (a vertex or a face's corner) keep the plain
+  // holds: stuck where the contact pass put their vertex, no cone, none let go at the start. With
+  // the frictional holds below, a ball a cylinder pressed into a soft block (grasp-body) no longer
+  // slid out of the squeeze: the whole push reached the soft pair constraints, the step ended with
+  // the ball ~1 cm inside the block, and from E x100 (large step, dt = 1/60 and 1/30 s) the
+  // body-contact stage's push-out diverged (exit 3; the plain holds: peaks 9-14x the explicit run's).
+  std::vector<char> paired(model_->numBodies(), 0);
+  for (const PairConstraint& p : pairs) {
+    paired[model_->bodyOfVertex(p.vertex)] = 1;
+    for (uint32_t f : p.face) paired[model_->bodyOfVertex(f)] = 1;
+  }
+  held.slip.assign(held.vertices.size(), Vec3::Zero());
+  for (size_t j = 0; j < held.vertices.size(); ++j) {
+    const uint32_t i = held.vertices[j];
     held.surface.push_back(c.contactSurface[i]);
     const size_t k = size_t(std::max(0, held.surface.back()));
-    held.friction.push_back(k < manipulators_.size() ? manipulators_[k].settings.friction : domain_.friction);
+    held.friction.push_back(k < K ? manipulators_[k].settings.friction : domain_.friction);
+    if (!(held.friction.back() > 0) || (!swept.empty() && swept[i] > 0) || held.surface.back() < 0) continue;
+    if (paired[model_->bodyOfVertex(i)]) {
+      held.friction.back() = std::numeric_limits<Real>::infinity();  // sticks without a cone (projective.h)
+      continue;
+    }
+    // A hold with friction sticks where the vertex was at the step's start, carried with its
+    // surface (the anchor), put on the surface along the surface's normal there; it slips only by
+    // Coulomb's cone in the held solve (projective.h). Held where the contact pass put it (before),
+    // its target came from the first solve, which lets the body fall a whole step unsupported
+    // (dt^2 g = 1.1 cm at 1/30 s), and the contact pass takes back a slip only up to friction x
+    // the depth it pushed (contacts.cpp, made for the explicit step's small steps): the side holds
+    // of a grasp were set lower every step and dragged the ball down into the floor (grasp-wall at
+    // E x1, 1/30 s: its centre 0.8 cm down, 2.5x the explicit run's elastic energy; with gravity
+    // off, 0.16 J against the explicit 0.18 J). On the contact's plane instead of the surface, a
+    // grasping sphere's holds sat up to 0.9 mm inside the ball (the free solve moves a squeezed
+    // rim vertex ~7 mm along the sphere, whose tangent plane there is outside it): 7 % more energy.
+    const Vec3 x0 = c.previousPositions[i];
+    Vec3 n = Vec3::Zero(), carry = Vec3::Zero();
+    if (k < K) {
+      const Manipulator& mp = manipulators_[k];
+      carry = mp.position - mp.previousPosition;
+      const Real d = mp.signedDistance(x0 + carry, &n);
+      held.at[j] = x0 + carry - (d - 1e-9 * mp.settings.radius) * n;
+    } else {
+      const int wall = int(k - K), a = wall / 2;
+      n[a] = wall % 2 ? -1 : 1;
+      carry = wallVelocity_[size_t(wall)] * dt_;
+      held.at[j] = x0 + carry;
+      held.at[j][a] = wall % 2 ? domain_.max[a] : domain_.min[a];
+    }
+    held.normal[j] = n;
+    // Its first guess of slip: its sliding over the surface at the step's start velocity (a body
+    // sliding on the floor goes on sliding from the first pass; the cone takes back what it must).
+    held.slip[j] = c.previousVelocities[i] * dt_ - carry;
   }
+  held.letGo.assign(held.vertices.size(), 0);
+  touchingAtStart(held, paired);
   return held;
+}
+
+// The vertices on a surface at the step's start that the first solve took off it: held too,
+// let go at first, so that the held solve's passes hold them once they go behind the surface's
+// plane (the one-sided holds, projective.h). Found only from the first solve's end, a vertex of a
+// squeezed contact's rim that the free solve took away from the surface was pushed into it by
+// the held solve and out again by the last contact pass: a ball grasped between two spheres at
+// dt = 1/60 s took turns of 19 and 10 holds with 8 and 17 vertices put back out, up to 0.45 mm,
+// by that pass in every step (it stored 7 % more than the explicit squeeze). On a surface:
+// within 1e-3 voxel of it (the contact pass leaves a vertex a skin of 1e-9 x its radius outside),
+// where it was at the step's start, carried with its surface.
+void World::touchingAtStart(HeldContacts& held, const std::vector<char>& paired) const {
+  const StepContext& c = *scratch_;
+  const size_t K = manipulators_.size();
+  const Real near = 1e-3 * model_->voxelSize;
+  std::vector<char> isHeld(model_->numVertices(), 0);
+  for (uint32_t i : held.vertices) isHeld[i] = 1;
+  for (uint32_t i = 0; i < model_->numVertices(); ++i) {
+    if (isHeld[i] || paired[model_->bodyOfVertex(i)]) continue;
+    const Vec3& x0 = c.previousPositions[i];
+    int surface = -1;
+    Vec3 at = Vec3::Zero(), normal = Vec3::Zero();
+    for (size_t k = 0; k < K && surface < 0; ++k) {
+      const Manipulator& mp = manipulators_[k];
+      if (mp.settings.shape == ManipulatorShape::Blade) continue;
+      const Vec3 carried = x0 + (mp.position - mp.previousPosition);
+      Vec3 n;
+      const Real d = mp.signedDistance(carried, &n);
+      if (d >= 0 && d < near) surface = int(k), at = carried - d * n, normal = n;
+    }
+    for (int a = 0; a < model_->dim && surface < 0 && domain_.enabled; ++a)
+      for (int side = 0; side < 2 && surface < 0; ++side) {
+        const int wall = 2 * a + side;
+        const Vec3 carried = x0 + wallVelocity_[size_t(wall)] * dt_;
+        const Real d = side == 0 ? carried[a] - domain_.min[a] : domain_.max[a] - carried[a];
+        if (d >= 0 && d < near) {
+          surface = int(K) + wall, at = carried, normal = Vec3::Zero();
+          at[a] = side == 0 ? domain_.min[a] : domain_.max[a], normal[a] = side == 0 ? 1 : -1;
+        }
+      }
+    if (surface < 0) continue;
+    held.vertices.push_back(i), held.at.push_back(at), held.normal.push_back(normal);
+    held.surface.push_back(surface);
+    held.friction.push_back(size_t(surface) < K ? manipulators_[size_t(surface)].settings.friction : domain_.friction);
+    held.letGo.push_back(1);
+    const Vec3 carry = size_t(surface) < K ? Vec3(manipulators_[size_t(surface)].position -
+                                                  manipulators_[size_t(surface)].previousPosition)
+                                           : Vec3(wallVelocity_[size_t(surface) - K] * dt_);
+    held.slip.push_back(c.previousVelocities[i] * dt_ - carry);
+  }
 }
 
 // The body contacts of this step as pair constraints: found at the start of the step (x0), where
@@ -112,7 +214,7 @@ void World::solveHeld(const State& start, const std::vector<Vec3>& targets, cons
   std::vector<Vec3> heldForces;
   projective_->step(state_.positions, state_.velocities, state_.rotations, c.gravity, sim_.damping,
                     sim_.implicitIterations, targets, sim_.rotationIterations, held.vertices, held.at, held.normal,
-                    &heldForces, &pairs, held.friction);
+                    &heldForces, &pairs, held.friction, held.letGo, held.slip);
   for (size_t j = 0; j < held.vertices.size(); ++j) {
     const size_t k = size_t(std::max(0, held.surface[j]));
     const Vec3 centre = k < manipulators_.size() ? manipulators_[k].position : Vec3::Zero();

@@ -38,6 +38,20 @@
 // the vertices a strike pushed into a ball were also held sideways, in the dent the striker made:
 // at E x1000 and dt = 1/60 s the step ended with 162 J of elastic energy, 57x the explicit run's
 // peak (issue 26); sliding, the ball moves off the striker instead (0.70 J).
+// A hold on a surface with friction mu sticks at its target (its anchor) while its tangential
+// reaction f_t stays within Coulomb's cone, |f_t| <= mu f_n, and slips otherwise: after each pass
+// a return mapping on z = f_t - k s (s its slip from the anchor, k the row's diagonal, which
+// overestimates how fast its reaction changes with its slip and so never overshoots): inside
+// the cone s = 0, outside s = -(|z| - mu f_n) z / (k |z|), where the reaction is mu f_n against
+// the slip. The slip is recomputed from the anchor each pass, so what an early pass's inexact
+// reactions asked for is taken back (kept, the side holds of a ball grasped against a wall at
+// dt = 1/30 s slipped down a little every step and the ball sank 2 mm into the floor). Without the
+// cone the squeezed ball of a grasp could not spread along the surfaces as the explicit run's
+// friction lets it. The slip of a whole body (a box sliding down a floor tilted past its
+// friction angle, where k is ~1000x the stiffness of that motion) would take ~1000 passes: a body
+// whose holds all lie on one plane first slips as a whole, the same return mapping on the sums of
+// its holds' reactions with k = its mass / dt^2 (its common slip carries the holds' anchors), and
+// the first guess (heldSlip) carries the last step's sliding over.
 // Velocities are (x_{n+1} - x_n) / dt. The scheme is unconditionally stable and dissipative
 // (numerical damping grows with omega dt); it is what lets a stiff body run at dt = 1/60 s.
 // Contacts between bodies (pair constraints): a vertex p near a face of another body, the face's
@@ -98,11 +112,17 @@ class ProjectiveSolver {
   /// (see above), their multipliers updated. `heldFriction` (empty, or one per held vertex, with
   /// the normals): the Coulomb coefficient of the surface holding each; a hold on a frictionless
   /// surface holds its vertex along the normal only (it slides; see above). Empty: every hold sticks.
+  /// A hold with (finite) friction sticks at its target (its anchor) until its tangential reaction
+  /// leaves Coulomb's cone, then slips (see above); with an infinite one it sticks without limit. `heldLetGo` (empty, or one per held vertex): the holds
+  /// that start let go (held once their vertex goes behind their plane). `heldSlip` (empty, or one
+  /// per held vertex): a first guess of each hold's slip from its anchor (e.g. its sliding over
+  /// the last step), in its surface's tangent plane.
   void step(std::vector<Vec3>& x, std::vector<Vec3>& v, std::vector<Quat>& q, const Vec3& gravity, Real damping,
             int iterations, const std::vector<Vec3>& pinTargets, int rotationIterations = 4,
             const std::vector<uint32_t>& held = {}, const std::vector<Vec3>& heldTargets = {},
             const std::vector<Vec3>& heldNormals = {}, std::vector<Vec3>* heldForces = nullptr,
-            std::vector<PairConstraint>* pairs = nullptr, const std::vector<Real>& heldFriction = {});
+            std::vector<PairConstraint>* pairs = nullptr, const std::vector<Real>& heldFriction = {},
+            const std::vector<char>& heldLetGo = {}, const std::vector<Vec3>& heldSlip = {});
 
   /// Static equilibrium under gravity with the pins at `pinTargets`: the same local/global
   /// iteration with the inertia term dropped (needs at least one pin per body). Runs until the
