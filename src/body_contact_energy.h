@@ -17,8 +17,8 @@
 // vertices at w = v + a dt / 2 (symplectic Euler's velocity is half a step behind its positions,
 // and the stage's pushes change a through the forces of every element of those vertices). It is
 // compared before (the touched vertices where and how fast they were when the stage began) and
-// after. An excess e > 0 is taken out with dv_i = -s (w_i - mean w) over the touched vertices
-// that can move: their kinetic energy changes by -K_rel (2 s - s^2), K_rel their kinetic energy
+// after, for each group of bodies the contacts link on its own. An excess e > 0 is taken out
+// with dv_i = -s (w_i - mean w) over the group's touched vertices that can move: their kinetic energy changes by -K_rel (2 s - s^2), K_rel their kinetic energy
 // about the mean, so s = 1 - sqrt(1 - e / K_rel), at most 1 (all of K_rel, when e exceeds it).
 // The sum of m dv is zero: linear momentum is kept to rounding.
 //
@@ -29,6 +29,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "gradel/body_contacts.h"
 #include "gradel/model.h"
 #include "gradel/types.h"
 
@@ -47,6 +48,7 @@ struct ContactEnergyInput {
   const std::vector<uint32_t>* touched = nullptr;
   const std::vector<Vec3>* startPositions = nullptr;
   const std::vector<Vec3>* startVelocities = nullptr;
+  const std::vector<BodyContacts::Contact>* contacts = nullptr;  ///< The stage's contacts (they group the touched).
   const Quat* rotations = nullptr;  ///< Per element: the warm start of its fit.
   const Real* movable = nullptr;    ///< Per vertex: 0 = not moved by the cap (pinned).
   Vec3 gravity = Vec3::Zero();
@@ -62,6 +64,7 @@ class ContactEnergyLimiter {
 
  private:
   void prepare(const RestModel& m);
+  ContactEnergyCap capGroup(const RestModel& m, const ContactEnergyInput& in, Vec3* x, Vec3* v);
   void elementsOf(const std::vector<uint32_t>& verts, std::vector<uint32_t>& out);
   Real measure(const RestModel& m, const ContactEnergyInput& in, const Vec3* x, const Vec3* v, std::vector<Vec3>& w);
 
@@ -72,6 +75,8 @@ class ContactEnergyLimiter {
   std::vector<uint32_t> inner_, ring_, outer_;  ///< Elements of the touched, their vertices, those's elements.
   std::vector<uint8_t> isInner_;                ///< Per element of outer_: also in inner_.
   std::vector<Vec3> force_, f_, offsets_, start_, wBefore_, wAfter_, vNow_;
+  std::vector<uint32_t> parent_, order_, groupT_;  ///< Union-find over the bodies; one group's vertices.
+  std::vector<Vec3> groupX0_, groupV0_;
 };
 
 }  // namespace gradel

@@ -64,6 +64,7 @@ void World::stageBodyContacts() {
     in.touched = &bodyContacts_->touched();
     in.startPositions = &bodyContacts_->touchedStart();
     in.startVelocities = &bodyContacts_->touchedStartVelocity();
+    in.contacts = &bodyContacts_->contacts();
     in.rotations = state_.rotations.data();
     in.movable = bodyContactInvMass_.data();
     in.gravity = sim_.gravity;
