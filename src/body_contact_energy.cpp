@@ -90,14 +90,13 @@ ContactEnergyCap ContactEnergyLimiter::apply(const RestModel& m, const ContactEn
       if (a != b) parent_[std::max(a, b)] = std::min(a, b);
     }
   }
-  order_.resize(T.size());
-  for (size_t i = 0; i < T.size(); ++i) order_[i] = uint32_t(i);
-  auto group = [&](uint32_t i) { return find(m.bodyOfVertex(T[i])); };
-  std::stable_sort(order_.begin(), order_.end(), [&](uint32_t a, uint32_t b) { return group(a) < group(b); });
+  order_.resize(T.size()), group_.resize(T.size());
+  for (size_t i = 0; i < T.size(); ++i) order_[i] = uint32_t(i), group_[i] = find(uint32_t(m.bodyOfVertex(T[i])));
+  std::stable_sort(order_.begin(), order_.end(), [&](uint32_t a, uint32_t b) { return group_[a] < group_[b]; });
   for (size_t k = 0; k < order_.size();) {  // the groups in order, each's vertices in T's order
     groupT_.clear(), groupX0_.clear(), groupV0_.clear();
-    const uint32_t root = group(order_[k]);
-    for (; k < order_.size() && group(order_[k]) == root; ++k) {
+    const uint32_t root = group_[order_[k]];
+    for (; k < order_.size() && group_[order_[k]] == root; ++k) {
       const uint32_t j = order_[k];
       groupT_.push_back(T[j]), groupX0_.push_back((*in.startPositions)[j]), groupV0_.push_back((*in.startVelocities)[j]);
     }

@@ -75,7 +75,7 @@ class ContactEnergyLimiter {
   std::vector<uint32_t> inner_, ring_, outer_;  ///< Elements of the touched, their vertices, those's elements.
   std::vector<uint8_t> isInner_;                ///< Per element of outer_: also in inner_.
   std::vector<Vec3> force_, f_, offsets_, start_, wBefore_, wAfter_, vNow_;
-  std::vector<uint32_t> parent_, order_, groupT_;  ///< Union-find over the bodies; one group's vertices.
+  std::vector<uint32_t> parent_, order_, group_, groupT_;  ///< Union-find over the bodies; per touched vertex its group; one group's vertices.
   std::vector<Vec3> groupX0_, groupV0_;
 };
 

@@ -27,10 +27,7 @@ Real BodyContacts::allowedDepth(const Contact& c, const BodyContactState& s) con
   if (!x0 || !s.leapfrog) return 0;
   const uint32_t u = c.vertex, b = bodyOf_[c.face[0]];
   const Real h = bodies_[b].thickness;
-  // The depth behind the face at the step's start, where the face was then, and only where the
-  // vertex lay over the face itself: beside it, behind its plane says nothing of a fold (a vertex
-  // sliding onto the face from beside it was 1 mm behind the plane through the face point it
-  // reaches, and was allowed to end the step 9.6 um inside the other ball).
+  // The depth behind the face's plane at the step's start, where the face was then.
   const Real atStart = depthBehind(c, x0);
   if (!(atStart > kTakeBackDepth * h)) return 0;
   if (startAskedStage_[u] != stage_ || startAskedBody_[u] != b) {  // once per vertex, body and stage

@@ -74,13 +74,9 @@ void World::stageBodyContacts() {
   }
   scratch_->maxContactDepth = std::max(scratch_->maxContactDepth, bodyContactStats_.maxDepth);
   if (!domain_.enabled || bodyContacts_->contacts().empty()) return;
-  std::vector<uint32_t> moved;
-  for (const BodyContacts::Contact& c : bodyContacts_->contacts()) {
-    moved.push_back(c.vertex);
-    moved.insert(moved.end(), c.face.begin(), c.face.end());
-  }
+  // The vertices the stage moved: its contacts' vertices and face corners, each once (touched()).
+  std::vector<uint32_t> moved = bodyContacts_->touched();
   std::sort(moved.begin(), moved.end());
-  moved.erase(std::unique(moved.begin(), moved.end()), moved.end());
   const size_t K = manipulators_.size();
   for (uint32_t u : moved) {
     if (bodyContactInvMass_[u] == 0) continue;
