@@ -399,8 +399,7 @@ struct ProjectiveSolver::Impl {
       F[b] += f - fn * h.normal, N[b] += fn;
     }
     for (size_t b = 0; b < B; ++b) {
-      if (!one[b] || bodyInPair[b] || plane[b] == Vec3::Zero() || bodyPinned[b] || !(bodyMass[b] > 0) ||
-          !(N[b] > 0))
+      if (!one[b] || bodyInPair[b] || plane[b] == Vec3::Zero() || bodyPinned[b] || !(bodyMass[b] > 0) || !(N[b] > 0))
         continue;
       const Real k = bodyMass[b] / (dt * dt);
       const Vec3 S = bodySlip[b] - bodySlip[b].dot(plane[b]) * plane[b];

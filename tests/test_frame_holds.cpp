@@ -72,8 +72,8 @@ void expectGraspBody(const std::vector<GraspBodyCase>& cases) {
     }
     EXPECT_LT(peak, c.bound * c.explicitPeak) << "E x" << c.factor << ", dt " << c.dt;
     EXPECT_GT(w.metrics().minElementDet, 0) << "E x" << c.factor << ", dt " << c.dt;
-    std::printf("[ measured ] E x%g, dt 1/%.0f s: peak %.4g J, %.3g x the explicit run's\n", c.factor, 1 / c.dt,
-                peak, peak / c.explicitPeak);
+    std::printf("[ measured ] E x%g, dt 1/%.0f s: peak %.4g J, %.3g x the explicit run's\n", c.factor, 1 / c.dt, peak,
+                peak / c.explicitPeak);
   }
 }
 TEST(FrameHolds, GraspBodyWithinFivePercentOfTheExplicitPeakAtSixtiethSecond) {
@@ -217,9 +217,7 @@ TEST(FrameHolds, BoxOnATiltedFloorSticksBelowItsFrictionAngleAndSlidesAbove) {
 // with 0.57 J at t = 0.3 s (0.51x the peak from E x10, the explicit ball taking more of the hit).
 // Now a hit vertex rides on the striker and the held solve hands the hit to the whole ball.
 TEST(FrameHolds, SweptStrikeWithinFivePercentOfTheExplicitPeak) {
-  const struct {
-    Real factor, explicitPeak;
-  } cases[] = {{1, 0.611538}, {10, 2.62904}, {100, 2.81975}, {1000, 2.82114}};
+  const struct { Real factor, explicitPeak; } cases[] = {{1, 0.611538}, {10, 2.62904}, {100, 2.81975}, {1000, 2.82114}};
   for (const auto& c : cases)
     for (Real dt : {1.0 / 60, 1.0 / 30}) {
       BuiltScene b = buildScene(shippedScene("strike", IntegratorKind::LargeStep, dt, c.factor));
