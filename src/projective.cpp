@@ -247,6 +247,7 @@ struct ProjectiveSolver::Impl {
   // active in this pass (lambda + k (gap - c(x)) > 0 at the pass's start).
   std::vector<PairConstraint>* pairs = nullptr;
   std::vector<Real> pairK;
+  std::vector<char> bodyInPair;  ///< Per body: a vertex of it in a pair (no common slip, updateHolds).
   std::vector<uint32_t> activePairs;
   static constexpr int kPairIterations = 8;      ///< PCG iterations per global solve with active pairs.
   static constexpr Real kPairTolerance = 1e-12;  ///< Stop when r.z has fallen by this factor.
@@ -257,6 +258,15 @@ struct ProjectiveSolver::Impl {
   // closing at 10 m/s, which the post-step stage clears); at 30 the 8 PCG iterations no longer
   // converge and the balls closing at 10 m/s ended steps a voxel inside (measured).
   static constexpr Real kPairStiffness = 10;
+  // ... and at least kPairDiagonalShare / (J D^-1 J^T) (D: the global matrix's diagonal, which
+  // holds the elements' stiffness): for a stiff body the inertial k is far below what a push
+  // needs (grasp-body at E x100, dt = 1/60 s: 4-90 N/m against elements of ~1e5 N/m; lambda grew
+  // ~11 N over a step, the ball ended steps ~1 cm inside the block and the body-contact stage
+  // pushed it out with 36 J at once). At 1 the stack of stack.json sank through itself (top
+  // 0.060 m against the explicit 0.178 m) and at 0.3 it still ended steps with vertices inside
+  // other bodies: the 8 PCG iterations, preconditioned without the pairs, stop short and the
+  // multipliers' updates overshoot; at 0.1 the stack and the fast balls keep their figures.
+  static constexpr Real kPairDiagonalShare = 0.1;
 
   // n . (x_p - sum w_k x_k) over the free (or, pinnedOnly, the pinned) vertices of the pair.
   Real pairValue(const PairConstraint& c, const std::vector<Vec3>& x, bool pinnedOnly) const {
@@ -288,13 +298,21 @@ struct ProjectiveSolver::Impl {
   void preparePairs(std::vector<PairConstraint>* p) {
     pairs = p && !p->empty() ? p : nullptr;
     pairK.clear(), activePairs.clear();
+    bodyInPair.assign(model->numBodies(), 0);
     if (!pairs) return;
     const RestModel& m = *model;
     for (const PairConstraint& c : *pairs) {
       Real W = freeIndex.at(c.vertex) >= 0 ? m.invMass[c.vertex] : 0;
-      for (int k = 0; k < 3; ++k)
-        if (freeIndex.at(c.face[size_t(k)]) >= 0) W += c.w[size_t(k)] * c.w[size_t(k)] * m.invMass[c.face[size_t(k)]];
-      pairK.push_back(W > 0 && dt > 0 ? kPairStiffness / (dt * dt * W) : 0);
+      Real Dinv = freeIndex.at(c.vertex) >= 0 ? 1 / diagonal[c.vertex] : 0;
+      bodyInPair.at(m.bodyOfVertex(c.vertex)) = 1;
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t f = c.face[size_t(k)];
+        bodyInPair.at(m.bodyOfVertex(f)) = 1;
+        if (freeIndex.at(f) < 0) continue;
+        W += c.w[size_t(k)] * c.w[size_t(k)] * m.invMass[f];
+        Dinv += c.w[size_t(k)] * c.w[size_t(k)] / diagonal[f];
+      }
+      pairK.push_back(W > 0 && dt > 0 ? std::max(kPairStiffness / (dt * dt * W), kPairDiagonalShare / Dinv) : 0);
     }
   }
   // The pass's active pairs and their right-hand side J^T (lambda + k (gap - c_pinned)).
@@ -360,7 +378,10 @@ struct ProjectiveSolver::Impl {
     // |F - k S| <= mu N, else slips against it by the excess / k. The return mapping per hold then
     // works about its anchor carried by S. (A body held by several surfaces, a grasped ball, is
     // left out: there its holds' surpluses beyond their cones do not move it as a whole; moved
-    // with their sum, the grasps at E x10 blew up.)
+    // with their sum, the grasps at E x10 blew up. So is a body in a pair constraint, whose holds'
+    // reactions balance the other body's push as well: with the common slip of grasp-body's block
+    // on its floor, the scene at E x1 and dt = 1/30 s diverged at 60x the explicit peak; without,
+    // 0.76x.)
     const size_t B = bodySlip.size();
     std::vector<Vec3> F(B, Vec3::Zero()), plane(B, Vec3::Zero());
     std::vector<Real> N(B, 0), mu(B, 0);
@@ -378,7 +399,8 @@ struct ProjectiveSolver::Impl {
       F[b] += f - fn * h.normal, N[b] += fn;
     }
     for (size_t b = 0; b < B; ++b) {
-      if (!one[b] || plane[b] == Vec3::Zero() || bodyPinned[b] || !(bodyMass[b] > 0) || !(N[b] > 0)) continue;
+      if (!one[b] || bodyInPair[b] || plane[b] == Vec3::Zero() || bodyPinned[b] || !(bodyMass[b] > 0) || !(N[b] > 0))
+        continue;
       const Real k = bodyMass[b] / (dt * dt);
       const Vec3 S = bodySlip[b] - bodySlip[b].dot(plane[b]) * plane[b];
       const Vec3 z = F[b] - k * S;

@@ -2,7 +2,6 @@
 // contacts: a solve, the obstacle contacts found on it, a second solve with those vertices held
 // and the body contacts as pair constraints, the contact rules on the result.
 #include <algorithm>
-#include <limits>
 
 #include "step_context.h"
 
@@ -37,7 +36,7 @@ void World::stepImplicit(bool largeStep) {
     std::vector<PairConstraint> pairs;
     if (c.bodyContacts) pairs = stepBodyPairs(start.positions, freeEnd, pairKeys);
     HeldContacts held;
-    if (c.obstacles) held = heldObstacleContacts(freeEnd, largeStep, pairs);
+    if (c.obstacles) held = heldObstacleContacts(freeEnd, largeStep);
     if (!held.vertices.empty() || !pairs.empty()) {
       solveHeld(start, targets, held, pairs);
       keepBodyPairLambdas(pairs, pairKeys);
@@ -58,8 +57,7 @@ void World::stepImplicit(bool largeStep) {
 // pass pushed out (left free, the second solve restarted without them, or without a second
 // solve they kept their flight alone: at dt = 1/30 s the struck ball's E x1000 step ended with
 // 7,770 J of elastic energy, the explicit run's peak 2.8 J).
-World::HeldContacts World::heldObstacleContacts(const std::vector<Vec3>& freeEnd, bool largeStep,
-                                                const std::vector<PairConstraint>& pairs) {
+World::HeldContacts World::heldObstacleContacts(const std::vector<Vec3>& freeEnd, bool largeStep) {
   StepContext& c = *scratch_;
   std::vector<Real> swept;
   if (largeStep) sweepManipulatorPaths(c.tNext - dt_), swept = c.contactDepth;
@@ -73,17 +71,11 @@ World::HeldContacts World::heldObstacleContacts(const std::vector<Vec3>& freeEnd
   // Every held vertex was moved by a surface (a wall: K + its kWalls index), with its friction:
   // a hold on a frictionless surface slides (projective.h).
   const size_t K = manipulators_.size();
-  // The bodies in a pair constraint of this step (a vertex or a face's corner) keep the plain
-  // holds: stuck where the contact pass put their vertex, no cone, none let go at the start. With
-  // the frictional holds below, a ball a cylinder pressed into a soft block (grasp-body) no longer
-  // slid out of the squeeze: the whole push reached the soft pair constraints, the step ended with
-  // the ball ~1 cm inside the block, and from E x100 (large step, dt = 1/60 and 1/30 s) the
-  // body-contact stage's push-out diverged (exit 3; the plain holds: peaks 9-14x the explicit run's).
-  std::vector<char> paired(model_->numBodies(), 0);
-  for (const PairConstraint& p : pairs) {
-    paired[model_->bodyOfVertex(p.vertex)] = 1;
-    for (uint32_t f : p.face) paired[model_->bodyOfVertex(f)] = 1;
-  }
+  // (A body in a pair constraint of the step has these holds too: kept where the contact pass put
+  // them, without a cone, a ball a cylinder pressed into a soft block (grasp-body) was dragged
+  // down into the floor by the ratchet below and ended 4.5 mm lower than the explicit run's,
+  // storing 5x its elastic energy at rest; that it no longer slides out of the squeeze needs pair
+  // constraints stiff enough for the push (projective.h).)
   held.slip.assign(held.vertices.size(), Vec3::Zero());
   for (size_t j = 0; j < held.vertices.size(); ++j) {
     const uint32_t i = held.vertices[j];
@@ -91,10 +83,6 @@ World::HeldContacts World::heldObstacleContacts(const std::vector<Vec3>& freeEnd
     const size_t k = size_t(std::max(0, held.surface.back()));
     held.friction.push_back(k < K ? manipulators_[k].settings.friction : domain_.friction);
     if (!(held.friction.back() > 0) || (!swept.empty() && swept[i] > 0) || held.surface.back() < 0) continue;
-    if (paired[model_->bodyOfVertex(i)]) {
-      held.friction.back() = std::numeric_limits<Real>::infinity();  // sticks without a cone (projective.h)
-      continue;
-    }
     // A hold with friction sticks where the vertex was at the step's start, carried with its
     // surface (the anchor), put on the surface along the surface's normal there; it slips only by
     // Coulomb's cone in the held solve (projective.h). Held where the contact pass put it (before),
@@ -126,7 +114,7 @@ World::HeldContacts World::heldObstacleContacts(const std::vector<Vec3>& freeEnd
     held.slip[j] = c.previousVelocities[i] * dt_ - carry;
   }
   held.letGo.assign(held.vertices.size(), 0);
-  touchingAtStart(held, paired);
+  touchingAtStart(held);
   return held;
 }
 
@@ -139,14 +127,14 @@ World::HeldContacts World::heldObstacleContacts(const std::vector<Vec3>& freeEnd
 // by that pass in every step (it stored 7 % more than the explicit squeeze). On a surface:
 // within 1e-3 voxel of it (the contact pass leaves a vertex a skin of 1e-9 x its radius outside),
 // where it was at the step's start, carried with its surface.
-void World::touchingAtStart(HeldContacts& held, const std::vector<char>& paired) const {
+void World::touchingAtStart(HeldContacts& held) const {
   const StepContext& c = *scratch_;
   const size_t K = manipulators_.size();
   const Real near = 1e-3 * model_->voxelSize;
   std::vector<char> isHeld(model_->numVertices(), 0);
   for (uint32_t i : held.vertices) isHeld[i] = 1;
   for (uint32_t i = 0; i < model_->numVertices(); ++i) {
-    if (isHeld[i] || paired[model_->bodyOfVertex(i)]) continue;
+    if (isHeld[i]) continue;
     const Vec3& x0 = c.previousPositions[i];
     int surface = -1;
     Vec3 at = Vec3::Zero(), normal = Vec3::Zero();

@@ -49,8 +49,9 @@
 // cone the squeezed ball of a grasp could not spread along the surfaces as the explicit run's
 // friction lets it. The slip of a whole body (a box sliding down a floor tilted past its
 // friction angle, where k is ~1000x the stiffness of that motion) would take ~1000 passes: a body
-// whose holds all lie on one plane first slips as a whole, the same return mapping on the sums of
-// its holds' reactions with k = its mass / dt^2 (its common slip carries the holds' anchors), and
+// whose holds all lie on one plane (and that is in no pair constraint) first slips as a whole, the
+// same return mapping on the sums of its holds' reactions with k = its mass / dt^2 (its common
+// slip carries the holds' anchors), and
 // the first guess (heldSlip) carries the last step's sliding over.
 // Velocities are (x_{n+1} - x_n) / dt. The scheme is unconditionally stable and dissipative
 // (numerical damping grows with omega dt); it is what lets a stiff body run at dt = 1/60 s.
@@ -66,7 +67,9 @@
 // preconditioned by the factor of the matrix without the contacts, stays well conditioned (8
 // iterations), while a contact vertex held by a stiff body, whose inertia rather than its own mass
 // resists the push, still closes most of its violation in a step's passes (at 1x the effective
-// mass the two balls of two-balls.json ended their first contact step 8 mm inside each other).
+// mass the two balls of two-balls.json ended their first contact step 8 mm inside each other);
+// and at least 0.1 / (J D^-1 J^T), D the matrix's diagonal (the elements' stiffness): a stiff body
+// squeezed against another by a tool needs the pair to carry the push (issue 26; projective.cpp).
 // lambda [N] is warm-started by the caller (a resting contact carries its load from the first pass).
 #pragma once
 

@@ -307,9 +307,8 @@ class World {
   void clearBodyPairLambdas();
   bool bodyContactsMayTouch() const;
   void stepImplicit(bool largeStep);
-  HeldContacts heldObstacleContacts(const std::vector<Vec3>& freeEnd, bool largeStep,
-                                    const std::vector<PairConstraint>& pairs);
-  void touchingAtStart(HeldContacts& held, const std::vector<char>& paired) const;
+  HeldContacts heldObstacleContacts(const std::vector<Vec3>& freeEnd, bool largeStep);
+  void touchingAtStart(HeldContacts& held) const;
   std::vector<PairConstraint> stepBodyPairs(const std::vector<Vec3>& x0, const std::vector<Vec3>& freeEnd,
                                             std::vector<uint64_t>& keys);
   void solveHeld(const State& start, const std::vector<Vec3>& targets, const HeldContacts& held,
