@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <limits>
 #include <type_traits>
+#include <ctime>
 #ifdef GRADEL_WITH_OPENMP
 #include <omp.h>
 #endif
@@ -16,6 +17,29 @@
 #include "step_context.h"
 
 namespace gradel {
+// PROBE (not kept): phase times of the team's step, GRADEL_PHASES=1 prints them at exit.
+struct PhaseProbe {
+  bool on = std::getenv("GRADEL_PHASES") != nullptr;
+  double sum[2][5] = {}, cpu[2][2] = {};  // per member: element work, barrier wait, vertex work, end wait; [0][4] whole step
+  long steps = 0, oneSteps = 0, serialSteps = 0; double oneTime = 0, serialElem = 0, serialVert = 0;
+  ~PhaseProbe() {
+    if (on && serialSteps)
+      std::fprintf(stderr, "one-thread steps %ld: elements %.1f us, vertices %.1f us (cpu %.1f, %.1f)\n", serialSteps,
+                   1e6 * serialElem / serialSteps, 1e6 * serialVert / serialSteps, 1e6 * cpu[0][0] / serialSteps, 1e6 * cpu[0][1] / serialSteps);
+    if (!on || steps == 0) return;
+    std::fprintf(stderr, "phases over %ld team steps (us per step): whole %.1f\n", steps, 1e6 * sum[0][4] / steps);
+    for (int t = 0; t < 2; ++t)
+      std::fprintf(stderr, "  member %d: elements %.1f barrier-wait %.1f vertices %.1f end-wait %.1f\n", t,
+                   1e6 * sum[t][0] / steps, 1e6 * sum[t][1] / steps, 1e6 * sum[t][2] / steps, 1e6 * sum[t][3] / steps);
+    for (int t = 0; t < 2; ++t)
+      std::fprintf(stderr, "  member %d cpu: elements %.1f vertices %.1f\n", t, 1e6 * cpu[t][0] / steps, 1e6 * cpu[t][1] / steps);
+    if (oneSteps) std::fprintf(stderr, "  one-member steps %ld, %.1f us each\n", oneSteps, 1e6 * oneTime / oneSteps);
+  }
+};
+static PhaseProbe gProbe;
+static inline double cpuNow() { timespec ts; clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts); return ts.tv_sec + 1e-9 * ts.tv_nsec; }
+static const bool gForceTeam = std::getenv("GRADEL_FORCE_TEAM") != nullptr;
+static inline double probeNow() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
 // Stage 1: the elements [begin, end): rotations fitted (eq. 1) and their frames (element_stage.h).
 void World::stageElementFrames(size_t begin, size_t end) {
@@ -277,9 +301,59 @@ void World::stepExplicit() {
   if (contacts) bounds = contactBounds();
   const ContactBounds* cb = contacts ? &bounds : nullptr;
   if (scratch_->touched.size() < size_t(members)) scratch_->touched.resize(size_t(members));
-  auto runOnThisThread = [&] {
+  auto runOnThisThread = [&] {  // (probe: timed)
+    const double a = probeNow();
+    static const int slabs = [] { const char* s = std::getenv("GRADEL_SLAB_PROBE"); return s ? std::atoi(s) : 0; }();
+    if (slabs > 1) {  // PROBE: timing only. z slabs: the elements whose centroid is in slab k (per level: a
+      // contiguous range), then the vertices of slab k - 1 (those of the last slab after the loop).
+      static std::vector<std::vector<size_t>> eb;  // eb[k]: per level segment, its first element of slab k
+      static std::vector<size_t> vb;               // vb[k]: first vertex of slab k
+      static std::vector<size_t> segStart;
+      if (vb.empty()) {
+        const auto& X = model_->restPositions;
+        const auto& lv = model_->level;
+        std::vector<Real> ez(E);
+        for (size_t e = 0; e < E; ++e) ez[e] = X[model_->elemVerts[model_->elemStart[e]]][2];
+        const Real z0 = X.front()[2], z1 = X.back()[2] + 1e-9;
+        auto zk = [&](int k) { return z0 + (z1 - z0) * Real(k) / Real(slabs); };
+        segStart.push_back(0);
+        for (size_t e = 1; e < E; ++e) if (lv[e] != lv[e - 1]) segStart.push_back(e);
+        segStart.push_back(E);
+        for (int k = 0; k <= slabs; ++k) {
+          size_t v = 0;
+          while (v < V && X[v][2] < zk(k)) ++v;
+          vb.push_back(k == slabs ? V : v / kVertexBlock * kVertexBlock);
+          std::vector<size_t> row;
+          for (size_t g = 0; g + 1 < segStart.size(); ++g) {
+            size_t e = segStart[g];
+            while (e < segStart[g + 1] && ez[e] < zk(k)) ++e;
+            if (k == 0) e = segStart[g];
+            if (k == slabs) e = segStart[g + 1];
+            row.push_back(e);
+          }
+          eb.push_back(row);
+        }
+        std::fprintf(stderr, "slab probe: %zu level segments, %d slabs\n", segStart.size() - 1, slabs);
+      }
+      Real d = 0;
+      for (int k = 0; k < slabs; ++k) {
+        for (size_t g = 0; g + 1 < segStart.size(); ++g) {
+          const size_t a4 = eb[k][g] / 4 * 4, b4 = k + 1 == slabs ? eb[k + 1][g] : eb[k + 1][g] / 4 * 4;
+          if (b4 > a4) stageElementFrames(std::max(a4, eb[0][g] / 4 * 4), b4);
+        }
+        if (k > 0) d = std::max(d, stageVertices(vb[k - 1], vb[k], cb, 0));
+      }
+      d = std::max(d, stageVertices(vb[slabs - 1], V, cb, 0));
+      scratch_->maxContactDepth = d;
+      gProbe.serialSteps++, gProbe.serialElem += probeNow() - a;
+      return;
+    }
+    const double ca_ = cpuNow();
     stageElementFrames(0, E);
+    const double b = probeNow(), cb_ = cpuNow();
     scratch_->maxContactDepth = stageVertices(0, V, cb, 0);
+    gProbe.serialSteps++, gProbe.serialElem += b - a, gProbe.serialVert += probeNow() - b;
+    gProbe.cpu[0][0] += cb_ - ca_, gProbe.cpu[0][1] += cpuNow() - cb_;
   };
   if (members == 1) {
     runOnThisThread();
@@ -305,19 +379,36 @@ void World::stepExplicit() {
     // members or one, as the governor finds faster on this machine now.
     prepareTeam(members);
     const auto t0 = std::chrono::steady_clock::now();
-    if (governor_->choose(members) == 1) {
+    if (!gForceTeam && governor_->choose(members) == 1) {
+      const double a = probeNow();
       runOnThisThread();
+      gProbe.oneSteps++, gProbe.oneTime += probeNow() - a;
     } else {
+      double mark[2][5], cmark[2][4];
+      const double start = probeNow();
       elementQueue_->reset(elementSplit_), vertexQueue_->reset(vertexSplit_);
       team_->run([&](int t) {
         size_t c;
+        mark[t][0] = probeNow(), cmark[t][0] = cpuNow();
         while (elementQueue_->claim(t, &c)) stageElementFrames(c * kElementChunk, std::min(E, (c + 1) * kElementChunk));
+        mark[t][1] = probeNow(), cmark[t][1] = cpuNow();
         team_->barrier();
+        mark[t][2] = probeNow(), cmark[t][2] = cpuNow();
         Real depth = 0;
         while (vertexQueue_->claim(t, &c))
           depth = std::max(depth, stageVertices(c * kVertexChunk, std::min(V, (c + 1) * kVertexChunk), cb, t));
+        mark[t][3] = probeNow(), cmark[t][3] = cpuNow();
         memberContactDepth_[size_t(t)] = depth;
       });
+      const double stop = probeNow();
+      if (members == 2) {
+        gProbe.steps++, gProbe.sum[0][4] += stop - start;
+        for (int t = 0; t < 2; ++t) {
+          gProbe.sum[t][0] += mark[t][1] - mark[t][0], gProbe.sum[t][1] += mark[t][2] - mark[t][1];
+          gProbe.sum[t][2] += mark[t][3] - mark[t][2], gProbe.sum[t][3] += stop - mark[t][3];
+          gProbe.cpu[t][0] += cmark[t][1] - cmark[t][0], gProbe.cpu[t][1] += cmark[t][3] - cmark[t][2];
+        }
+      }
       scratch_->maxContactDepth = *std::max_element(memberContactDepth_.begin(), memberContactDepth_.end());
     }
     governor_->report(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
