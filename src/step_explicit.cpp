@@ -15,6 +15,7 @@
 
 #include "gradel/rotation_fit.h"
 #include "step_context.h"
+#include "team_chunks.h"
 
 namespace gradel {
 // PROBE (not kept): phase times of the team's step, GRADEL_PHASES=1 prints them at exit.
@@ -260,10 +261,37 @@ void World::prepareTeam(int members) {
   team_ = std::make_unique<ThreadTeam>(members);
   governor_ = std::make_unique<ThreadGovernor>();
   elementQueue_ = std::make_unique<ChunkQueue>(), vertexQueue_ = std::make_unique<ChunkQueue>();
-  elementSplit_ = chunkSplit(model_->elemStart, kElementCost, members, kElementChunk);
   // Vertices by blocks of kVertexStartStride (the stage keeps each block's start in its frame list).
   vertexSplit_ = chunkSplit(stageRest_->vertexBlockStart, kVertexCost * kVertexStartStride, members,
                             kVertexChunk / kVertexStartStride);
+  // Each element batch to the member whose vertex share holds its first vertex (team_chunks.h): on a
+  // machine whose cores share no cache, a frame or position the other core wrote is a transfer
+  // between them (docs/speed.md, "Sixth pass").
+  std::vector<size_t> vertexBound(size_t(members) + 1);
+  for (size_t t = 0; t <= size_t(members); ++t) vertexBound[t] = std::min(model_->numVertices(), vertexSplit_[t] * kVertexChunk);
+  elementChunks_ = ownerElementChunks(*model_, vertexBound, kRotationLanes, kElementChunk, elementSplit_);
+  if (std::getenv("GRADEL_OLD_SPLIT")) {  // PROBE: the split by element index, as before
+    elementSplit_ = chunkSplit(model_->elemStart, kElementCost, members, kElementChunk);
+    elementChunks_.clear();
+    for (size_t b = 0; b < model_->numElements(); b += kElementChunk)
+      elementChunks_.push_back({uint32_t(b), uint32_t(std::min(model_->numElements(), b + kElementChunk))});
+  }
+  if (std::getenv("GRADEL_PHASES")) {  // PROBE: pairs whose element and vertex have different owners
+    const RestModel& m = *model_;
+    std::vector<int> eo(m.numElements());
+    for (int t = 0; t < members; ++t)
+      for (size_t c = elementSplit_[size_t(t)]; c < elementSplit_[size_t(t) + 1]; ++c)
+        for (uint32_t e = elementChunks_[c].first; e < elementChunks_[c].second; ++e) eo[e] = t;
+    size_t cross = 0;
+    for (size_t e = 0; e < m.numElements(); ++e)
+      for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) {
+        int t = 0;
+        while (t + 1 < members && m.elemVerts[p] >= vertexSplit_[size_t(t) + 1] * kVertexChunk) ++t;
+        cross += t != eo[e];
+      }
+    std::fprintf(stderr, "team split: %zu element chunks, pairs across members %.1f %%\n", elementChunks_.size(),
+                 100.0 * double(cross) / double(m.numPairs()));
+  }
   memberContactDepth_.assign(size_t(members), 0.0);
   teamMembers_ = members;
 }
@@ -384,13 +412,13 @@ void World::stepExplicit() {
       runOnThisThread();
       gProbe.oneSteps++, gProbe.oneTime += probeNow() - a;
     } else {
-      double mark[2][5], cmark[2][4];
+      double mark[8][5], cmark[8][4];
       const double start = probeNow();
       elementQueue_->reset(elementSplit_), vertexQueue_->reset(vertexSplit_);
       team_->run([&](int t) {
         size_t c;
         mark[t][0] = probeNow(), cmark[t][0] = cpuNow();
-        while (elementQueue_->claim(t, &c)) stageElementFrames(c * kElementChunk, std::min(E, (c + 1) * kElementChunk));
+        while (elementQueue_->claim(t, &c)) stageElementFrames(elementChunks_[c].first, elementChunks_[c].second);
         mark[t][1] = probeNow(), cmark[t][1] = cpuNow();
         team_->barrier();
         mark[t][2] = probeNow(), cmark[t][2] = cpuNow();
