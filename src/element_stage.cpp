@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
-#include <cstdlib>
 
 #include "gradel/element.h"
 #include "gradel/material.h"
@@ -64,32 +63,6 @@ inline ElementRows elementRows(const char* x, const uint32_t* vertex, const Latt
     a0 += p[0] * u, a1 += p[1] * u, a2 += p[2] * u;
   }
   return {a0 + b0, a1 + b1, a2 + b2};
-}
-
-// PROBE (not kept): the moments in single precision. Offsets from the element's first vertex
-// (double subtraction) rounded to float, products summed in float; x0 returned for the centroid.
-const int gFloatMoments = [] { const char* s = std::getenv("GRADEL_FLOAT_MOMENTS"); return s ? std::atoi(s) : 0; }();
-template <class Lattice>
-inline ElementRows elementRowsFloat(const char* x, const uint32_t* vertex, const Lattice* lattice, size_t n, d4* x0) {
-  constexpr size_t S = sizeof(Vec3);
-  const Real* f = reinterpret_cast<const Real*>(x + vertex[0] * S);
-  float acc[3][4] = {};
-  Real sum[3] = {0, 0, 0};  // the centroid stays double (it is what keeps linear momentum)
-  for (size_t i = 0; i < n; ++i) {
-    const Real* p = reinterpret_cast<const Real*>(x + vertex[i] * S);
-    for (int j = 0; j < 3; ++j) {
-      const float d = float(p[j] - f[j]);
-      for (int k = 0; k < 3; ++k) acc[j][k] = std::fma(d, float(lattice[4 * i + k]), acc[j][k]);
-      sum[j] += p[j];
-    }
-  }
-  for (int j = 0; j < 3; ++j) acc[j][3] = 0;
-  *x0 = d4{f[0], f[1], f[2], 0};
-  ElementRows r;
-  r.r0 = d4{acc[0][0], acc[0][1], acc[0][2], sum[0]};
-  r.r1 = d4{acc[1][0], acc[1][1], acc[1][2], sum[1]};
-  r.r2 = d4{acc[2][0], acc[2][1], acc[2][2], sum[2]};
-  return r;
 }
 
 }  // namespace
@@ -269,7 +242,7 @@ void elementFrames(const RestModel& m, const ElementStageRest& rest, const Latti
     //    (I, 0), sum P = 0 and q = I: A = I, which the fit leaves alone. The prefetch reads
     //    kPrefetchPairs pairs ahead: not in the model's last batches.
     const bool prefetch = Prefetch && elemStart[e0 + size_t(lanes)] + kPrefetchPairs <= P;
-    d4 S[3][4], Q[4], X0[4] = {splat(0), splat(0), splat(0), splat(0)};
+    d4 S[3][4], Q[4];
 #pragma GCC unroll 4
     for (int l = 0; l < L; ++l) {
       if (l >= lanes) {
@@ -279,8 +252,7 @@ void elementFrames(const RestModel& m, const ElementStageRest& rest, const Latti
       }
       const size_t e = e0 + l;
       const uint32_t b = elemStart[e], n = elemStart[e + 1] - b;
-      const ElementRows r = gFloatMoments ? elementRowsFloat(xb, vertex + b, lattice + 4 * size_t(b), n, &X0[l])
-                            : prefetch ? elementRows<true>(xb, vertex + b, lattice + 4 * size_t(b), n)
+      const ElementRows r = prefetch ? elementRows<true>(xb, vertex + b, lattice + 4 * size_t(b), n)
                                      : elementRows<false>(xb, vertex + b, lattice + 4 * size_t(b), n);
       S[0][l] = r.r0, S[1][l] = r.r1, S[2][l] = r.r2;
       Q[l] = load4(rotations[e].coeffs().data());  // x, y, z, w
@@ -302,11 +274,9 @@ void elementFrames(const RestModel& m, const ElementStageRest& rest, const Latti
     }
     // 2. Centroid c = sum x / n and A / h = sum x P^T - c (sum P)^T.
     d4 c[3];
-    if (gFloatMoments) transpose(X0[0], X0[1], X0[2], X0[3]);
     for (int j = 0; j < 3; ++j) {
       c[j] = S[j][3] * K[3];
-      const d4 cr = gFloatMoments ? c[j] - X0[j] : c[j];
-      for (int k = 0; k < 3; ++k) store4(batch.A[3 * j + k], S[j][k] - cr * K[k]);
+      for (int k = 0; k < 3; ++k) store4(batch.A[3 * j + k], S[j][k] - c[j] * K[k]);
     }
     store4(batch.q[0], Q[3]), store4(batch.q[1], Q[0]), store4(batch.q[2], Q[1]), store4(batch.q[3], Q[2]);
     // 3. Best-fit rotations (eq. 1), four at once; 2D has a closed form (rotation about z).

@@ -8,7 +8,6 @@
 #include <cstdlib>
 #include <limits>
 #include <type_traits>
-#include <ctime>
 #ifdef GRADEL_WITH_OPENMP
 #include <omp.h>
 #endif
@@ -18,29 +17,6 @@
 #include "team_chunks.h"
 
 namespace gradel {
-// PROBE (not kept): phase times of the team's step, GRADEL_PHASES=1 prints them at exit.
-struct PhaseProbe {
-  bool on = std::getenv("GRADEL_PHASES") != nullptr;
-  double sum[2][5] = {}, cpu[2][2] = {};  // per member: element work, barrier wait, vertex work, end wait; [0][4] whole step
-  long steps = 0, oneSteps = 0, serialSteps = 0; double oneTime = 0, serialElem = 0, serialVert = 0;
-  ~PhaseProbe() {
-    if (on && serialSteps)
-      std::fprintf(stderr, "one-thread steps %ld: elements %.1f us, vertices %.1f us (cpu %.1f, %.1f)\n", serialSteps,
-                   1e6 * serialElem / serialSteps, 1e6 * serialVert / serialSteps, 1e6 * cpu[0][0] / serialSteps, 1e6 * cpu[0][1] / serialSteps);
-    if (!on || steps == 0) return;
-    std::fprintf(stderr, "phases over %ld team steps (us per step): whole %.1f\n", steps, 1e6 * sum[0][4] / steps);
-    for (int t = 0; t < 2; ++t)
-      std::fprintf(stderr, "  member %d: elements %.1f barrier-wait %.1f vertices %.1f end-wait %.1f\n", t,
-                   1e6 * sum[t][0] / steps, 1e6 * sum[t][1] / steps, 1e6 * sum[t][2] / steps, 1e6 * sum[t][3] / steps);
-    for (int t = 0; t < 2; ++t)
-      std::fprintf(stderr, "  member %d cpu: elements %.1f vertices %.1f\n", t, 1e6 * cpu[t][0] / steps, 1e6 * cpu[t][1] / steps);
-    if (oneSteps) std::fprintf(stderr, "  one-member steps %ld, %.1f us each\n", oneSteps, 1e6 * oneTime / oneSteps);
-  }
-};
-static PhaseProbe gProbe;
-static inline double cpuNow() { timespec ts; clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts); return ts.tv_sec + 1e-9 * ts.tv_nsec; }
-static const bool gForceTeam = std::getenv("GRADEL_FORCE_TEAM") != nullptr;
-static inline double probeNow() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
 // Stage 1: the elements [begin, end): rotations fitted (eq. 1) and their frames (element_stage.h).
 void World::stageElementFrames(size_t begin, size_t end) {
@@ -229,8 +205,8 @@ std::vector<size_t> chunkSplit(const std::vector<uint32_t>& prefix, uint64_t ite
 // Measured costs in pairs (instruction counts, callgrind): an element's moments set-up, rotation
 // fit and frame cost about as much as 21 of its pairs; a vertex's integration about 4 of its pairs.
 constexpr uint64_t kElementCost = 21, kVertexCost = 4;
-// Chunks handed out by the team: ~20-40 us of work each (kElementChunk a multiple of the
-// rotation fit's lanes, kVertexChunk of stageVertices' blocks).
+// Chunks handed out by the team: ~20-40 us of work each (kElementChunk, the longest element chunk,
+// a multiple of the rotation fit's lanes; kVertexChunk of stageVertices' blocks).
 constexpr size_t kElementChunk = 256, kVertexChunk = 512;
 static_assert(kVertexChunk % kVertexBlock == 0, "chunks hold whole blocks (the contact forces' partial sums)");
 static_assert(kVertexBlock % kVertexStartStride == 0, "the vertex splits are made on the stage's blocks");
@@ -268,30 +244,9 @@ void World::prepareTeam(int members) {
   // machine whose cores share no cache, a frame or position the other core wrote is a transfer
   // between them (docs/speed.md, "Sixth pass").
   std::vector<size_t> vertexBound(size_t(members) + 1);
-  for (size_t t = 0; t <= size_t(members); ++t) vertexBound[t] = std::min(model_->numVertices(), vertexSplit_[t] * kVertexChunk);
+  for (size_t t = 0; t <= size_t(members); ++t)
+    vertexBound[t] = std::min(model_->numVertices(), vertexSplit_[t] * kVertexChunk);
   elementChunks_ = ownerElementChunks(*model_, vertexBound, kRotationLanes, kElementChunk, elementSplit_);
-  if (std::getenv("GRADEL_OLD_SPLIT")) {  // PROBE: the split by element index, as before
-    elementSplit_ = chunkSplit(model_->elemStart, kElementCost, members, kElementChunk);
-    elementChunks_.clear();
-    for (size_t b = 0; b < model_->numElements(); b += kElementChunk)
-      elementChunks_.push_back({uint32_t(b), uint32_t(std::min(model_->numElements(), b + kElementChunk))});
-  }
-  if (std::getenv("GRADEL_PHASES")) {  // PROBE: pairs whose element and vertex have different owners
-    const RestModel& m = *model_;
-    std::vector<int> eo(m.numElements());
-    for (int t = 0; t < members; ++t)
-      for (size_t c = elementSplit_[size_t(t)]; c < elementSplit_[size_t(t) + 1]; ++c)
-        for (uint32_t e = elementChunks_[c].first; e < elementChunks_[c].second; ++e) eo[e] = t;
-    size_t cross = 0;
-    for (size_t e = 0; e < m.numElements(); ++e)
-      for (uint32_t p = m.elemStart[e]; p < m.elemStart[e + 1]; ++p) {
-        int t = 0;
-        while (t + 1 < members && m.elemVerts[p] >= vertexSplit_[size_t(t) + 1] * kVertexChunk) ++t;
-        cross += t != eo[e];
-      }
-    std::fprintf(stderr, "team split: %zu element chunks, pairs across members %.1f %%\n", elementChunks_.size(),
-                 100.0 * double(cross) / double(m.numPairs()));
-  }
   memberContactDepth_.assign(size_t(members), 0.0);
   teamMembers_ = members;
 }
@@ -329,59 +284,9 @@ void World::stepExplicit() {
   if (contacts) bounds = contactBounds();
   const ContactBounds* cb = contacts ? &bounds : nullptr;
   if (scratch_->touched.size() < size_t(members)) scratch_->touched.resize(size_t(members));
-  auto runOnThisThread = [&] {  // (probe: timed)
-    const double a = probeNow();
-    static const int slabs = [] { const char* s = std::getenv("GRADEL_SLAB_PROBE"); return s ? std::atoi(s) : 0; }();
-    if (slabs > 1) {  // PROBE: timing only. z slabs: the elements whose centroid is in slab k (per level: a
-      // contiguous range), then the vertices of slab k - 1 (those of the last slab after the loop).
-      static std::vector<std::vector<size_t>> eb;  // eb[k]: per level segment, its first element of slab k
-      static std::vector<size_t> vb;               // vb[k]: first vertex of slab k
-      static std::vector<size_t> segStart;
-      if (vb.empty()) {
-        const auto& X = model_->restPositions;
-        const auto& lv = model_->level;
-        std::vector<Real> ez(E);
-        for (size_t e = 0; e < E; ++e) ez[e] = X[model_->elemVerts[model_->elemStart[e]]][2];
-        const Real z0 = X.front()[2], z1 = X.back()[2] + 1e-9;
-        auto zk = [&](int k) { return z0 + (z1 - z0) * Real(k) / Real(slabs); };
-        segStart.push_back(0);
-        for (size_t e = 1; e < E; ++e) if (lv[e] != lv[e - 1]) segStart.push_back(e);
-        segStart.push_back(E);
-        for (int k = 0; k <= slabs; ++k) {
-          size_t v = 0;
-          while (v < V && X[v][2] < zk(k)) ++v;
-          vb.push_back(k == slabs ? V : v / kVertexBlock * kVertexBlock);
-          std::vector<size_t> row;
-          for (size_t g = 0; g + 1 < segStart.size(); ++g) {
-            size_t e = segStart[g];
-            while (e < segStart[g + 1] && ez[e] < zk(k)) ++e;
-            if (k == 0) e = segStart[g];
-            if (k == slabs) e = segStart[g + 1];
-            row.push_back(e);
-          }
-          eb.push_back(row);
-        }
-        std::fprintf(stderr, "slab probe: %zu level segments, %d slabs\n", segStart.size() - 1, slabs);
-      }
-      Real d = 0;
-      for (int k = 0; k < slabs; ++k) {
-        for (size_t g = 0; g + 1 < segStart.size(); ++g) {
-          const size_t a4 = eb[k][g] / 4 * 4, b4 = k + 1 == slabs ? eb[k + 1][g] : eb[k + 1][g] / 4 * 4;
-          if (b4 > a4) stageElementFrames(std::max(a4, eb[0][g] / 4 * 4), b4);
-        }
-        if (k > 0) d = std::max(d, stageVertices(vb[k - 1], vb[k], cb, 0));
-      }
-      d = std::max(d, stageVertices(vb[slabs - 1], V, cb, 0));
-      scratch_->maxContactDepth = d;
-      gProbe.serialSteps++, gProbe.serialElem += probeNow() - a;
-      return;
-    }
-    const double ca_ = cpuNow();
+  auto runOnThisThread = [&] {
     stageElementFrames(0, E);
-    const double b = probeNow(), cb_ = cpuNow();
     scratch_->maxContactDepth = stageVertices(0, V, cb, 0);
-    gProbe.serialSteps++, gProbe.serialElem += b - a, gProbe.serialVert += probeNow() - b;
-    gProbe.cpu[0][0] += cb_ - ca_, gProbe.cpu[0][1] += cpuNow() - cb_;
   };
   if (members == 1) {
     runOnThisThread();
@@ -407,36 +312,19 @@ void World::stepExplicit() {
     // members or one, as the governor finds faster on this machine now.
     prepareTeam(members);
     const auto t0 = std::chrono::steady_clock::now();
-    if (!gForceTeam && governor_->choose(members) == 1) {
-      const double a = probeNow();
+    if (governor_->choose(members) == 1) {
       runOnThisThread();
-      gProbe.oneSteps++, gProbe.oneTime += probeNow() - a;
     } else {
-      double mark[8][5], cmark[8][4];
-      const double start = probeNow();
       elementQueue_->reset(elementSplit_), vertexQueue_->reset(vertexSplit_);
       team_->run([&](int t) {
         size_t c;
-        mark[t][0] = probeNow(), cmark[t][0] = cpuNow();
         while (elementQueue_->claim(t, &c)) stageElementFrames(elementChunks_[c].first, elementChunks_[c].second);
-        mark[t][1] = probeNow(), cmark[t][1] = cpuNow();
         team_->barrier();
-        mark[t][2] = probeNow(), cmark[t][2] = cpuNow();
         Real depth = 0;
         while (vertexQueue_->claim(t, &c))
           depth = std::max(depth, stageVertices(c * kVertexChunk, std::min(V, (c + 1) * kVertexChunk), cb, t));
-        mark[t][3] = probeNow(), cmark[t][3] = cpuNow();
         memberContactDepth_[size_t(t)] = depth;
       });
-      const double stop = probeNow();
-      if (members == 2) {
-        gProbe.steps++, gProbe.sum[0][4] += stop - start;
-        for (int t = 0; t < 2; ++t) {
-          gProbe.sum[t][0] += mark[t][1] - mark[t][0], gProbe.sum[t][1] += mark[t][2] - mark[t][1];
-          gProbe.sum[t][2] += mark[t][3] - mark[t][2], gProbe.sum[t][3] += stop - mark[t][3];
-          gProbe.cpu[t][0] += cmark[t][1] - cmark[t][0], gProbe.cpu[t][1] += cmark[t][3] - cmark[t][2];
-        }
-      }
       scratch_->maxContactDepth = *std::max_element(memberContactDepth_.begin(), memberContactDepth_.end());
     }
     governor_->report(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());

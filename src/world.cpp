@@ -1,6 +1,3 @@
-#include <chrono>
-#include <cstdio>
-#include <cstdlib>
 // World: creation (dt and its rule, damping, the rest data's derived arrays), the step as its
 // list of stages (step_context.h), pins, external forces and the state's hash. The stages live
 // in step_*.cpp, the figures in world_metrics.cpp, the start overlaps' release in
@@ -171,24 +168,11 @@ void World::setManipulatorPose(size_t i, const Vec3& position, const Vec3& veloc
 }
 
 // The step as its list of stages (step_context.h).
-// PROBE (not kept)
-static double stepProbeNow() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
-struct StepProbe {
-  double t[4] = {}; long n = 0;
-  ~StepProbe() { if (n && std::getenv("GRADEL_PHASES")) std::fprintf(stderr, "step parts (us): begin %.1f integrator %.1f bodycontacts %.1f finish %.1f over %ld\n", 1e6*t[0]/n, 1e6*t[1]/n, 1e6*t[2]/n, 1e6*t[3]/n, n); }
-};
-static StepProbe gStepProbe;
 void World::step() {
-  const double a = stepProbeNow();
   beginStep();
-  const double b = stepProbeNow();
   advanceIntegrator();                           // ... and the pins
-  const double c = stepProbeNow();
   if (scratch_->bodyContacts) stageBodyContacts();  // broad -> narrow -> response, the walls' re-pass
-  const double d = stepProbeNow();
   finishContactImpulses();                       // the ledger closes last
-  const double e = stepProbeNow();
-  gStepProbe.t[0] += b - a, gStepProbe.t[1] += c - b, gStepProbe.t[2] += d - c, gStepProbe.t[3] += e - d, gStepProbe.n++;
 }
 
 // Begin: the start overlaps' release, the external forces' impulse (the same before every
