@@ -242,7 +242,7 @@ void World::prepareTeam(int members) {
                             kVertexChunk / kVertexStartStride);
   // Each element batch to the member whose vertex share holds its first vertex (team_chunks.h): on a
   // machine whose cores share no cache, a frame or position the other core wrote is a transfer
-  // between them (docs/speed.md, "Sixth pass").
+  // between them (docs/speed.md, "A leaner step", sixth pass).
   std::vector<size_t> vertexBound(size_t(members) + 1);
   for (size_t t = 0; t <= size_t(members); ++t)
     vertexBound[t] = std::min(model_->numVertices(), vertexSplit_[t] * kVertexChunk);
