@@ -55,6 +55,7 @@ set(GRADEL_CORE_SOURCES
   src/stability.cpp
   src/stability_warm.cpp
   src/surface.cpp
+  src/team_chunks.cpp
   src/thread_team.cpp
   src/volume.cpp
   src/world.cpp                  # World: creation, the step's list of stages (step_context.h), pins
@@ -145,6 +146,7 @@ set(GRADEL_TEST_SOURCES
   tests/test_element_stage.cpp
   tests/test_embedding.cpp
   tests/test_factor_solve.cpp
+  tests/test_team_chunks.cpp
   tests/test_thread_governor.cpp
   tests/test_frame_loop.cpp
   tests/test_golden.cpp

@@ -14,6 +14,7 @@
 
 #include "gradel/rotation_fit.h"
 #include "step_context.h"
+#include "team_chunks.h"
 
 namespace gradel {
 
@@ -204,8 +205,8 @@ std::vector<size_t> chunkSplit(const std::vector<uint32_t>& prefix, uint64_t ite
 // Measured costs in pairs (instruction counts, callgrind): an element's moments set-up, rotation
 // fit and frame cost about as much as 21 of its pairs; a vertex's integration about 4 of its pairs.
 constexpr uint64_t kElementCost = 21, kVertexCost = 4;
-// Chunks handed out by the team: ~20-40 us of work each (kElementChunk a multiple of the
-// rotation fit's lanes, kVertexChunk of stageVertices' blocks).
+// Chunks handed out by the team: ~20-40 us of work each (kElementChunk, the longest element chunk,
+// a multiple of the rotation fit's lanes; kVertexChunk of stageVertices' blocks).
 constexpr size_t kElementChunk = 256, kVertexChunk = 512;
 static_assert(kVertexChunk % kVertexBlock == 0, "chunks hold whole blocks (the contact forces' partial sums)");
 static_assert(kVertexBlock % kVertexStartStride == 0, "the vertex splits are made on the stage's blocks");
@@ -236,10 +237,16 @@ void World::prepareTeam(int members) {
   team_ = std::make_unique<ThreadTeam>(members);
   governor_ = std::make_unique<ThreadGovernor>();
   elementQueue_ = std::make_unique<ChunkQueue>(), vertexQueue_ = std::make_unique<ChunkQueue>();
-  elementSplit_ = chunkSplit(model_->elemStart, kElementCost, members, kElementChunk);
   // Vertices by blocks of kVertexStartStride (the stage keeps each block's start in its frame list).
   vertexSplit_ = chunkSplit(stageRest_->vertexBlockStart, kVertexCost * kVertexStartStride, members,
                             kVertexChunk / kVertexStartStride);
+  // Each element batch to the member whose vertex share holds its first vertex (team_chunks.h): on a
+  // machine whose cores share no cache, a frame or position the other core wrote is a transfer
+  // between them (docs/speed.md, "A leaner step", sixth pass).
+  std::vector<size_t> vertexBound(size_t(members) + 1);
+  for (size_t t = 0; t <= size_t(members); ++t)
+    vertexBound[t] = std::min(model_->numVertices(), vertexSplit_[t] * kVertexChunk);
+  elementChunks_ = ownerElementChunks(*model_, vertexBound, kRotationLanes, kElementChunk, elementSplit_);
   memberContactDepth_.assign(size_t(members), 0.0);
   teamMembers_ = members;
 }
@@ -311,7 +318,7 @@ void World::stepExplicit() {
       elementQueue_->reset(elementSplit_), vertexQueue_->reset(vertexSplit_);
       team_->run([&](int t) {
         size_t c;
-        while (elementQueue_->claim(t, &c)) stageElementFrames(c * kElementChunk, std::min(E, (c + 1) * kElementChunk));
+        while (elementQueue_->claim(t, &c)) stageElementFrames(elementChunks_[c].first, elementChunks_[c].second);
         team_->barrier();
         Real depth = 0;
         while (vertexQueue_->claim(t, &c))

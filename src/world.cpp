@@ -279,7 +279,8 @@ size_t World::memoryBytes() const {
   b += bytes(scratch_->frames) + bytes(scratch_->previousPositions) + bytes(scratch_->previousVelocities) +
        bytes(scratch_->contactDepth) + bytes(scratch_->impulse) + bytes(scratch_->contactSurface);
   for (const StepContext::TouchedBlocks& t : scratch_->touched) b += bytes(t.block) + bytes(t.work) + bytes(t.impulse);
-  b += (elementSplit_.capacity() + vertexSplit_.capacity()) * sizeof(size_t);
+  b += (elementSplit_.capacity() + vertexSplit_.capacity()) * sizeof(size_t) +
+       elementChunks_.capacity() * sizeof(elementChunks_[0]);
   for (const Manipulator& m : manipulators_) b += sizeof(m) + bytes(m.settings.path.keys);
   b += bytes(bodyContactStartX_) + bytes(bodyContactStartV_) + bytes(bodyContactInvMass_);
   if (bodyContacts_)

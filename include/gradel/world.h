@@ -348,11 +348,14 @@ class World {
       projective_;  ///< Implicit, and LargeStep near contacts: built at the first such step.
   std::unique_ptr<LargeStepSolver> largeStep_;  ///< LargeStep only: built at the first step (dt, pins fixed).
   // Threads of the explicit step (thread_team.h): the team, its chunk queues and each member's
-  // first share of the element and vertex chunks (weighted by work), made for `teamMembers_`.
+  // first share of the element and vertex chunks, made for `teamMembers_`. The vertex shares are
+  // weighted by work; the element chunks ([begin, end) each, elementChunks_) are grouped by the
+  // member whose vertex share holds their elements' first vertex (prepareTeam).
   std::unique_ptr<ThreadTeam> team_;
   std::unique_ptr<ThreadGovernor> governor_;  ///< All members or one, whichever is faster now.
   std::unique_ptr<ChunkQueue> elementQueue_, vertexQueue_;
   std::vector<size_t> elementSplit_, vertexSplit_;
+  std::vector<std::pair<uint32_t, uint32_t>> elementChunks_;
   std::vector<Real> memberContactDepth_;
   // Soft-soft contact: the stage, its last result, the boundary vertices' start of the step
   // (full-size arrays, only the bodies' boundary vertices written) and the inverse masses it uses.
