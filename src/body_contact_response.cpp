@@ -15,19 +15,13 @@ namespace gradel {
 // Appends round_ to contacts_ with each one's keep_. In an explicit step (s.leapfrog), a finding
 // whose vertex lay behind the same face point, along the same normal, by d0 > kTakeBackDepth
 // voxels at the step's start while the winding number of the other body's surface says it was
-// outside then and is outside now, is a misreading of a folded or crushed surface (the
-// pseudo-normal test reads the wrong side there): its vertex keeps its whole depth, so it is not
-// pushed at all (dropUnreachable drops such findings; a warm-started one stays where it is).
-// Pushing such vertices out along far faces took the energy of a stiff 6^3 ball into a soft one to
-// 1.35x, grew a violent hit's search radius round by round (21 M nearest-point tests in a step) and
-// froze pairs in the last resort. Pushing them out only past their start depth (d0 - 0.01 voxel,
-// until 2026-11-30) still pushed along the wrong normal by what the step deepened them, in every
-// step of a press: a stiff 9^3 box at 8 m/s into a soft 8^3 ball (the random-pairs property's 30th
-// case of 40) gained 0.5-1 % of its energy a step, the stage's energy cap could pay only half of it
-// from the touched vertices' motion, and the pair ended stuck at 1.47x with elements inverted; never
-// pushed, it parts at 1.0000x (docs/speed.md, "The stage's energy cap"). Every other contact
-// (outside at the start, or inside by the winding number at the start or now) keeps nothing, and
-// no vertex is left inside another body by it.
+// outside then, is a misreading of a folded or crushed surface (the pseudo-normal test reads the
+// wrong side there): its vertex may end the step up to d0 - kDepenetration voxels behind that
+// plane, and a finding no deeper is dropped (dropUnreachable). Pushing such vertices out along
+// far faces took the energy of a stiff 6^3 ball into a soft one to 1.35x, grew a violent hit's
+// search radius round by round (21 M nearest-point tests in a step) and froze pairs in the last
+// resort. Every other contact (outside at the start, or inside by the winding number too) keeps
+// nothing: the same arithmetic as before, and no vertex is left inside another body by it.
 Real BodyContacts::allowedDepth(const Contact& c, const BodyContactState& s) const {
   const Vec3* x0 = s.previousPositions;
   if (!x0 || !s.leapfrog) return 0;
@@ -47,7 +41,7 @@ Real BodyContacts::allowedDepth(const Contact& c, const BodyContactState& s) con
   // end the step 9.6 um inside the other ball).
   ++startWindings_;
   if (std::abs(windingNumber(s.positions[u], bodies_[b].triangles, s.positions)) >= 0.5) return 0;
-  return c.depth;  // (> 0: atStart > 0 and the vertex is behind the face now, so not pushed)
+  return atStart - kDepenetration * h;
 }
 
 void BodyContacts::addContacts(const BodyContactState& s) {

@@ -30,10 +30,7 @@ void BodyContacts::dropUnreachable(const BodyContactState& s, BodyContactStats& 
   for (size_t k = 0; k < round_.size(); ++k) {
     const Contact& c = round_[k];
     const Real allowed = allowedDepth(c, s);
-    if (allowed > 0 && !(c.depth > allowed)) {  // a misread fold (allowedDepth): never pushed
-      ++stats.unreachable;
-      continue;
-    }
+    if (allowed > 0 && !(c.depth > allowed)) continue;  // a misread fold no deeper than at the start (addContacts)
     const uint32_t b = bodyOf_[c.face[0]];
     const Real reach = (x[c.vertex] - x0[c.vertex]).norm() + moved_[b] + kTakeBackDepth * bodies_[b].thickness + skin_;
     bool keep = !(c.depth > reach);

@@ -21,10 +21,9 @@ struct BodyContactStats {
   int takeBacks = 0;      ///< Times the last resort took bodies back towards the step's start (0: not needed).
   size_t warm = 0;        ///< Contacts of the last stage that the warm start applied (found inside their plane).
   Real takenBackTo = 1;   ///< [-] the fraction of the step's motion the taken-back bodies kept.
-  /// "Inside" findings that the winding number of the other body's surface said were outside (a
-  /// folded surface misleads the pseudo-normal test): deeper than the step's motion can reach, or
-  /// behind a face's plane at the step's start too (a misread fold, allowedDepth): dropped, not
-  /// pushed (dropUnreachable).
+  /// "Inside" findings deeper than the step's motion can reach that the winding number of the
+  /// other body's surface said were outside (a folded surface misleads the pseudo-normal test):
+  /// dropped, not pushed (dropUnreachable).
   size_t unreachable = 0;
   /// The narrow phase's work: nearest-point tests of a vertex against a face (all lookups, all
   /// rounds, the last resort's detections included).
